@@ -1,0 +1,189 @@
+"""Dataset construction (coordinates, CF attributes, provenance) and atomic save/load."""
+
+from __future__ import annotations
+
+import datetime
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from ._kernels import Status, columns
+from .scene import PARAMETER_INFO, Scene
+
+__all__ = ["to_dataset", "save", "load", "scene_from", "run_arguments"]
+
+
+def _version() -> str:
+    from . import __version__
+
+    return __version__
+
+
+def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Dataset:
+    """Wrap flat kernel outputs into a labelled, self-describing Dataset.
+
+    Parameters
+    ----------
+    scene : Scene
+    grid : Grid
+    settings : sweep.engine.RunSettings
+    spec : sweep._kernels.KernelSpec
+    out : ndarray, shape (grid.size, n_columns), float64
+        Observables in `sweep._kernels.columns` order.
+    status : ndarray, shape (grid.size,), int8
+    saved : ndarray, shape (grid.size, 2, n_saved), float64, optional
+        Sampled theta [rad] and omega [rad/s].
+
+    Returns
+    -------
+    xarray.Dataset
+    """
+    dims = grid.dims
+    coords = {
+        name: xr.Variable(name, values, {"units": PARAMETER_INFO[name][0],
+                                         "long_name": PARAMETER_INFO[name][1]})
+        for name, values in grid.axes.items()
+    }
+    data_vars = {}
+    for k, (name, units, long_name) in enumerate(columns(spec)):
+        data_vars[name] = xr.Variable(dims, grid.unflatten(out[:, k]),
+                                      {"units": units, "long_name": long_name})
+    codes = np.array([s.value for s in Status], dtype=np.int8)
+    data_vars["status"] = xr.Variable(
+        dims,
+        grid.unflatten(status),
+        {
+            "long_name": "per-trajectory integration status",
+            "flag_values": codes,
+            "flag_meanings": " ".join(s.name.lower() for s in Status),
+            "comment": "; ".join(f"{s.name.lower()}: {s.message}" for s in Status),
+        },
+    )
+    if saved is not None:
+        n_saved = saved.shape[2]
+        stride = settings.save_every
+        coords["time"] = xr.Variable(
+            "time", settings.t0 + np.arange(n_saved) * stride * settings.dt,
+            {"units": "s", "long_name": "time (t0 + n dt at saved steps n)"},
+        )
+        for k, (name, units, long_name) in enumerate(
+            (("theta", "rad", "angle, unwrapped"), ("omega", "rad s-1", "angular velocity"))
+        ):
+            data_vars[name] = xr.Variable(dims + ("time",),
+                                          grid.unflatten(saved[:, k, :]),
+                                          {"units": units, "long_name": long_name})
+
+    simulated = [e for e in ("damping", "forcing") if getattr(spec, e)]
+    fixed = {k: v for k, v in scene.parameters().items() if k not in dims}
+    if not spec.damping:
+        fixed.pop("damping")
+    if not spec.forcing:
+        for key in ("forcing_amplitude", "forcing_frequency", "forcing_phase"):
+            fixed.pop(key)
+    attrs = {
+        "Conventions": "CF-1.10",
+        "title": "pendulum parameter sweep",
+        "source": f"sweep {_version()}",
+        "history": f"{datetime.datetime.now(datetime.UTC).isoformat(timespec='seconds')}"
+                   f" created by sweep {_version()}",
+        "sweep_version": _version(),
+        "equation": "theta'' = A sin(W t + phase) - c theta' - (g/L) f(theta)",
+        "model": scene.model,
+        "effects": " ".join(simulated) if simulated else "none",
+        **{name: float(value) for name, value in fixed.items()},
+        "scene": json.dumps(scene.to_dict(), sort_keys=True),
+        "grid_axes": " ".join(dims),
+        "method": settings.method,
+        "t0": settings.t0,
+        "t_end": settings.t_end,
+        "dt": settings.dt,
+        "t_transient": settings.t_transient,
+        "n_steps": settings.n_steps,
+        "observe": " ".join(spec.observe),
+    }
+    if settings.save_every is not None:
+        attrs["save_every"] = settings.save_every
+    return xr.Dataset(data_vars, coords, attrs)
+
+
+def scene_from(ds: xr.Dataset) -> Scene:
+    """Rebuild the `Scene` a dataset was made with (from its ``scene`` attribute)."""
+    return Scene.from_dict(json.loads(ds.attrs["scene"]))
+
+
+def run_arguments(ds: xr.Dataset) -> dict:
+    """The keyword arguments of `sweep.run` that made ``ds`` (besides scene and grid).
+
+    With `scene_from` and the dataset's coordinates this reproduces the run::
+
+        grid = sweep.Grid(**{d: ds[d].values for d in ds.attrs["grid_axes"].split()})
+        sweep.run(sweep.io.scene_from(ds), grid, **sweep.io.run_arguments(ds))
+    """
+    a = ds.attrs
+    kwargs = {"t0": float(a["t0"]), "t_end": float(a["t_end"]), "dt": float(a["dt"]),
+              "t_transient": float(a["t_transient"]), "method": str(a["method"]),
+              "observe": tuple(str(a["observe"]).split())}
+    if "save_every" in a:
+        kwargs["save_every"] = int(a["save_every"])
+    return kwargs
+
+
+def check_output_path(path) -> Path:
+    """Return ``path`` as a Path if its folder exists and is writable, else raise.
+
+    Called before any compute so that a run never ends in an unwritable file.
+    """
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    if path.is_dir():
+        raise ValueError(f"output path {str(path)!r} is a folder; accepted: a file path")
+    if not folder.is_dir():
+        raise ValueError(f"output path {str(path)!r}: folder {str(folder)!r} does not exist; "
+                         "accepted: a path in an existing folder")
+    if not os.access(folder, os.W_OK):
+        raise ValueError(f"output path {str(path)!r}: folder {str(folder)!r} is not writable")
+    return path
+
+
+def save(ds: xr.Dataset, path) -> Path:
+    """Write ``ds`` to netCDF4 atomically: a temporary file in the same folder, then
+    an atomic rename. An interrupted save leaves any previous file at ``path`` intact.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+    path : str or Path
+
+    Returns
+    -------
+    Path
+    """
+    path = check_output_path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    os.close(fd)
+    try:
+        ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4")
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def load(path) -> xr.Dataset:
+    """Read a dataset written by `save` fully into memory (the file is closed).
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``path`` does not exist.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no such file: {str(path)!r}")
+    return xr.load_dataset(path, engine="netcdf4")

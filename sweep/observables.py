@@ -1,0 +1,155 @@
+"""Streaming per-trajectory observables: what each one stores and how it accumulates.
+
+An observable is data: the variables it writes (name, units, long name) and three
+snippets of kernel source -- ``init`` (once, with the initial state in ``th, om``),
+``update`` (at every step whose time is >= ``t0 + t_transient``, state in ``th, om``)
+and ``final`` (once, writing ``out[i, COL + k]`` for its k-th variable). `_kernels`
+pastes in only the snippets of the observables a run asks for, so a run that observes
+only the final state keeps no running maxima.
+
+Names available to the snippets: ``th, om`` (state, unwrapped angle), ``th0, om0``
+(initial state), ``L, g`` (length, gravity), ``w0sq = g/L`` and ``energy(th, om, w0sq)``, the mechanical
+energy per unit ``m L^2`` of the scene's model.
+
+Memory is O(number of trajectories): one row of ``out`` per trajectory, whatever the
+number of steps.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["Observable", "OBSERVABLES", "DEFAULT_OBSERVE", "resolve"]
+
+
+@dataclass(frozen=True)
+class Observable:
+    """A streaming per-trajectory reduction.
+
+    Attributes
+    ----------
+    name : str
+        The key users pass in ``observe=``.
+    variables : tuple of (name, units, long_name)
+        The dataset variables it writes, in order.
+    init, update, final : str
+        Kernel source snippets (see the module docstring).
+    steady : bool
+        True if it accumulates only over ``t >= t0 + t_transient``.
+    uses_energy : bool
+        True if a snippet calls ``energy(th, om, w0sq)``.
+    """
+
+    name: str
+    variables: tuple[tuple[str, str, str], ...]
+    init: str = ""
+    update: str = ""
+    final: str = ""
+    steady: bool = False
+    uses_energy: bool = False
+
+
+OBSERVABLES: dict[str, Observable] = {
+    o.name: o
+    for o in (
+        Observable(
+            name="final",
+            variables=(
+                ("theta_final", "rad", "angle at t_end, unwrapped (not reduced modulo 2 pi)"),
+                ("omega_final", "rad s-1", "angular velocity at t_end"),
+            ),
+            final="out[i, COL] = th\nout[i, COL + 1] = om",
+        ),
+        Observable(
+            name="winding",
+            variables=(
+                ("winding", "1",
+                 "net full turns from t0 to t_end: trunc((theta_final - theta0) / 2 pi)"),
+            ),
+            final="out[i, COL] = math.trunc((th - th0) / TWO_PI)",
+        ),
+        Observable(
+            name="theta_max",
+            variables=(("theta_max", "rad", "max |theta| over t >= t0 + t_transient"),),
+            init="acc_abs_max = 0.0",
+            update="acc_abs_max = max(acc_abs_max, abs(th))",
+            final="out[i, COL] = acc_abs_max",
+            steady=True,
+        ),
+        Observable(
+            name="amplitude",
+            variables=(
+                ("amplitude", "rad",
+                 "half peak-to-peak of theta over t >= t0 + t_transient"),
+            ),
+            init="acc_th_max = -math.inf\nacc_th_min = math.inf",
+            update="acc_th_max = max(acc_th_max, th)\nacc_th_min = min(acc_th_min, th)",
+            final="out[i, COL] = 0.5 * (acc_th_max - acc_th_min)",
+            steady=True,
+        ),
+        Observable(
+            name="tension",
+            variables=(
+                ("tension_min", "m s-2",
+                 "min rod tension per unit mass, T/m = L omega^2 + g cos(theta), "
+                 "over t >= t0 + t_transient"),
+                ("tension_max", "m s-2",
+                 "max rod tension per unit mass, T/m = L omega^2 + g cos(theta), "
+                 "over t >= t0 + t_transient"),
+            ),
+            init="acc_T_min = math.inf\nacc_T_max = -math.inf",
+            update=(
+                "tension = L * om * om + g * math.cos(th)\n"
+                "acc_T_min = min(acc_T_min, tension)\n"
+                "acc_T_max = max(acc_T_max, tension)"
+            ),
+            final="out[i, COL] = acc_T_min\nout[i, COL + 1] = acc_T_max",
+            steady=True,
+        ),
+        Observable(
+            name="energy",
+            variables=(
+                ("energy_initial", "s-2",
+                 "mechanical energy per unit m L^2 at t0: omega^2/2 + (g/L) V(theta)"),
+                ("energy_final", "s-2",
+                 "mechanical energy per unit m L^2 at t_end: omega^2/2 + (g/L) V(theta)"),
+            ),
+            init="acc_E0 = energy(th, om, w0sq)",
+            final="out[i, COL] = acc_E0\nout[i, COL + 1] = energy(th, om, w0sq)",
+            uses_energy=True,
+        ),
+    )
+}
+
+#: What `sweep.run` observes when ``observe`` is not given.
+DEFAULT_OBSERVE = ("final", "winding")
+
+
+def resolve(observe) -> tuple[str, ...]:
+    """Validate ``observe`` and return its names in canonical (registry) order.
+
+    Parameters
+    ----------
+    observe : str or iterable of str
+        Observable names, keys of `OBSERVABLES`.
+
+    Raises
+    ------
+    ValueError
+        Naming the unknown observable and listing the accepted ones.
+    """
+    if isinstance(observe, str):
+        observe = (observe,)
+    try:
+        names = tuple(observe)
+    except TypeError:
+        raise ValueError(
+            f"observe must be a sequence of names from {', '.join(OBSERVABLES)}, "
+            f"got {observe!r}"
+        ) from None
+    for name in names:
+        if name not in OBSERVABLES:
+            raise ValueError(
+                f"unknown observable {name!r} in observe; accepted: {', '.join(OBSERVABLES)}"
+            )
+    return tuple(n for n in OBSERVABLES if n in names)
