@@ -75,7 +75,7 @@ def check_axis(name: str, values: Any) -> np.ndarray:
     bad = ~np.isfinite(array)
     if bad.any():
         raise ValueError(
-            f"grid axis {name!r} has non-finite value {array[bad][0]!r} at index "
+            f"grid axis {name!r} has non-finite value {float(array[bad][0])!r} at index "
             f"{int(np.flatnonzero(bad)[0])}; accepted: finite numbers"
         )
     return np.ascontiguousarray(array)

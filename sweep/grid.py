@@ -85,7 +85,7 @@ class Grid:
                 bad = array <= bound if strict else array < bound
                 if bad.any():
                     raise ValueError(
-                        f"grid axis {name!r} has value {array[bad][0]!r} at index "
+                        f"grid axis {name!r} has value {float(array[bad][0])!r} at index "
                         f"{int(np.flatnonzero(bad)[0])}; accepted: {accepted}"
                     )
             checked[name].flags.writeable = False

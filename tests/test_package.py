@@ -1,0 +1,31 @@
+"""Package hygiene: a cheap import, one place for JIT flags, a public surface that exists."""
+
+import pathlib
+import subprocess
+import sys
+
+import sweep
+
+ROOT = pathlib.Path(sweep.__file__).parent
+
+
+def test_import_compiles_nothing_and_loads_no_matplotlib():
+    code = ("import sys, sweep; "
+            "print('numba' in sys.modules, 'matplotlib' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["False", "False"]
+
+
+def test_jit_flags_live_only_in_config():
+    for path in ROOT.glob("*.py"):
+        if path.name == "_config.py":
+            continue
+        text = path.read_text()
+        assert "fastmath=" not in text, path
+        assert "boundscheck=" not in text, path
+
+
+def test_public_names_exist():
+    for name in sweep.__all__:
+        assert hasattr(sweep, name), name
