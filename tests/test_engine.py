@@ -247,3 +247,20 @@ def test_winding_counts_net_full_turns():
     expected = np.trunc(ds.theta_final / (2 * np.pi))
     np.testing.assert_array_equal(ds.winding, expected)
     assert ds.winding[0] < -5 and ds.winding[1] == 0 and ds.winding[2] > 5
+
+
+def test_fresh_process_loads_the_kernel_from_the_disk_cache(tmp_path):
+    script = textwrap.dedent("""
+        import sweep
+        from sweep import _kernels
+        sweep.run(sweep.Scene(effects=(sweep.Damping(0.1),)), sweep.Grid(theta0=[0.1]),
+                  t_end=1.0, dt=0.1, observe=("final", "energy"))
+        kernel = _kernels.build(_kernels.KernelSpec("nonlinear", True, False,
+                                                    ("final", "energy")))
+        print(sum(kernel.stats.cache_hits.values()), sum(kernel.stats.cache_misses.values()))
+    """)
+    env = dict(os.environ, SWEEP_CACHE_DIR=str(tmp_path))
+    runs = [subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                           text=True, check=True).stdout.split() for _ in range(2)]
+    assert runs[0] == ["0", "1"]  # first process compiles...
+    assert runs[1] == ["1", "0"]  # ...the second loads machine code from disk
