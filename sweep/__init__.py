@@ -15,6 +15,19 @@ from .scene import Damping as Damping
 from .scene import Forcing as Forcing
 from .scene import Scene as Scene
 
+_LAZY_MODULES = ("plot", "io", "cli")
+
+
+def __getattr__(name):
+    """Import submodules such as `sweep.plot` on first use, so that ``import sweep``
+    stays cheap (no matplotlib)."""
+    if name in _LAZY_MODULES:
+        import importlib
+
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module 'sweep' has no attribute {name!r}")
+
+
 __all__ = [
     "Damping",
     "Forcing",

@@ -1,6 +1,8 @@
 """netCDF round trips, other readers, and atomic writes."""
 
+import os
 import shutil
+import stat
 import subprocess
 
 import numpy as np
@@ -67,3 +69,12 @@ def test_save_refuses_missing_folder_and_load_missing_file(dataset, tmp_path):
         sweep.save(dataset, tmp_path)
     with pytest.raises(FileNotFoundError, match=r"no such file"):
         sweep.load(tmp_path / "absent.nc")
+
+
+def test_saved_file_gets_the_usual_permissions(dataset, tmp_path):
+    umask = os.umask(0o022)
+    try:
+        path = sweep.save(dataset, tmp_path / "run.nc")
+    finally:
+        os.umask(umask)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o644

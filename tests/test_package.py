@@ -29,3 +29,13 @@ def test_jit_flags_live_only_in_config():
 def test_public_names_exist():
     for name in sweep.__all__:
         assert hasattr(sweep, name), name
+
+
+def test_plot_module_is_reachable_lazily():
+    # DESIGN: `import sweep; sweep.plot.map(...)` works, and matplotlib loads only
+    # when a figure is drawn
+    code = ("import sys, sweep; print(callable(sweep.plot.map)); "
+            "print('matplotlib' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["True", "False"]

@@ -1,0 +1,452 @@
+"""Matplotlib figures of sweep datasets: 2-D maps and trajectories.
+
+matplotlib is imported inside the functions, so ``import sweep.plot`` costs nothing
+and loads no plotting library until a figure is drawn. Every function works on a
+dataset loaded from disk (`sweep.load`): plotting never re-runs the integrator.
+
+Conventions
+-----------
+- Angle-like coordinates (``theta0`` [rad], ``omega0`` [rad/s], ``forcing_phase``
+  [rad]) are shown in degrees (deg, deg/s) when ``degrees=True``; data values are
+  always shown in the units stored with them.
+- Axis and colour-bar labels come from the ``long_name`` and ``units`` attributes
+  that `sweep.run` writes; UDUNITS strings are shown in the usual notation
+  (``"rad s-1"`` as ``rad/s``).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import secrets
+import textwrap
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["map", "save_figure", "select", "trajectory"]
+
+#: Coordinates converted to degrees (and deg/s) when ``degrees=True``.
+ANGLE_COORDS = ("theta0", "omega0", "forcing_phase")
+
+#: Integer-valued maps with at most this many distinct levels get a discrete colormap.
+MAX_DISCRETE_LEVELS = 41
+
+#: Most trajectories `trajectory` draws in one figure.
+MAX_TRAJECTORIES = 10
+
+_SYMBOLS = {
+    "theta0": r"$\theta_0$",
+    "omega0": r"$\omega_0$",
+    "theta": r"$\theta$",
+    "omega": r"$\omega$",
+    "time": "$t$",
+}
+
+_LABEL_WIDTH = 48  # characters per line of a wrapped colour-bar label
+
+
+# ----------------------------------------------------------------------------- labels
+def units_text(units: str) -> str:
+    """Show a UDUNITS string the usual way: ``"rad s-1"`` -> ``"rad/s"``.
+
+    Parameters
+    ----------
+    units : str
+        Space-separated factors with optional integer exponents (``"m s-2"``).
+        ``"1"`` and ``""`` mean dimensionless.
+
+    Returns
+    -------
+    str
+        E.g. ``"rad/s"``, ``"m/s²"``, ``"1/s"``; ``""`` for dimensionless.
+    """
+    units = (units or "").strip()
+    if units in ("", "1"):
+        return ""
+    numerator, denominator = [], []
+    for factor in units.split():
+        match = re.fullmatch(r"([A-Za-z]+)(-?\d+)?", factor)
+        if match is None:
+            return units  # not a simple product: show it unchanged
+        name, power = match.group(1), int(match.group(2) or 1)
+        side = numerator if power > 0 else denominator
+        side.append(name + ("" if abs(power) == 1 else _superscript(abs(power))))
+    top = " ".join(numerator) or "1"
+    return top + ("/" + " ".join(denominator) if denominator else "")
+
+
+def _superscript(n: int) -> str:
+    return str(n).translate(str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹"))
+
+
+def _label(long_name: str, symbol: str | None, units: str) -> str:
+    """``long_name, symbol [units]`` with the parts that exist."""
+    text = long_name + (f", {symbol}" if symbol else "")
+    shown = units_text(units)
+    return f"{text} [{shown}]" if shown else text
+
+
+def _coordinate(da, name: str, degrees: bool) -> tuple[np.ndarray, str]:
+    """Values and axis label of coordinate ``name`` (converted to degrees if asked)."""
+    coord = da[name]
+    values = np.asarray(coord.values, dtype=np.float64)
+    units = str(coord.attrs.get("units", ""))
+    if degrees and name in ANGLE_COORDS and units.split()[:1] == ["rad"]:
+        values = np.rad2deg(values)
+        units = "deg" + units[len("rad"):]
+    long_name = str(coord.attrs.get("long_name", name))
+    return values, _label(long_name, _SYMBOLS.get(name), units)
+
+
+def _variable_label(da) -> str:
+    """Colour-bar label of a data variable: long name and units, wrapped."""
+    long_name = str(da.attrs.get("long_name", da.name if da.name is not None else "value"))
+    return textwrap.fill(_label(long_name, None, str(da.attrs.get("units", ""))),
+                         _LABEL_WIDTH)
+
+
+def _scalar_coords_text(obj, names=None) -> str:
+    """``"forcing_amplitude = 1.2 rad/s²"`` for the scalar numeric coordinates of
+    ``obj`` (those in ``names`` when given), joined by commas."""
+    parts = []
+    for name, coord in obj.coords.items():
+        if names is not None and name not in names:
+            continue
+        if coord.ndim == 0 and np.issubdtype(coord.dtype, np.number):
+            shown = units_text(str(coord.attrs.get("units", "")))
+            parts.append(f"{name} = {float(coord):.4g}" + (f" {shown}" if shown else ""))
+    return ", ".join(parts)
+
+
+# ------------------------------------------------------------------------- selection
+def select(obj, **sel):
+    """Select by nearest coordinate value, refusing names that are not dimensions.
+
+    Parameters
+    ----------
+    obj : xarray.Dataset or xarray.DataArray
+    **sel : float
+        ``dim=value`` in the coordinate's stored units (radians for ``theta0``,
+        rad/s for ``omega0``, ...); the nearest grid point is taken and the
+        dimension dropped (kept as a scalar coordinate).
+
+    Returns
+    -------
+    Same type as ``obj``.
+
+    Raises
+    ------
+    ValueError
+        On a name that is not a dimension of ``obj``.
+    TypeError
+        On a value that is not a number.
+    """
+    dims = [d for d in obj.dims if d in obj.coords]
+    for name, value in sel.items():
+        if name not in dims:
+            raise ValueError(f"cannot select {name!r}: not a dimension of the data; "
+                             f"accepted: {', '.join(dims) or 'none'}")
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float,
+                                                                         np.number)):
+            raise TypeError(f"selection {name}={value!r}: accepted: a number "
+                             f"({obj[name].attrs.get('units', 'coordinate units')})")
+        obj = obj.sel({name: float(value)}, method="nearest")
+    return obj
+
+
+# ------------------------------------------------------------------------------ maps
+def _integer_levels(values: np.ndarray) -> np.ndarray | None:
+    """Distinct levels of an integer-valued array, or None if it is not one."""
+    finite = values[np.isfinite(values)]
+    if finite.size == 0 or not np.all(finite == np.round(finite)):
+        return None
+    lo, hi = int(finite.min()), int(finite.max())
+    if hi - lo + 1 > MAX_DISCRETE_LEVELS:
+        return None
+    if lo < 0 < hi:  # symmetric, so that 0 takes the middle colour of a diverging map
+        m = max(-lo, hi)
+        lo, hi = -m, m
+    return np.arange(lo, hi + 1, dtype=np.float64)
+
+
+def _colormap(name: str):
+    """The matplotlib colormap called ``name``; ValueError naming ``cmap`` if none."""
+    import matplotlib
+
+    if not isinstance(name, str):
+        return name  # already a Colormap
+    try:
+        return matplotlib.colormaps[name]
+    except KeyError:
+        raise ValueError(f"cmap {name!r} is not a matplotlib colormap; accepted: a name "
+                         "such as viridis, magma, RdBu_r, twilight") from None
+
+
+def _discrete(levels: np.ndarray, cmap_name: str):
+    """Colormap and norm with one colour per level, boundaries half-way between."""
+    from matplotlib.colors import BoundaryNorm
+
+    levels = np.asarray(levels, dtype=np.float64)
+    mids = 0.5 * (levels[1:] + levels[:-1])
+    first = levels[0] - (mids[0] - levels[0] if mids.size else 0.5)
+    last = levels[-1] + (levels[-1] - mids[-1] if mids.size else 0.5)
+    bounds = np.concatenate(([first], mids, [last]))
+    cmap = _colormap(cmap_name).resampled(levels.size)
+    return cmap, BoundaryNorm(bounds, cmap.N)
+
+
+def _flag_levels(da):
+    """(levels, tick labels) of a CF flag variable (``flag_values``/``flag_meanings``)."""
+    values = da.attrs.get("flag_values")
+    meanings = da.attrs.get("flag_meanings")
+    if values is None or meanings is None:
+        return None
+    values = np.atleast_1d(np.asarray(values, dtype=np.float64))
+    meanings = str(meanings).split()
+    if len(meanings) != values.size:
+        return None
+    order = np.argsort(values)
+    return values[order], [meanings[k] for k in order]
+
+
+def _as_2d(da):
+    """``da`` with size-1 dimensions squeezed; ValueError unless two dimensions remain."""
+    da = da.squeeze(drop=False)
+    if da.ndim != 2:
+        raise ValueError(
+            f"map needs a 2-D variable; {da.name or 'the data'} has dimensions "
+            f"({', '.join(da.dims)}); accepted: select all but two dimensions first "
+            "(sweep.plot.select / --sel DIM=VALUE)"
+        )
+    return da.sortby(list(da.dims))
+
+
+def map(da, ax=None, degrees=True, cmap=None, title=None):
+    """Draw a 2-D DataArray as a colour map with labelled axes and colour bar.
+
+    The first dimension runs along x and the second along y, so a ``theta0 x
+    omega0`` map is a picture of the phase plane. Integer-valued data (winding
+    numbers, well indices, labels) get one colour per integer and integer ticks;
+    a diverging colormap centred on 0 is used when they take both signs. CF flag
+    variables (``status``) get their flag meanings as tick labels.
+
+    Parameters
+    ----------
+    da : xarray.DataArray
+        Two dimensions after size-1 dimensions are dropped; dimension coordinates
+        carry ``units`` and ``long_name`` (as `sweep.run` writes them). NaN cells
+        are left blank.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw in; a new figure is made when omitted.
+    degrees : bool, default True
+        Show ``theta0`` and ``forcing_phase`` in deg and ``omega0`` in deg/s
+        (coordinates only; data values keep their own units).
+    cmap : str or matplotlib.colors.Colormap, optional
+        Matplotlib colormap (name). Default: ``"RdBu_r"`` for integer data of both
+        signs, ``"viridis"`` otherwise.
+    title : str, optional
+        Axes title. Default: the variable name and any scalar coordinates.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Raises
+    ------
+    ValueError
+        If ``da`` does not have exactly two dimensions of size > 1.
+
+    Examples
+    --------
+    >>> fig = sweep.plot.map(ds.winding)                      # doctest: +SKIP
+    >>> sweep.plot.save_figure(fig, "winding.png")            # doctest: +SKIP
+    """
+    import matplotlib.pyplot as plt
+
+    da = _as_2d(da)
+    xdim, ydim = da.dims
+    x, xlabel = _coordinate(da, xdim, degrees)
+    y, ylabel = _coordinate(da, ydim, degrees)
+    values = np.ma.masked_invalid(np.asarray(da.transpose(ydim, xdim).values,
+                                             dtype=np.float64))
+    flags = _flag_levels(da)
+    levels = flags[0] if flags else _integer_levels(values.filled(np.nan))
+    ticklabels = flags[1] if flags else None
+    if levels is not None:
+        default = "RdBu_r" if levels[0] < 0 < levels[-1] else "viridis"
+        colormap, norm = _discrete(levels, cmap or default)
+        colors = {"cmap": colormap, "norm": norm}
+    else:
+        colors = {"cmap": _colormap(cmap or "viridis")}
+
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(7.0, 5.4), layout="constrained")
+    else:
+        fig = ax.figure
+    mesh = ax.pcolormesh(x, y, values, shading="nearest", **colors)
+    bar = fig.colorbar(mesh, ax=ax)
+    bar.set_label(_variable_label(da))
+    if levels is not None:
+        step = max(1, int(np.ceil(levels.size / 15)))
+        bar.set_ticks(levels[::step])
+        if ticklabels is not None:
+            bar.set_ticklabels(ticklabels[::step])
+        else:
+            bar.set_ticklabels([f"{int(v):d}" for v in levels[::step]])
+        bar.minorticks_off()
+
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    if title is None:
+        scalars = _scalar_coords_text(da)
+        title = (str(da.name) if da.name is not None else "") + (
+            f" ({scalars})" if scalars else "")
+    ax.set_title(title)
+    return fig
+
+
+# ----------------------------------------------------------------------- trajectories
+def _trajectories(ds, sel):
+    """Select ``sel`` (nearest) and split what remains into single trajectories.
+
+    Returns the selection and the list of one-trajectory datasets, and the names of
+    the dimensions along which they differ.
+    """
+    if "time" not in ds.dims:
+        raise ValueError(
+            "trajectory needs a dataset with a 'time' dimension (sampled theta and omega); "
+            "accepted: the output of a run with save_every set"
+        )
+    missing = [v for v in ("theta", "omega") if v not in ds.data_vars]
+    if missing:
+        raise ValueError(f"trajectory needs the variables theta and omega; missing: "
+                         f"{', '.join(missing)}")
+    if "time" in sel:
+        raise ValueError("cannot select 'time' for a trajectory; accepted: grid dimensions "
+                         + ", ".join(d for d in ds.dims if d != "time"))
+    picked = select(ds[["theta", "omega"]], **sel).squeeze(drop=False)
+    others = [d for d in picked.theta.dims if d != "time"]
+    shape = [picked.sizes[d] for d in others]
+    count = int(np.prod(shape)) if others else 1
+    if count > MAX_TRAJECTORIES:
+        raise ValueError(
+            f"{count} trajectories remain after selection; accepted: at most "
+            f"{MAX_TRAJECTORIES}; select along {', '.join(others)} (dim=value)"
+        )
+    lines = [picked.isel(dict(zip(others, index))) for index in np.ndindex(*shape)]
+    return picked, lines, others
+
+
+def trajectory(ds, ax=None, **sel):
+    """Draw theta(t) and the phase portrait (theta, omega) side by side.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A dataset with a ``time`` dimension and the sampled ``theta`` [rad] and
+        ``omega`` [rad/s] (a run with ``save_every``).
+    ax : sequence of two matplotlib.axes.Axes, optional
+        Axes for theta(t) and for the phase portrait; a new figure when omitted.
+    **sel : float
+        ``dim=value`` selections (nearest grid point, in the stored units: rad,
+        rad/s, ...). At most `MAX_TRAJECTORIES` trajectories may remain; each is
+        drawn as one line and labelled by its grid values.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Raises
+    ------
+    ValueError
+        If ``ds`` has no ``time`` dimension, ``theta`` or ``omega``; on a bad
+        selection; or if too many trajectories remain.
+
+    Examples
+    --------
+    >>> fig = sweep.plot.trajectory(ds, theta0=-2.0, omega0=0.0)   # doctest: +SKIP
+    """
+    import matplotlib.pyplot as plt
+
+    picked, lines, others = _trajectories(ds, sel)
+    if ax is None:
+        fig, ax = plt.subplots(1, 2, figsize=(11.0, 4.4), layout="constrained")
+    else:
+        if len(ax) != 2:
+            raise ValueError(f"ax must be two Axes (theta(t), phase portrait), got {ax!r}")
+        fig = ax[0].figure
+    time_axis, phase_axis = ax
+    t, time_label = _coordinate(ds, "time", degrees=False)
+    for one in lines:
+        label = _scalar_coords_text(one, others)
+        time_axis.plot(t, one.theta.values, lw=1.2, label=label)
+        phase_axis.plot(one.theta.values, one.omega.values, lw=1.0, label=label)
+        phase_axis.plot(one.theta.values[:1], one.omega.values[:1], "o",
+                        color=phase_axis.lines[-1].get_color(), ms=4)
+    theta_label = _label(str(ds.theta.attrs.get("long_name", "theta")), _SYMBOLS["theta"],
+                         str(ds.theta.attrs.get("units", "")))
+    omega_label = _label(str(ds.omega.attrs.get("long_name", "omega")), _SYMBOLS["omega"],
+                         str(ds.omega.attrs.get("units", "")))
+    time_axis.set(xlabel=time_label, ylabel=theta_label, title="Angle against time")
+    phase_axis.set(xlabel=theta_label, ylabel=omega_label,
+                   title="Phase portrait (dot: initial state)")
+    for axes in (time_axis, phase_axis):
+        axes.grid(True, alpha=0.3)
+    if others:
+        time_axis.legend(fontsize="small")
+    common = _scalar_coords_text(picked)
+    if common:
+        fig.suptitle(common)
+    return fig
+
+
+# ----------------------------------------------------------------------------- files
+def save_figure(fig, path, dpi=150):
+    """Write ``fig`` to ``path`` atomically and close it.
+
+    The image goes to a temporary file in the same folder, then is renamed over
+    ``path``: an interrupted save leaves any previous file intact.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    path : str or Path
+        Output file; its suffix picks the format (``.png`` when it has none).
+        The folder must exist.
+    dpi : float, default 150
+        Resolution in dots per inch.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    ValueError
+        If the folder does not exist or is not writable, or the suffix is not a
+        format matplotlib writes.
+    """
+    import matplotlib.pyplot as plt
+
+    from .io import check_output_path
+
+    try:
+        path = check_output_path(path)
+        fmt = path.suffix.lstrip(".").lower() or "png"
+        supported = fig.canvas.get_supported_filetypes()
+        if fmt not in supported:
+            raise ValueError(f"output path {str(path)!r}: unknown image format {fmt!r}; "
+                             f"accepted: {', '.join(sorted(supported))}")
+        # a name of our own (not mkstemp) so the file gets the usual permissions
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.part")
+        try:
+            fig.savefig(tmp, format=fmt, dpi=dpi)
+            os.replace(tmp, path)
+        except BaseException:
+            if tmp.exists():
+                tmp.unlink()
+            raise
+    finally:
+        plt.close(fig)
+    return Path(path)

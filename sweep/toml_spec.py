@@ -1,0 +1,286 @@
+"""Run files: a TOML description of a sweep -> ``(Scene, Grid, run keyword arguments)``.
+
+A run file has three tables::
+
+    [scene]                      # Scene.from_dict: gravity, length, model
+    gravity = 9.81               # m/s^2
+    [scene.damping]              # optional effect
+    coefficient = 0.5            # 1/s
+    [scene.forcing]              # optional effect
+    amplitude = 1.2              # rad/s^2
+    frequency = 0.6667           # rad/s
+    phase = 0.0                  # rad
+
+    [grid]                       # axes in dimension order; each axis is one of:
+    theta0 = {start = -180, stop = 180, num = 361, units = "deg"}   # np.linspace
+    omega0 = [0.0, 1.0, 2.0]                                        # a list
+    damping = 0.5                                                   # one number
+    forcing_phase = {values = [0, 90], units = "deg"}               # a list in degrees
+
+    [run]                        # keyword arguments of sweep.run
+    t_end = 100.0                # s (required)
+    dt = 0.01                    # s (required)
+    t0 = 0.0                     # s
+    t_transient = 80.0           # s
+    observe = ["final", "winding"]
+    save_every = 10              # steps; stores theta(t), omega(t)
+    method = "rk4"
+
+``units = "deg"`` is accepted for the angle-like axes ``theta0`` (deg),
+``omega0`` (deg/s) and ``forcing_phase`` (deg); values are converted to radians
+with `sweep.from_degrees`. Every error is a ValueError (or TypeError for a wrong
+type) whose message names the file, the table and the key.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .engine import validate_settings
+from .grid import Grid, from_degrees
+from .observables import resolve
+from .scene import PARAMETERS, Scene
+
+__all__ = ["ANGLE_AXES", "RUN_KEYS", "TABLES", "load_run", "parse_run"]
+
+#: Top-level tables of a run file.
+TABLES = ("scene", "grid", "run")
+
+#: Keys of the ``[run]`` table (keyword arguments of `sweep.run`).
+RUN_KEYS = ("t_end", "dt", "t0", "t_transient", "observe", "save_every", "method")
+
+#: Keys of ``[run]`` that must be present.
+REQUIRED_RUN_KEYS = ("t_end", "dt")
+
+#: Grid axes that accept ``units = "deg"`` (theta0 and forcing_phase in deg,
+#: omega0 in deg/s).
+ANGLE_AXES = ("theta0", "omega0", "forcing_phase")
+
+#: Accepted ``units`` per angle axis; the value says whether it means degrees.
+_UNITS = {
+    "theta0": {"rad": False, "deg": True},
+    "omega0": {"rad/s": False, "rad": False, "deg/s": True, "deg": True},
+    "forcing_phase": {"rad": False, "deg": True},
+}
+
+_RANGE_KEYS = ("start", "stop", "num")
+
+
+def load_run(path) -> tuple[Scene, Grid, dict[str, Any]]:
+    """Read a TOML run file into the arguments of `sweep.run`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The run file (UTF-8 TOML with tables ``[scene]``, ``[grid]``, ``[run]``;
+        see the module docstring).
+
+    Returns
+    -------
+    scene : Scene
+    grid : Grid
+    run_kwargs : dict
+        Keyword arguments for `sweep.run` (``t_end`` and ``dt`` always present, the
+        other keys of ``[run]`` when given), already validated.
+
+    Raises
+    ------
+    ValueError
+        If the file cannot be read or is not valid TOML (naming the file and the
+        TOML error), on an unknown key (naming the key, its table and the accepted
+        keys), a missing required key, or a bad value.
+    TypeError
+        On a value of the wrong type (a string where a number is expected, ...).
+
+    Examples
+    --------
+    >>> scene, grid, kwargs = load_run("examples/forced.toml")   # doctest: +SKIP
+    >>> ds = sweep.run(scene, grid, **kwargs)                    # doctest: +SKIP
+    """
+    path = Path(path)
+    try:
+        with open(path, "rb") as handle:
+            spec = tomllib.load(handle)
+    except OSError as exc:
+        raise ValueError(f"cannot read run file {str(path)!r}: "
+                         f"{exc.strerror or exc}") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"run file {str(path)!r} is not valid TOML: {exc}") from None
+    return parse_run(spec, source=str(path))
+
+
+def parse_run(spec: dict[str, Any], source: str = "run file"
+              ) -> tuple[Scene, Grid, dict[str, Any]]:
+    """Turn a parsed run file (nested dicts, as `tomllib` returns) into run arguments.
+
+    Parameters
+    ----------
+    spec : dict
+        ``{"scene": {...}, "grid": {...}, "run": {...}}``; ``scene`` may be omitted
+        (the default `Scene`).
+    source : str
+        Where ``spec`` came from, put at the start of every error message.
+
+    Returns
+    -------
+    scene, grid, run_kwargs
+        As `load_run`.
+
+    Raises
+    ------
+    ValueError, TypeError
+        As `load_run`.
+    """
+    _check_keys(source, "top level of the file", spec, TABLES)
+    for name in ("grid", "run"):
+        if name not in spec:
+            raise ValueError(f"{source}: missing table [{name}]; required tables: grid, run "
+                             "(scene is optional)")
+    tables = {name: _table(source, name, spec.get(name, {})) for name in TABLES}
+    scene = _scene(source, tables["scene"])
+    grid = _grid(source, tables["grid"])
+    with _context(source, "grid"):
+        grid.check_against(scene)
+    return scene, grid, _run(source, tables["run"])
+
+
+# ----------------------------------------------------------------------------- helpers
+@contextmanager
+def _context(source: str, table: str) -> Iterator[None]:
+    """Prefix errors raised inside with the file and the table."""
+    try:
+        yield
+    except (ValueError, TypeError) as exc:
+        message = str(exc)
+        where = "" if message.startswith(table) else f"[{table}] "
+        kind = ValueError if isinstance(exc, ValueError) else TypeError
+        raise kind(f"{source}: {where}{message}") from None
+
+
+def _check_keys(source: str, where: str, table: dict, accepted) -> None:
+    unknown = [key for key in table if key not in accepted]
+    if unknown:
+        raise ValueError(f"{source}: unknown key {unknown[0]!r} in {where}; "
+                         f"accepted: {', '.join(accepted)}")
+
+
+def _table(source: str, name: str, value: Any) -> dict:
+    if not isinstance(value, dict):
+        raise TypeError(f"{source}: {name} must be a table ([{name}]), got {value!r}")
+    return value
+
+
+def _scene(source: str, table: dict) -> Scene:
+    """``[scene]`` -> Scene (via `Scene.from_dict`)."""
+    with _context(source, "scene"):
+        return Scene.from_dict(table)
+
+
+def _grid(source: str, table: dict) -> Grid:
+    """``[grid]`` -> Grid, axes in file order."""
+    _check_keys(source, "[grid]", table, PARAMETERS)
+    if not table:
+        raise ValueError(f"{source}: [grid] has no axes; accepted axis names: "
+                         f"{', '.join(PARAMETERS)}")
+    axes = {name: _axis(source, name, value) for name, value in table.items()}
+    with _context(source, "grid"):
+        return Grid(**axes)
+
+
+def _axis(source: str, name: str, value: Any) -> np.ndarray | list:
+    """One ``[grid]`` entry -> the values of that axis (radians for angles)."""
+    if isinstance(value, (bool, str)):
+        raise TypeError(f"{source}: [grid] {name} must be a number, a list of numbers or "
+                         f"a table {{start, stop, num}}, got {value!r}")
+    if isinstance(value, (int, float)):
+        return [float(value)]
+    if isinstance(value, list):
+        return _numbers(source, name, value)
+    if not isinstance(value, dict):
+        raise TypeError(f"{source}: [grid] {name} must be a number, a list of numbers or "
+                         f"a table {{start, stop, num}}, got {value!r}")
+    return _axis_table(source, name, value)
+
+
+def _numbers(source: str, name: str, values: list) -> list:
+    for index, item in enumerate(values):
+        if isinstance(item, bool) or not isinstance(item, (int, float)):
+            raise TypeError(f"{source}: [grid] {name}[{index}] must be a number, "
+                             f"got {item!r}")
+    return [float(item) for item in values]
+
+
+def _axis_table(source: str, name: str, table: dict) -> np.ndarray:
+    """``{start, stop, num[, units]}`` or ``{values[, units]}`` -> axis values."""
+    accepted = _RANGE_KEYS + ("values",) + (("units",) if name in ANGLE_AXES else ())
+    _check_keys(source, f"[grid.{name}]", table, accepted)
+    if "values" in table:
+        extra = [key for key in _RANGE_KEYS if key in table]
+        if extra:
+            raise ValueError(f"{source}: [grid.{name}] gives both 'values' and {extra[0]!r}; "
+                             "accepted: either values or start, stop, num")
+        if not isinstance(table["values"], list):
+            raise TypeError(f"{source}: [grid.{name}] values must be a list of numbers, "
+                             f"got {table['values']!r}")
+        values = np.asarray(_numbers(source, f"{name}.values", table["values"]))
+    else:
+        missing = [key for key in _RANGE_KEYS if key not in table]
+        if missing:
+            raise ValueError(f"{source}: [grid.{name}] missing key {missing[0]!r}; accepted: "
+                             "a table with start, stop, num (np.linspace) or with values")
+        start, stop = (_number(source, f"{name}.{key}", table[key]) for key in ("start",
+                                                                                "stop"))
+        num = table["num"]
+        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+            raise ValueError(f"{source}: [grid.{name}] num must be an integer >= 1, "
+                             f"got {num!r}")
+        values = np.linspace(start, stop, num)
+    if "units" in table:
+        return from_degrees(values) if _is_degrees(source, name, table["units"]) else values
+    return values
+
+
+def _number(source: str, key: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"{source}: [grid] {key} must be a number, got {value!r}")
+    return float(value)
+
+
+def _is_degrees(source: str, name: str, units: Any) -> bool:
+    accepted = _UNITS[name]
+    if units not in accepted:
+        raise ValueError(f"{source}: [grid.{name}] units must be one of "
+                         f"{', '.join(map(repr, accepted))}, got {units!r}")
+    return accepted[units]
+
+
+def _run(source: str, table: dict) -> dict[str, Any]:
+    """``[run]`` -> validated keyword arguments of `sweep.run`."""
+    _check_keys(source, "[run]", table, RUN_KEYS)
+    missing = [key for key in REQUIRED_RUN_KEYS if key not in table]
+    if missing:
+        raise ValueError(f"{source}: [run] missing key {missing[0]!r}; required: "
+                         f"{', '.join(REQUIRED_RUN_KEYS)}")
+    kwargs = dict(table)
+    with _context(source, "run"):
+        validate_settings(t_end=kwargs["t_end"], dt=kwargs["dt"],
+                          t0=kwargs.get("t0", 0.0),
+                          t_transient=kwargs.get("t_transient", 0.0),
+                          save_every=kwargs.get("save_every"),
+                          method=kwargs.get("method", "rk4"))
+        if "observe" in kwargs:
+            observe = kwargs["observe"]
+            if isinstance(observe, list) and not all(isinstance(o, str) for o in observe):
+                raise TypeError(f"observe must be a list of names, got {observe!r}")
+            if not isinstance(observe, (str, list)):
+                raise TypeError(f"observe must be a name or a list of names, "
+                                 f"got {observe!r}")
+            resolve(observe)
+            kwargs["observe"] = (observe,) if isinstance(observe, str) else tuple(observe)
+    return kwargs
