@@ -94,6 +94,11 @@ def validate_settings(*, t_end, dt, t0, t_transient, save_every, method) -> RunS
     n_steps = _steps("t_end - t0", t_end - t0, dt)
     # first step index whose time t0 + n dt is >= t0 + t_transient
     n_transient = math.ceil(t_transient / dt - _WHOLE_STEPS_RTOL * max(1.0, t_transient / dt))
+    if n_transient >= n_steps:
+        raise ValueError(
+            f"t_transient = {t_transient!r} leaves no step to observe before t_end - t0 = "
+            f"{t_end - t0!r} with dt = {dt!r}; accepted: t_transient <= t_end - t0 - dt"
+        )
     if save_every is not None:
         if isinstance(save_every, (bool, np.bool_)) or not isinstance(
             save_every, (int, np.integer)

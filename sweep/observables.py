@@ -88,6 +88,22 @@ OBSERVABLES: dict[str, Observable] = {
             steady=True,
         ),
         Observable(
+            name="omega_mean",
+            variables=(
+                ("omega_mean", "rad s-1",
+                 "mean angular velocity over t >= t0 + t_transient: net angle turned in "
+                 "that window divided by its duration"),
+            ),
+            init="acc_n_steady = 0\nacc_th_steady = th",
+            update=(
+                "if acc_n_steady == 0:\n"
+                "    acc_th_steady = th\n"
+                "acc_n_steady += 1"
+            ),
+            final="out[i, COL] = (th - acc_th_steady) / ((acc_n_steady - 1) * dt)",
+            steady=True,
+        ),
+        Observable(
             name="tension",
             variables=(
                 ("tension_min", "m s-2",

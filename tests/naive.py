@@ -74,7 +74,7 @@ def integrate(theta0, omega0, *, t_end, dt, t0=0.0, t_transient=0.0, save_every=
     Returns
     -------
     dict
-        ``theta_final, omega_final, winding, theta_max, amplitude, tension_min,
+        ``theta_final, omega_final, winding, theta_max, amplitude, omega_mean, tension_min,
         tension_max, energy_initial, energy_final`` (floats), ``time_all, theta_all,
         omega_all`` (every state, arrays of length n_steps + 1) and, when
         ``save_every`` is given, ``time, theta, omega`` at steps 0, k, 2k, ...
@@ -111,6 +111,7 @@ def integrate(theta0, omega0, *, t_end, dt, t0=0.0, t_transient=0.0, save_every=
         "winding": float(math.trunc((theta - theta0) / TWO_PI)),
         "theta_max": float(np.max(np.abs(th_s))),
         "amplitude": float(0.5 * (np.max(th_s) - np.min(th_s))),
+        "omega_mean": float((th_s[-1] - th_s[0]) / ((th_s.size - 1) * dt)),
         "tension_min": float(np.min(tensions)),
         "tension_max": float(np.max(tensions)),
         "energy_initial": float(energy(float(theta0), float(omega0), p)),

@@ -77,6 +77,8 @@ CASES = [
     ("inf t_end", lambda: _run(t_end=float("inf")), ValueError, r"t_end must be .* got inf"),
     ("transient too long", lambda: _run(t_transient=1.0), ValueError,
      r"t_transient must be < t_end - t0 = 1\.0 .* got t_transient = 1\.0"),
+    ("transient leaves no step", lambda: _run(t_transient=0.99), ValueError,
+     r"t_transient = 0\.99 leaves no step to observe before t_end - t0 = 1\.0"),
     ("negative transient", lambda: _run(t_transient=-1.0), ValueError,
      r"t_transient must be a finite number >= 0 \(s\), got -1\.0"),
     ("span not whole steps", lambda: _run(dt=0.3), ValueError,
