@@ -1,0 +1,216 @@
+"""Phase-space maps: pure functions ``Dataset -> DataArray``.
+
+Maps never re-run the integrator: they read the features a run stored (final state,
+winding, mean angular velocity, energy, amplitude) and turn them into labels, so they
+work as well on a file loaded from disk (`sweep.load`). This is the split of
+Attractors.jl: the kernel computes features, the maps compute labels.
+
+For developers
+--------------
+A map takes the dataset and keyword options, checks that the variables it needs are
+there (naming the ``observe=`` entry that provides them when they are not), and
+returns a DataArray on the grid's dimensions with ``long_name``, ``units`` or CF
+``flag_values``/``flag_meanings``. Trajectories whose ``status`` is not ok are never
+given a label other than the documented "unresolved" value.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from ._kernels import Status
+
+__all__ = ["motion", "well", "basins", "amplitude", "natural_frequency_squared",
+           "UNRESOLVED"]
+
+#: Label of a trajectory that no map can classify (failed, not settled, ...).
+UNRESOLVED = -1
+
+_MOTION_FILL = np.int8(-127)
+
+
+def _require(ds: xr.Dataset, variables: tuple[str, ...], observe: str, what: str) -> None:
+    missing = [v for v in variables if v not in ds]
+    if missing:
+        raise ValueError(
+            f"{what} needs the variable {missing[0]!r}, which this dataset lacks; accepted: "
+            f"a dataset from sweep.run(..., observe=(..., {observe!r}))"
+        )
+
+
+def _parameter(ds: xr.Dataset, name: str):
+    """A scene parameter as a grid coordinate (when it is an axis) or a float."""
+    if name in ds.coords:
+        return ds[name]
+    if name in ds.attrs:
+        return float(ds.attrs[name])
+    raise ValueError(f"dataset has neither a {name!r} axis nor a {name!r} attribute; "
+                     "accepted: a dataset made by sweep.run")
+
+
+def natural_frequency_squared(ds: xr.Dataset):
+    """``g/L`` [1/s^2] of each trajectory (a float, or a DataArray over grid axes)."""
+    return _parameter(ds, "gravity") / _parameter(ds, "length")
+
+
+def _ok(ds: xr.Dataset) -> xr.DataArray:
+    return ds["status"] == int(Status.OK)
+
+
+def _steady_window(ds: xr.Dataset) -> float:
+    """Duration [s] of the steady window ``t >= t0 + t_transient`` (step-aligned)."""
+    dt = float(ds.attrs["dt"])
+    n_transient = int(np.ceil(float(ds.attrs["t_transient"]) / dt - 1e-9))
+    return (int(ds.attrs["n_steps"]) - n_transient) * dt
+
+
+def motion(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
+    """Rotation versus libration, with the sense of rotation.
+
+    With ``omega_mean`` observed the classification is of the steady motion (after
+    ``t_transient``): a trajectory rotates if it turns at least ``min_turns`` full
+    turns net during the steady window. Otherwise ``winding`` (net full turns over the
+    whole run) is used, which for conservative scenes is the same thing.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        From `sweep.run` with ``observe`` containing ``"omega_mean"`` or ``"winding"``.
+    min_turns : float, default 1
+        Net full turns that count as rotation.
+
+    Returns
+    -------
+    xarray.DataArray, int8, grid dims
+        ``-1`` rotation in the negative sense, ``0`` libration, ``1`` rotation in the
+        positive sense, ``-127`` unresolved (trajectory failed).
+
+    Notes
+    -----
+    Near the separatrix the time for one turn diverges like ``ln(16/delta)/omega_n``
+    (``delta`` the relative energy above the separatrix), so a rotation that has not
+    completed ``min_turns`` turns by ``t_end`` is read as libration: the band of
+    misclassified starts has relative width about ``16 exp(-omega_n T / (min_turns + 1))``
+    for a window of duration ``T``.
+    """
+    if "omega_mean" in ds:
+        turns = ds["omega_mean"] * _steady_window(ds) / (2 * np.pi)
+        source = "omega_mean over the steady window"
+    else:
+        _require(ds, ("winding",), "omega_mean", "motion")
+        turns = ds["winding"]
+        source = "winding over the whole run"
+    code = xr.where(np.abs(turns) >= min_turns, np.sign(turns), 0)
+    code = xr.where(_ok(ds), code, _MOTION_FILL).astype(np.int8)
+    code.attrs = {
+        "long_name": f"motion: rotation (sense) or libration, from {source}",
+        "flag_values": np.array([-1, 0, 1, _MOTION_FILL], dtype=np.int8),
+        "flag_meanings": "rotation_negative libration rotation_positive unresolved",
+        "min_turns": float(min_turns),
+    }
+    return code.rename("motion")
+
+
+def _captured(ds: xr.Dataset) -> xr.DataArray:
+    """True where the final energy is below the separatrix energy ``2 g/L``.
+
+    An unforced damped pendulum below that energy can never leave its well: its
+    energy only decreases.
+    """
+    _require(ds, ("energy_final",), "energy", "capture detection")
+    return ds["energy_final"] < 2.0 * natural_frequency_squared(ds)
+
+
+def _check_unforced(ds: xr.Dataset, what: str) -> None:
+    if "forcing" in str(ds.attrs.get("effects", "")).split():
+        raise ValueError(f"{what} is for unforced scenes (an unforced damped pendulum "
+                         "settles in a well); this dataset's scene has forcing")
+
+
+def well(ds: xr.Dataset) -> xr.DataArray:
+    """The potential well ``k`` (rest position ``2 pi k``) each start ends in.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        An unforced run observing ``final`` and ``energy``.
+
+    Returns
+    -------
+    xarray.DataArray, float64, grid dims
+        ``round(theta_final / 2 pi)`` where the pendulum has been captured (final
+        energy below the separatrix, so it can never leave that well); NaN where it
+        has not (still rotating at ``t_end``) or the trajectory failed.
+    """
+    _check_unforced(ds, "well")
+    _require(ds, ("theta_final",), "final", "well")
+    index = np.round(ds["theta_final"] / (2 * np.pi))
+    index = index.where(_captured(ds) & _ok(ds))
+    index.attrs = {"long_name": "final potential well k (rest at theta = 2 pi k)",
+                   "units": "1"}
+    return index.rename("well")
+
+
+def basins(ds: xr.Dataset, *, rest_position: bool = False) -> xr.DataArray:
+    """Basins of attraction as integer labels with a catalogue of attractors.
+
+    For unforced damped scenes the attractors are the rest states ``theta = 2 pi k``;
+    with ``rest_position=True`` they are identified modulo ``2 pi`` (the physical
+    rest position, so every captured start gets the same label).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        An unforced run observing ``final`` and ``energy``.
+    rest_position : bool, default False
+        Identify wells modulo 2 pi.
+
+    Returns
+    -------
+    xarray.DataArray, int32, grid dims
+        ``0 .. n-1`` attractor labels, ``-1`` unresolved (not yet captured, or
+        failed). Attribute ``attractor_theta`` lists each attractor's rest angle [rad]
+        (``attractor_theta[label]``).
+    """
+    index = well(ds)
+    if rest_position:
+        index = xr.where(index.notnull(), 0.0, np.nan)
+    values = index.values
+    found = np.unique(values[np.isfinite(values)])
+    labels = np.full(values.shape, UNRESOLVED, dtype=np.int32)
+    finite = np.isfinite(values)
+    labels[finite] = np.searchsorted(found, values[finite])
+    out = xr.DataArray(labels, coords=index.coords, dims=index.dims, name="basins")
+    out.attrs = {
+        "long_name": "basin of attraction (attractor label)",
+        "attractor_theta": (2 * np.pi * found).astype(np.float64),
+        "attractor_kind": "rest state modulo 2 pi" if rest_position else "rest state",
+        "unresolved": UNRESOLVED,
+    }
+    return out
+
+
+def amplitude(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
+    """Steady amplitude after the transient, NaN where the pendulum rotates.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A run observing ``amplitude`` and ``omega_mean`` (or ``winding``).
+    min_turns : float, default 1
+        Passed to `motion`.
+
+    Returns
+    -------
+    xarray.DataArray, float64 [rad], grid dims
+        Half peak-to-peak of theta over ``t >= t0 + t_transient``; NaN where `motion`
+        says rotation or the trajectory failed.
+    """
+    _require(ds, ("amplitude",), "amplitude", "amplitude map")
+    code = motion(ds, min_turns=min_turns)
+    out = ds["amplitude"].where(code == 0)
+    out.attrs = {"long_name": "steady amplitude (half peak-to-peak of theta after the "
+                              "transient); NaN where the pendulum rotates",
+                 "units": "rad"}
+    return out.rename("amplitude")
