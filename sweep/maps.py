@@ -214,3 +214,137 @@ def amplitude(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
                               "transient); NaN where the pendulum rotates",
                  "units": "rad"}
     return out.rename("amplitude")
+
+
+# ------------------------------------------------------------------ forced attractors
+def _periods(theta: np.ndarray, omega: np.ndarray, max_period: int, tol: float):
+    """Smallest stroboscopic period of each trajectory.
+
+    Parameters
+    ----------
+    theta, omega : ndarray, shape (n, P)
+        The last P stroboscopic samples (unwrapped angle [rad], velocity [rad/s]).
+    max_period : int
+        Largest period p tried; needs ``P >= 2 p``.
+    tol : float
+        Closeness in rad and rad/s for a sample to count as repeating.
+
+    Returns
+    -------
+    period : ndarray, shape (n,), int64
+        Smallest p with ``x[j + p] == x[j]`` (angle modulo 2 pi, within ``tol``) for all
+        available j, or 0 where none up to ``max_period``.
+    turns : ndarray, shape (n,), int64
+        Net full turns per ``period`` forcing periods (0 where unresolved).
+    """
+    n, samples = theta.shape
+    period = np.zeros(n, dtype=np.int64)
+    turns = np.zeros(n, dtype=np.int64)
+    finite = np.isfinite(theta).all(axis=1) & np.isfinite(omega).all(axis=1)
+    for p in range(1, max_period + 1):
+        if samples < 2 * p:
+            break
+        d_theta = theta[:, p:] - theta[:, :-p]
+        q = np.round(d_theta[:, -1] / (2 * np.pi))
+        ok = (np.abs(d_theta - 2 * np.pi * q[:, None]) < tol).all(axis=1)
+        ok &= (np.abs(omega[:, p:] - omega[:, :-p]) < tol).all(axis=1)
+        new = ok & finite & (period == 0)
+        period[new] = p
+        turns[new] = q[new].astype(np.int64)
+    return period, turns
+
+
+def _orbit(theta_row, omega_row, p):
+    """The p orbit points (angle wrapped to [0, 2 pi), velocity), shape (p, 2)."""
+    return np.stack([np.mod(theta_row[-p:], 2 * np.pi), omega_row[-p:]], axis=1)
+
+
+def _same_orbit(a: np.ndarray, b: np.ndarray, tol: float) -> bool:
+    """True if orbits a and b (shape (p, 2)) coincide up to a cyclic shift."""
+    for shift in range(len(a)):
+        rolled = np.roll(b, shift, axis=0)
+        d_theta = np.abs(a[:, 0] - rolled[:, 0])
+        d_theta = np.minimum(d_theta, 2 * np.pi - d_theta)
+        if (d_theta < tol).all() and (np.abs(a[:, 1] - rolled[:, 1]) < tol).all():
+            return True
+    return False
+
+
+def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int = 8,
+                        tol: float = 1e-3):
+    """Group trajectories by the periodic attractor their stroboscopic samples sit on.
+
+    Parameters
+    ----------
+    theta, omega : ndarray, shape (n, P)
+        Last P stroboscopic samples per trajectory, oldest first.
+    max_period : int, default 8
+        Longest period (in forcing periods) that is looked for.
+    tol : float, default 1e-3
+        Repetition and identity tolerance, in rad and rad/s.
+
+    Returns
+    -------
+    labels : ndarray, shape (n,), int32
+        ``0..m-1`` by decreasing basin size; ``-1`` unresolved (no period found:
+        chaotic, quasi-periodic or not converged, or a failed trajectory).
+    catalogue : dict of ndarray
+        ``theta`` [rad, in [0, 2 pi)] and ``omega`` [rad/s]: one point of each
+        attractor; ``period`` (forcing periods); ``turns_per_period`` (mean net turns
+        per forcing period; 0 for librations); ``size`` (trajectories in its basin).
+
+    Notes
+    -----
+    Orbits are first bucketed by (period, turns, quantised orbit point of least
+    wrapped angle), then buckets whose orbits coincide up to a cyclic shift within
+    ``tol`` are merged, so quantisation edges do not split an attractor.
+    """
+    period, turns = _periods(theta, omega, max_period, tol)
+    n = theta.shape[0]
+    labels = np.full(n, UNRESOLVED, dtype=np.int32)
+    resolved = np.flatnonzero(period > 0)
+    if resolved.size == 0:
+        empty = np.zeros(0)
+        return labels, {"theta": empty, "omega": empty, "period": empty.astype(int),
+                        "turns_per_period": empty, "size": empty.astype(int)}
+    keys = np.empty((resolved.size, 4), dtype=np.int64)
+    for p in np.unique(period[resolved]):
+        rows = resolved[period[resolved] == p]
+        wrapped = np.mod(theta[rows, -p:], 2 * np.pi)
+        pick = np.argmin(wrapped, axis=1)
+        where = np.searchsorted(resolved, rows)
+        keys[where, 0] = p
+        keys[where, 1] = turns[rows]
+        keys[where, 2] = np.round(wrapped[np.arange(rows.size), pick] / (10 * tol))
+        keys[where, 3] = np.round(omega[rows, -p:][np.arange(rows.size), pick] / (10 * tol))
+    buckets, bucket_of = np.unique(keys, axis=0, return_inverse=True)
+    bucket_of = bucket_of.ravel()
+    first = np.full(len(buckets), -1)
+    for k in range(resolved.size - 1, -1, -1):
+        first[bucket_of[k]] = resolved[k]
+    # merge buckets holding the same orbit (few buckets: quadratic is fine)
+    parent = np.arange(len(buckets))
+    orbits = [_orbit(theta[r], omega[r], int(buckets[b, 0])) for b, r in enumerate(first)]
+    for a in range(len(buckets)):
+        for b in range(a):
+            if parent[b] != b or buckets[a, 0] != buckets[b, 0] or buckets[a, 1] != buckets[b, 1]:
+                continue
+            if _same_orbit(orbits[a], orbits[b], 10 * tol):
+                parent[a] = b
+                break
+    attractor_of_bucket = parent[bucket_of]
+    roots, inverse, sizes = np.unique(attractor_of_bucket, return_inverse=True,
+                                      return_counts=True)
+    order = np.argsort(-sizes, kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    labels[resolved] = rank[inverse.ravel()]
+    reps = [first[r] for r in roots[order]]
+    catalogue = {
+        "theta": np.array([np.mod(theta[r, -1], 2 * np.pi) for r in reps]),
+        "omega": np.array([omega[r, -1] for r in reps]),
+        "period": np.array([period[r] for r in reps]),
+        "turns_per_period": np.array([turns[r] / period[r] for r in reps]),
+        "size": sizes[order],
+    }
+    return labels, catalogue

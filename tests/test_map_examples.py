@@ -1,0 +1,48 @@
+"""The map examples run end to end at a reduced size and say what they should."""
+
+import importlib.util
+import pathlib
+
+import matplotlib.image
+import pytest
+
+EXAMPLES = pathlib.Path(__file__).resolve().parents[1] / "examples"
+
+
+def _load(name):
+    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _assert_png(path):
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert matplotlib.image.imread(path).ndim == 3
+
+
+def test_damped_basins(tmp_path, capsys):
+    assert _load("damped_basins").main(["--size", "41", "--out", str(tmp_path)]) == 0
+    _assert_png(tmp_path / "basins.png")
+    assert (tmp_path / "basins.nc").is_file()
+    assert "basin fraction per well k" in capsys.readouterr().out
+
+
+def test_rotation_map(tmp_path, capsys):
+    assert _load("rotation_map").main(["--size", "15", "--out", str(tmp_path)]) == 0
+    _assert_png(tmp_path / "rotation.png")
+    _assert_png(tmp_path / "amplitude.png")
+    shares = capsys.readouterr().out
+    assert "libration" in shares
+
+
+def test_frequency_response(tmp_path, capsys):
+    assert _load("frequency_response").main(["--points", "31", "--out", str(tmp_path)]) == 0
+    _assert_png(tmp_path / "frequency_response.png")
+    # the softening resonance shows hysteresis below the natural frequency 1 rad/s
+    out = capsys.readouterr().out
+    assert "hysteresis window: W in [0.9" in out
+
+
+if __name__ == "__main__":  # pragma: no cover
+    pytest.main([__file__])
