@@ -138,3 +138,42 @@ def test_maps_work_on_a_file_loaded_from_disk(damped, tmp_path):
     loaded = sweep.load(path)
     xr.testing.assert_identical(maps.basins(loaded), maps.basins(damped))
     xr.testing.assert_identical(maps.motion(loaded), maps.motion(damped))
+
+
+def _strobe_rows():
+    """Synthetic stroboscopic samples (16 per row) with known attractors."""
+    m = np.arange(16)
+    rng = np.random.default_rng(0)
+    rows = [
+        # period-1 libration at (0.5, 0.1), seen in well 3 and in well 0: one attractor
+        (np.full(16, 0.5 + 6 * np.pi), np.full(16, 0.1)),
+        (np.full(16, 0.5 + 1e-5), np.full(16, 0.1)),
+        # period-2 libration, and the same orbit sampled half a cycle later
+        (np.where(m % 2 == 0, 1.0, -1.0), np.where(m % 2 == 0, 0.3, -0.3)),
+        (np.where(m % 2 == 1, 1.0, -1.0), np.where(m % 2 == 1, 0.3, -0.3)),
+        # period-1 rotation: one full turn per forcing period
+        (2.0 + 2 * np.pi * m, np.full(16, 1.5)),
+        # no period up to 8: unresolved
+        (rng.uniform(-3, 3, 16), rng.uniform(-3, 3, 16)),
+        # one fixed point seen on both sides of the 2 pi wrap
+        (np.full(16, 2 * np.pi - 1e-5), np.full(16, -0.2)),
+        (np.full(16, 1e-5), np.full(16, -0.2)),
+        # a failed trajectory
+        (np.full(16, np.nan), np.full(16, np.nan)),
+    ]
+    return np.array([r[0] for r in rows]), np.array([r[1] for r in rows])
+
+
+def test_identify_attractors_on_known_orbits():
+    theta, omega = _strobe_rows()
+    labels, catalogue = maps.identify_attractors(theta, omega)
+    # same attractor -> same label, across wells, cyclic shifts and the 2 pi wrap
+    assert labels[0] == labels[1] and labels[2] == labels[3] and labels[6] == labels[7]
+    assert len({labels[0], labels[2], labels[4], labels[6]}) == 4
+    assert labels[5] == maps.UNRESOLVED and labels[8] == maps.UNRESOLVED
+    by_label = {name: catalogue[name] for name in catalogue}
+    assert by_label["period"][labels[2]] == 2 and by_label["period"][labels[0]] == 1
+    assert by_label["turns_per_period"][labels[4]] == 1.0
+    assert by_label["turns_per_period"][labels[0]] == 0.0
+    assert list(by_label["size"]) == sorted(by_label["size"], reverse=True)
+    assert by_label["size"].sum() == 7
