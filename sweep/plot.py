@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["map", "save_figure", "select", "trajectory"]
+__all__ = ["basins", "map", "save_figure", "select", "trajectory"]
 
 #: Coordinates converted to degrees (and deg/s) when ``degrees=True``.
 ANGLE_COORDS = ("theta0", "omega0", "forcing_phase")
@@ -402,6 +402,52 @@ def trajectory(ds, ax=None, **sel):
 
 
 # ----------------------------------------------------------------------------- files
+def basins(labels, ax=None, degrees=True, cmap="tab20", title=None):
+    """Draw a basin map (integer attractor labels) with the attractors marked.
+
+    Parameters
+    ----------
+    labels : xarray.DataArray, int
+        From `sweep.maps.basins`: ``-1`` unresolved (drawn blank), ``0..m-1``
+        attractor labels; attributes ``attractor_theta`` [rad] and optionally
+        ``attractor_omega`` [rad/s] give one point of each attractor.
+    ax : matplotlib.axes.Axes, optional
+    degrees : bool, default True
+        As in `map`.
+    cmap : str, default "tab20"
+        A qualitative colormap: neighbouring labels get distinct colours.
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The map; when its axes are ``theta0`` and ``omega0``, each attractor point
+        that falls inside the window is marked with a white-edged star (angles
+        reduced to the window modulo 2 pi).
+    """
+    masked = labels.where(labels >= 0)
+    masked.attrs = dict(labels.attrs)
+    masked.attrs.pop("flag_values", None)
+    fig = map(masked, ax=ax, degrees=degrees, cmap=cmap, title=title)
+    ax = fig.axes[0]
+    dims = _as_2d(labels).dims
+    if dims == ("theta0", "omega0") and "attractor_theta" in labels.attrs:
+        theta = np.atleast_1d(np.asarray(labels.attrs["attractor_theta"], dtype=float))
+        omega = np.atleast_1d(np.asarray(labels.attrs.get("attractor_omega",
+                                                          np.zeros_like(theta)), dtype=float))
+        lo, hi = float(labels.theta0.min()), float(labels.theta0.max())
+        theta = lo + np.mod(theta - lo, 2 * np.pi)  # reduce into the window
+        inside = (theta <= hi) & (omega >= float(labels.omega0.min())) & \
+            (omega <= float(labels.omega0.max()))
+        scale = 180 / np.pi if degrees else 1.0
+        ax.plot(theta[inside] * scale, omega[inside] * scale, linestyle="none", marker="*",
+                markersize=12, markerfacecolor="black", markeredgecolor="white",
+                label="attractor")
+        if inside.any():
+            ax.legend(loc="upper right", fontsize="small")
+    return fig
+
+
 def save_figure(fig, path, dpi=150):
     """Write ``fig`` to ``path`` atomically and close it.
 

@@ -220,3 +220,20 @@ def test_interrupted_save_keeps_the_previous_file(maps, tmp_path, monkeypatch):
         plot.save_figure(fig, path)
     assert path.read_bytes() == before
     assert [p.name for p in tmp_path.iterdir()] == ["map.png"]
+
+
+def test_basins_plot_marks_attractors(tmp_path):
+    import sweep
+    from sweep import maps
+
+    ds = sweep.run(sweep.Scene(effects=(sweep.Damping(0.5),)),
+                   sweep.Grid(theta0=np.linspace(-np.pi, np.pi, 21),
+                              omega0=np.linspace(-8, 8, 21)),
+                   t_end=20.0, dt=0.02, observe=("final", "energy"))
+    fig = sweep.plot.basins(maps.basins(ds))
+    ax = fig.axes[0]
+    stars = [line for line in ax.get_lines() if line.get_marker() == "*"]
+    # every rest state 2 pi k reduces to (0, 0) in the window: one star there
+    assert len(stars) == 1 and np.allclose(stars[0].get_xydata(), [[0.0, 0.0]])
+    sweep.plot.save_figure(fig, tmp_path / "basins.png")
+    assert (tmp_path / "basins.png").read_bytes()[:4] == b"\x89PNG"
