@@ -15,7 +15,7 @@ from .scene import Damping as Damping
 from .scene import Forcing as Forcing
 from .scene import Scene as Scene
 
-_LAZY_MODULES = ("plot", "io", "cli", "maps", "metrics")
+_LAZY_MODULES = ("plot", "io", "cli", "maps", "metrics", "methods", "accuracy")
 
 
 def __getattr__(name):

@@ -1,4 +1,4 @@
-"""All numba: build the sweep kernel for (model, effects, observables, saving).
+"""All numba: build the sweep kernel for (model, effects, observables, saving, method).
 
 The kernel is *generated source*: `source` writes a small Python module that
 contains only the terms the scene calls for (no ``sin(W t)`` without forcing, no
@@ -8,7 +8,13 @@ the hash of its text) and imported; its functions are compiled with numba's
 ``cache=True``, so a fresh process loads machine code from disk instead of compiling
 again. Built kernels are also memoised in the process (`build`).
 
-Kernel contract (every generated kernel)::
+The step is generated from the method's *data* (`sweep.methods`): an explicit
+Runge-Kutta step from its Butcher tableau (RK4 included: the generated code performs
+exactly the operations of the classical hand-written step, ``th + (dt/6) * (k1 + 2 k2
++ 2 k3 + k4)`` etc., so there is no separate fast path), a kick-drift sequence from a
+splitting method's coefficients, and an adaptive loop from an embedded pair.
+
+Kernel contract (every fixed-step kernel: explicit Runge-Kutta and symplectic)::
 
     kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
 
@@ -17,14 +23,29 @@ t0, dt : float64                      time of step n is t0 + n*dt (never accumul
 n_steps : int64                       steps to take
 n_transient : int64                   steady observables accumulate from this step index
 save_every : int64                    sampling stride when spec.save (else ignored)
-out : float64[n, n_columns]           observables, in `columns(spec)` order
+out : float64[n, n_columns(spec)]     observables, in observe order
 status : int8[n]                      Status code per trajectory
 saved : float64[n, 2, n_saved]        theta, omega at steps 0, k, 2k, ... (spec.save)
 
+Adaptive kernels (embedded pairs, per-trajectory step-size control)::
+
+    kernel(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats)
+
+dt : float64                          first trial step and largest step [s]
+t_transient : float64                 steady observables update at accepted steps
+                                      whose time is >= t0 + t_transient
+rtol, atol : float64                  error per step <= atol + rtol * |y| (RMS norm)
+stats : int64[n, 2]                   accepted and rejected steps per trajectory
+
+Each trajectory advances its own time ``t`` (a sum of accepted steps) and clips its
+last step so that it ends at ``t_end`` exactly.
+
 Iteration ``i`` reads ``params[i]`` and writes only ``out[i]``, ``status[i]``,
-``saved[i]``; nothing is allocated inside the time loop; no exception is raised: a
-non-finite state sets ``status[i] = NONFINITE``, stops that trajectory, and fills its
-outputs with NaN (its saved samples from then on stay NaN).
+``saved[i]`` (``stats[i]``); nothing is allocated inside the time loop; no exception is
+raised: a non-finite state sets ``status[i] = NONFINITE``, stops that trajectory, and
+fills its outputs with NaN (its saved samples from then on stay NaN). An adaptive
+trajectory whose step would have to shrink below ``16 eps max(|t0|, |t_end|)`` (which
+only a state on its way to overflow does) is flagged the same way.
 """
 
 from __future__ import annotations
@@ -34,17 +55,21 @@ import functools
 import hashlib
 import importlib.util
 import os
+import re
 import sys
 import tempfile
 import textwrap
 from dataclasses import dataclass
+from fractions import Fraction
+from math import lcm
 from pathlib import Path
 
 from . import _config
+from . import methods as _methods
 from .observables import OBSERVABLES
 from .scene import PARAMETERS
 
-__all__ = ["Status", "KernelSpec", "columns", "source", "build"]
+__all__ = ["Status", "KernelSpec", "n_columns", "source", "build"]
 
 
 class Status(enum.IntEnum):
@@ -61,7 +86,8 @@ class Status(enum.IntEnum):
 
 _STATUS_MESSAGES = {
     Status.OK: "integrated to t_end",
-    Status.NONFINITE: "state became non-finite (overflow or NaN); integration stopped",
+    Status.NONFINITE: "state became non-finite (overflow or NaN), or an adaptive step "
+                      "underflowed; integration stopped",
 }
 
 
@@ -78,8 +104,10 @@ class KernelSpec:
         Observable names in canonical (`OBSERVABLES`) order.
     save : bool
         Whether sampled trajectories are written.
-    method : str
-        Integrator; only ``"rk4"`` for now.
+    method : str or sweep.methods.ButcherTableau or sweep.methods.SplittingMethod
+        Integrator: a `sweep.methods.METHODS` name or a method object. A registry
+        object is stored as its name, so ``method=RK4`` and ``method="rk4"`` share one
+        kernel; an unknown name is refused by `source`.
     """
 
     model: str
@@ -87,12 +115,19 @@ class KernelSpec:
     forcing: bool
     observe: tuple[str, ...]
     save: bool = False
-    method: str = "rk4"
+    method: object = "rk4"
+
+    def __post_init__(self) -> None:
+        method = self.method
+        if not isinstance(method, str) and \
+                _methods.METHODS.get(getattr(method, "name", None)) == method:
+            object.__setattr__(self, "method", method.name)
 
 
-def columns(spec: KernelSpec) -> list[tuple[str, str, str]]:
-    """The ``out`` columns of a kernel: ``(name, units, long_name)`` in order."""
-    return [v for name in spec.observe for v in OBSERVABLES[name].variables]
+def n_columns(spec: KernelSpec) -> int:
+    """Width of ``out``: every column of every observed observable, in observe order
+    (an observable with samples > 1 fills ``samples`` columns per variable)."""
+    return sum(OBSERVABLES[name].n_columns for name in spec.observe)
 
 
 # --------------------------------------------------------------------------- source
@@ -126,26 +161,222 @@ def _energy_source(spec: KernelSpec) -> str:
     )
 
 
-def _rk4_step_source(spec: KernelSpec) -> str:
-    """One classical RK4 step of (th, om); forcing values fa, fb, fc at t, t+dt/2, t+dt."""
-    extra_a = (", c" if spec.damping else "") + (", fa" if spec.forcing else "")
-    extra_b = (", c" if spec.damping else "") + (", fb" if spec.forcing else "")
-    extra_c = (", c" if spec.damping else "") + (", fc" if spec.forcing else "")
-    return textwrap.dedent(f"""\
-        k1t = om
-        k1o = accel(th, om, w0sq{extra_a})
-        k2t = om + half * k1o
-        k2o = accel(th + half * k1t, om + half * k1o, w0sq{extra_b})
-        k3t = om + half * k2o
-        k3o = accel(th + half * k2t, om + half * k2o, w0sq{extra_b})
-        k4t = om + dt * k3o
-        k4o = accel(th + dt * k3t, om + dt * k3o, w0sq{extra_c})
-        th = th + sixth * (k1t + 2.0 * k2t + 2.0 * k3t + k4t)
-        om = om + sixth * (k1o + 2.0 * k2o + 2.0 * k3o + k4o)
-        """)
+def _accel_call(spec: KernelSpec, th: str, om: str, f: str | None) -> str:
+    """``accel(...)`` with only the arguments the scene's terms take."""
+    args = [th, om, "w0sq"]
+    if spec.damping:
+        args.append("c")
+    if spec.forcing:
+        args.append(f)
+    return f"accel({', '.join(args)})"
 
 
-_STEPPERS = {"rk4": _rk4_step_source}
+def _float(x) -> str:
+    return repr(float(x))
+
+
+# Rows whose exact (Fraction) coefficients share a denominator up to this size are
+# written as (dt / D) * (n1 k1 + n2 k2 + ...), with small integers n: for RK4 that is
+# exactly the classical hand-written step, operation for operation.
+_MAX_COMMON_DENOMINATOR = 1000
+
+
+def _combination(coeffs, names, scale: str, constants: dict[str, str] | None):
+    """Source of ``scale * sum(coeffs[j] * names[j])`` over the non-zero coefficients,
+    or None when they are all zero.
+
+    With ``constants`` (a dict filled with preamble lines), exact rows with a small
+    common denominator D become ``dt_D * (n1 * x1 + ...)`` with ``dt_D = dt / D``
+    computed once per kernel call; otherwise ``scale * (c1 * x1 + ...)`` with the
+    coefficients as float literals.
+    """
+    terms = [(x, name) for x, name in zip(coeffs, names) if x != 0]
+    if not terms:
+        return None
+    exact = all(isinstance(x, Fraction) for x, _ in terms)
+    if constants is not None and exact:
+        denominator = lcm(*(x.denominator for x, _ in terms))
+        if denominator <= _MAX_COMMON_DENOMINATOR:
+            if denominator == 1:
+                factor = scale
+            else:
+                factor = f"{scale}_{denominator}"
+                constants[factor] = f"{factor} = {scale} / {float(denominator)!r}"
+            parts = []
+            for x, name in terms:
+                n = int(x * denominator)
+                sign = "-" if n < 0 else "+"
+                body = name if abs(n) == 1 else f"{float(abs(n))!r} * {name}"
+                parts.append((sign, body))
+            text = ("-" if parts[0][0] == "-" else "") + parts[0][1]
+            for sign, body in parts[1:]:
+                text += f" {sign} {body}"
+            return f"{factor} * {text}" if len(parts) == 1 else f"{factor} * ({text})"
+    text = ""
+    for x, name in terms:
+        body = f"{_float(abs(x))} * {name}"
+        text += (("-" if x < 0 else "") + body) if not text else \
+            (f" - {body}" if x < 0 else f" + {body}")
+    return f"{scale} * ({text})"
+
+
+def _forcing_times(spec: KernelSpec, c, *, time: str, step: str | None, scale: str,
+                   constants: dict[str, str] | None):
+    """Forcing variable per distinct node c_i, and the lines computing them.
+
+    Fixed step (``step`` given): time of node c is ``t0 + step * dt + c * dt`` (c = 0:
+    ``t0 + step * dt``; c = 1: ``t0 + (step + 1) * dt``), never accumulated. Adaptive
+    (``step`` None): ``time + c * h``.
+    Returns ({c: variable}, [lines]).
+    """
+    if not spec.forcing:
+        return {}, []
+    names, lines = {}, []
+    for x in sorted(set(c)):
+        name = f"f{len(names)}"
+        names[x] = name
+        if step is None:
+            at = time if x == 0 else (f"{time} + {scale}" if x == 1 else
+                                      f"{time} + {_float(x)} * {scale}")
+        elif x == 0:
+            at = f"t0 + {step} * dt"
+        elif x == 1:
+            at = f"t0 + ({step} + 1) * dt"
+        else:
+            const = f"cdt{len(names) - 1}"
+            constants[const] = f"{const} = dt * {_float(x)}"
+            at = f"t0 + {step} * dt + {const}"
+        lines.append(f"{name} = A * math.sin(W * ({at}) + phi)")
+    return names, lines
+
+
+def _rk_stages(spec: KernelSpec, tableau, scale: str, constants, forcing: dict) -> list[str]:
+    """Stage lines k_it, k_io (k_it = omega at stage i, since theta' = omega)."""
+    lines = []
+    for i in range(tableau.stages):
+        row = tableau.a[i][:i]
+        kt = [f"k{j + 1}t" for j in range(i)]
+        ko = [f"k{j + 1}o" for j in range(i)]
+        dth = _combination(row, kt, scale, constants)
+        dom = _combination(row, ko, scale, constants)
+        lines.append(f"k{i + 1}t = " + (f"om + {dom}" if dom else "om"))
+        lines.append(f"k{i + 1}o = " + _accel_call(
+            spec, f"th + {dth}" if dth else "th", f"k{i + 1}t", forcing.get(tableau.c[i])))
+    return lines
+
+
+def _explicit_stepper(spec: KernelSpec, tableau) -> dict[str, list[str]]:
+    """One fixed step of an explicit Runge-Kutta method, from its tableau."""
+    constants: dict[str, str] = {}
+    c = tableau.c
+    carry = spec.forcing and 0 in c and 1 in c  # f(t_{n+1}) is the next step's f(t_n)
+    forcing, f_lines = _forcing_times(spec, c, time="", step="step", scale="dt",
+                                      constants=constants)
+    before, after = [], []
+    if carry:
+        f_lines = f_lines[1:]  # f at c = 0 comes from the previous step
+        before.append(f"{forcing[Fraction(0)]} = A * math.sin(W * t0 + phi)")
+        after.append(f"{forcing[Fraction(0)]} = {forcing[Fraction(1)]}")
+    step = f_lines + _rk_stages(spec, tableau, "dt", constants, forcing)
+    kt = [f"k{j + 1}t" for j in range(tableau.stages)]
+    ko = [f"k{j + 1}o" for j in range(tableau.stages)]
+    step.append(f"th = th + {_combination(tableau.b, kt, 'dt', constants)}")
+    step.append(f"om = om + {_combination(tableau.b, ko, 'dt', constants)}")
+    return {"preamble": list(constants.values()), "before": before, "step": step + after}
+
+
+def _symplectic_stepper(spec: KernelSpec, method) -> dict[str, list[str]]:
+    """One kick-drift step; the force is re-evaluated only after a drift moved theta."""
+    if spec.damping or spec.forcing:  # `source` refuses these first; a guard
+        raise ValueError(f"method {method.name!r} needs a conservative scene")
+    constants, step, stale = {}, [], False
+    force = f"acc = {_accel_call(spec, 'th', 'om', None)}"
+
+    def scaled(kind, x):
+        if x == 1:
+            return "dt"
+        line = f"dt * {_float(x)}"
+        for name, known in constants.items():
+            if known.endswith(f" = {line}"):
+                return name
+        name = f"{kind}{len(constants)}"
+        constants[name] = f"{name} = {line}"
+        return name
+
+    for kick, drift in zip(method.kick, method.drift):
+        if kick != 0:
+            if stale:
+                step.append(force)
+                stale = False
+            step.append(f"om = om + {scaled('kick', kick)} * acc")
+        if drift != 0:
+            step.append(f"th = th + {scaled('drift', drift)} * om")
+            stale = True
+    if stale:
+        step.append(force)
+    return {"preamble": list(constants.values()), "before": [force], "step": step}
+
+
+#: How each kind of fixed-step method becomes kernel source (keyed by ``method.kind``).
+_STEPPERS = {"explicit": _explicit_stepper, "symplectic": _symplectic_stepper}
+
+
+def method_of(spec: KernelSpec):
+    """The method object of ``spec`` (registry name resolved)."""
+    if isinstance(spec.method, str):
+        if spec.method not in _methods.METHODS:
+            raise ValueError(f"method must be one of "
+                             f"{', '.join(map(repr, _methods.METHODS))}, got {spec.method!r}")
+        return _methods.METHODS[spec.method]
+    return _methods.resolve(spec.method)
+
+
+# Names of the fixed-step kernel that an observable snippet may rely on (the step grid);
+# an adaptive kernel has no such grid, so observables using them are refused there.
+_STEP_GRID_NAMES = re.compile(r"\b(dt|step|n_steps|n_transient|save_every)\b")
+
+
+def check_observables_fit(method, observe) -> None:
+    """Refuse observables that sample the fixed step grid under an adaptive method.
+
+    Raises
+    ------
+    ValueError
+        Naming the observable, the method and what is accepted.
+    """
+    if not method.adaptive:
+        return
+    for name in observe:
+        obs = OBSERVABLES[name]
+        if any(_STEP_GRID_NAMES.search(getattr(obs, part)) for part in
+               ("init", "update", "final")):
+            fixed = ", ".join(repr(n) for n, m in _methods.METHODS.items() if not m.adaptive)
+            raise ValueError(
+                f"observable {name!r} is defined on the fixed step grid (t0 + n dt), which "
+                f"the adaptive method {method.name!r} does not have; accepted: a fixed-step "
+                f"method ({fixed}), or observe without {name!r}"
+            )
+
+
+def check_method_fits(method, *, damping: bool, forcing: bool, where: str = "the scene"):
+    """Refuse a method that does not fit the scene (a symplectic method with damping or
+    forcing), naming the method, the effect and what is accepted.
+
+    Raises
+    ------
+    ValueError
+    """
+    if not method.conservative_only:
+        return
+    effects = [name for name, on in (("damping", damping), ("forcing", forcing)) if on]
+    if effects:
+        others = ", ".join(repr(n) for n, m in _methods.METHODS.items()
+                           if not m.conservative_only)
+        raise ValueError(
+            f"method {method.name!r} is symplectic and integrates only conservative scenes "
+            f"(no damping, no forcing), but {where} has {' and '.join(effects)}; accepted: "
+            f"a scene (and grid) without damping and forcing, or one of {others}"
+        )
 
 
 def _snippets(spec: KernelSpec, part: str) -> str:
@@ -157,7 +388,7 @@ def _snippets(spec: KernelSpec, part: str) -> str:
         code = getattr(obs, part)
         if code:
             lines.append(f"# {name}\n" + code.replace("COL", str(col)))
-        col += len(obs.variables)
+        col += obs.n_columns
     return "\n".join(lines)
 
 
@@ -176,37 +407,25 @@ def source(spec: KernelSpec) -> str:
     -------
     str
         A self-contained module defining ``kernel`` (see the module docstring).
+
+    Raises
+    ------
+    ValueError
+        For an unknown method, a symplectic method with damping or forcing, or an
+        adaptive method with saving.
     """
-    if spec.method not in _STEPPERS:
-        raise ValueError(f"method must be one of {', '.join(map(repr, _STEPPERS))}, "
-                         f"got {spec.method!r}")
-    n_columns = len(columns(spec))
+    method = method_of(spec)
+    check_method_fits(method, damping=spec.damping, forcing=spec.forcing,
+                      where="the kernel spec")
+    if method.adaptive and spec.save:
+        raise ValueError(f"method {method.name!r} is adaptive: its steps are not on a fixed "
+                         "grid, so it cannot save every k-th step; accepted: save=False")
+    check_observables_fit(method, spec.observe)
     jit = {"fastmath": _config.FASTMATH, "boundscheck": _config.BOUNDSCHECK,
            "error_model": "numpy", "cache": True}
     uses_energy = any(OBSERVABLES[n].uses_energy for n in spec.observe)
-    load = [f"th0 = params[i, {_COL['theta0']}]", f"om0 = params[i, {_COL['omega0']}]",
-            f"L = params[i, {_COL['length']}]", f"g = params[i, {_COL['gravity']}]",
-            "w0sq = g / L"]
-    if spec.damping:
-        load.append(f"c = params[i, {_COL['damping']}]")
-    if spec.forcing:
-        load += [f"A = params[i, {_COL['forcing_amplitude']}]",
-                 f"W = params[i, {_COL['forcing_frequency']}]",
-                 f"phi = params[i, {_COL['forcing_phase']}]"]
-    update = _snippets(spec, "update")
-    save_first = "saved[i, 0, 0] = th\nsaved[i, 1, 0] = om" if spec.save else ""
-    save_step = textwrap.dedent("""\
-        if (step + 1) % save_every == 0:
-            j = (step + 1) // save_every
-            saved[i, 0, j] = th
-            saved[i, 1, j] = om""") if spec.save else ""
-    forcing_first = "fa = A * math.sin(W * t0 + phi)" if spec.forcing else ""
-    forcing_step = textwrap.dedent("""\
-        fb = A * math.sin(W * (t0 + step * dt + half) + phi)
-        fc = A * math.sin(W * (t0 + (step + 1) * dt) + phi)""") if spec.forcing else ""
-    forcing_carry = "fa = fc" if spec.forcing else ""
-
-    body = f'''\
+    body = (_adaptive_kernel if method.adaptive else _fixed_kernel)(spec, method)
+    header = f'''\
 """Generated by sweep._kernels for {spec!r}. Do not edit."""
 import math
 from numba import njit, prange
@@ -217,40 +436,164 @@ JIT = {jit!r}
 {_accel_source(spec)}
 
 {_energy_source(spec) if uses_energy else ""}
+'''
+    text = header + body
+    # drop the blank lines left by absent parts, for a readable module
+    return "\n".join(line for line in text.splitlines() if line.strip()) + "\n"
 
-@njit(parallel=True, **JIT)
-def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
-    TWO_PI = 2.0 * math.pi
-    half = 0.5 * dt
-    sixth = dt / 6.0
-    for i in prange(params.shape[0]):
-{_indent(chr(10).join(load), 2)}
-        th = th0
-        om = om0
-{_indent(_snippets(spec, "init"), 2)}
-{_indent(("if n_transient <= 0:" + chr(10) + _indent(update, 1)) if update else "", 2)}
-{_indent(save_first, 2)}
-{_indent(forcing_first, 2)}
-        ok = True
-        for step in range(n_steps):
-{_indent(forcing_step, 3)}
-{_indent(_STEPPERS[spec.method](spec), 3)}
-{_indent(forcing_carry, 3)}
-            if not (math.isfinite(th) and math.isfinite(om)):
-                ok = False
-                break
-{_indent(("if step + 1 >= n_transient:" + chr(10) + _indent(update, 1)) if update else "", 3)}
-{_indent(save_step, 3)}
+
+def _load_lines(spec: KernelSpec) -> list[str]:
+    load = [f"th0 = params[i, {_COL['theta0']}]", f"om0 = params[i, {_COL['omega0']}]",
+            f"L = params[i, {_COL['length']}]", f"g = params[i, {_COL['gravity']}]",
+            "w0sq = g / L"]
+    if spec.damping:
+        load.append(f"c = params[i, {_COL['damping']}]")
+    if spec.forcing:
+        load += [f"A = params[i, {_COL['forcing_amplitude']}]",
+                 f"W = params[i, {_COL['forcing_frequency']}]",
+                 f"phi = params[i, {_COL['forcing_phase']}]"]
+    return load
+
+
+def _final_block(spec: KernelSpec) -> str:
+    return f'''\
         if ok:
             status[i] = {int(Status.OK)}
 {_indent(_snippets(spec, "final"), 3) or "            pass"}
         else:
             status[i] = {int(Status.NONFINITE)}
-            for col in range({n_columns}):
+            for col in range({n_columns(spec)}):
                 out[i, col] = math.nan
 '''
-    # drop the blank lines left by absent parts, for a readable module
-    return "\n".join(line for line in body.splitlines() if line.strip()) + "\n"
+
+
+def _fixed_kernel(spec: KernelSpec, method) -> str:
+    """Kernel body of a fixed-step method (time at step n is t0 + n dt)."""
+    parts = _STEPPERS[method.kind](spec, method)
+    update = _snippets(spec, "update")
+    save_first = "saved[i, 0, 0] = th\nsaved[i, 1, 0] = om" if spec.save else ""
+    save_step = textwrap.dedent("""\
+        if (step + 1) % save_every == 0:
+            j = (step + 1) // save_every
+            saved[i, 0, j] = th
+            saved[i, 1, j] = om""") if spec.save else ""
+    nl = chr(10)
+    return f'''
+@njit(parallel=True, **JIT)
+def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
+    TWO_PI = 2.0 * math.pi
+{_indent(nl.join(parts["preamble"]), 1)}
+    for i in prange(params.shape[0]):
+{_indent(nl.join(_load_lines(spec)), 2)}
+        th = th0
+        om = om0
+{_indent(_snippets(spec, "init"), 2)}
+{_indent(("if n_transient <= 0:" + nl + _indent(update, 1)) if update else "", 2)}
+{_indent(save_first, 2)}
+{_indent(nl.join(parts["before"]), 2)}
+        ok = True
+        for step in range(n_steps):
+{_indent(nl.join(parts["step"]), 3)}
+            if not (math.isfinite(th) and math.isfinite(om)):
+                ok = False
+                break
+{_indent(("if step + 1 >= n_transient:" + nl + _indent(update, 1)) if update else "", 3)}
+{_indent(save_step, 3)}
+{_final_block(spec)}'''
+
+
+# Step-size control of the adaptive kernels ([HNW] II.4, as in DOPRI5 and SciPy's RK45):
+# h_new = h * min(FACMAX, max(FACMIN, SAFETY * err^(-1/(q+1)))), q the embedded order;
+# no growth right after a rejection.
+_SAFETY = 0.9
+_FACMIN = 0.2
+_FACMAX = 10.0
+
+
+def _adaptive_kernel(spec: KernelSpec, tableau) -> str:
+    """Kernel body of an embedded pair: each trajectory controls its own step."""
+    s = tableau.stages
+    forcing, f_lines = _forcing_times(spec, tableau.c, time="t", step=None, scale="h",
+                                      constants=None)
+    stages = _rk_stages(spec, tableau, "h", None, forcing)
+    kt = [f"k{j + 1}t" for j in range(s)]
+    ko = [f"k{j + 1}o" for j in range(s)]
+    new_state = [f"thn = th + {_combination(tableau.b, kt, 'h', None)}",
+                 f"omn = om + {_combination(tableau.b, ko, 'h', None)}"]
+    if tableau.fsal:
+        # the last stage is evaluated at the new state: it is the next step's first
+        stages = stages[2:-2]
+        last = [f"k{s}t = omn",
+                f"k{s}o = " + _accel_call(spec, "thn", "omn", forcing.get(tableau.c[-1]))]
+        first = ["k1t = om", "k1o = " + _accel_call(spec, "th", "om", forcing.get(0))]
+        f_first = [line for line in f_lines if line.startswith(f"{forcing.get(0)} =")]
+        f_lines = [line for line in f_lines if line not in f_first]
+        attempt = f_lines + stages + new_state + last
+        accept_carry = [f"k1t = k{s}t", f"k1o = k{s}o"]
+    else:
+        first, f_first, accept_carry = [], [], []
+        attempt = f_lines + _rk_stages(spec, tableau, "h", None, forcing) + new_state
+    err = [f"et = {_combination(tableau.error_weights, kt, 'h', None)}",
+           f"eo = {_combination(tableau.error_weights, ko, 'h', None)}"]
+    update = _snippets(spec, "update")
+    exponent = -1.0 / (tableau.embedded_order + 1)
+    nl = chr(10)
+    return f'''
+@njit(parallel=True, **JIT)
+def kernel(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats):
+    TWO_PI = 2.0 * math.pi
+    t_obs = t0 + t_transient
+    h_min = 16.0 * 2.220446049250313e-16 * max(abs(t0), abs(t_end))
+    for i in prange(params.shape[0]):
+{_indent(nl.join(_load_lines(spec)), 2)}
+        th = th0
+        om = om0
+{_indent(_snippets(spec, "init"), 2)}
+{_indent(("if t_transient <= 0.0:" + nl + _indent(update, 1)) if update else "", 2)}
+        t = t0
+        h = dt
+{_indent(nl.join(f_first + first), 2)}
+        accepted = 0
+        rejected = 0
+        after_reject = False
+        ok = True
+        while t < t_end:
+            last = t + h >= t_end
+            if last:
+                h = t_end - t
+{_indent(nl.join(attempt), 3)}
+{_indent(nl.join(err), 3)}
+            sct = atol + rtol * max(abs(th), abs(thn))
+            sco = atol + rtol * max(abs(om), abs(omn))
+            err = math.sqrt(0.5 * ((et / sct) ** 2 + (eo / sco) ** 2))
+            if err <= 1.0 and math.isfinite(thn) and math.isfinite(omn):
+                t = t_end if last else t + h
+                th = thn
+                om = omn
+{_indent(nl.join(accept_carry), 4)}
+                accepted += 1
+{_indent(("if t >= t_obs:" + nl + _indent(update, 1)) if update else "", 4)}
+                if err == 0.0:
+                    fac = {_FACMAX!r}
+                else:
+                    fac = min({_FACMAX!r}, max({_FACMIN!r}, {_SAFETY!r} * err ** {exponent!r}))
+                if after_reject:
+                    fac = min(fac, 1.0)
+                after_reject = False
+                h = min(h * fac, dt)
+            else:
+                rejected += 1
+                if math.isfinite(err):
+                    h = h * max({_FACMIN!r}, {_SAFETY!r} * err ** {exponent!r})
+                else:
+                    h = h * {_FACMIN!r}
+                after_reject = True
+                if h < h_min:
+                    ok = False
+                    break
+        stats[i, 0] = accepted
+        stats[i, 1] = rejected
+{_final_block(spec)}'''
 
 
 # --------------------------------------------------------------------------- build

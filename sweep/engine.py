@@ -16,16 +16,25 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _config, io
-from ._kernels import KernelSpec, Status, build, columns
+from . import methods as _methods
+from ._kernels import (KernelSpec, Status, build, check_method_fits, check_observables_fit,
+                       n_columns)
 from ._validate import check_real
 from .grid import Grid
-from .observables import DEFAULT_OBSERVE, resolve
+from .methods import METHODS
+from .observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
 from .scene import Scene
 
 __all__ = ["run", "RunSettings", "METHODS"]
 
-#: Integrators `run` accepts (more arrive with the accuracy work).
-METHODS = ("rk4",)
+#: Default tolerances of the adaptive methods (per step, RMS norm over theta, omega):
+#: about 1e-6 global error on a few periods of the pendulum.
+DEFAULT_RTOL = 1e-6
+DEFAULT_ATOL = 1e-9
+
+#: Smallest rtol accepted: below ~100 machine epsilons the local error estimate is
+#: round-off, and the controller would shrink the step for nothing (SciPy's floor too).
+MIN_RTOL = 100 * np.finfo(np.float64).eps
 
 # A time span must be a whole number of steps to within this relative slack:
 # (t_end - t0) / dt is computed in floating point, so 300 / 0.01 = 30000.000000000004.
@@ -44,6 +53,14 @@ class RunSettings:
     n_transient: int
     save_every: int | None
     method: str
+    rtol: float | None = None
+    atol: float | None = None
+    integrator: object = None
+
+    @property
+    def adaptive(self) -> bool:
+        """True for an embedded pair (per-trajectory step-size control)."""
+        return bool(self.integrator is not None and self.integrator.adaptive)
 
 
 def _steps(name: str, span: float, dt: float) -> int:
@@ -71,8 +88,12 @@ def _available_memory() -> int:
     return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")  # pragma: no cover
 
 
-def validate_settings(*, t_end, dt, t0, t_transient, save_every, method) -> RunSettings:
+def validate_settings(*, t_end, dt, t0, t_transient, save_every, method, rtol=None,
+                      atol=None) -> RunSettings:
     """Check the time-stepping arguments of `run`; return them cleaned.
+
+    ``method`` is a `sweep.methods.METHODS` name or a method object; ``rtol``/``atol``
+    belong to adaptive methods only (defaults `DEFAULT_RTOL`, `DEFAULT_ATOL`).
 
     Raises
     ------
@@ -91,6 +112,33 @@ def validate_settings(*, t_end, dt, t0, t_transient, save_every, method) -> RunS
             f"t_transient must be < t_end - t0 = {t_end - t0!r} (something must remain "
             f"to observe), got t_transient = {t_transient!r}"
         )
+    integrator = validate_method(method)
+    if integrator.adaptive:
+        if save_every is not None:
+            raise ValueError(
+                f"save_every = {save_every!r} cannot be used with the adaptive method "
+                f"{integrator.name!r}: each trajectory takes its own steps, so there is no "
+                "common time axis to sample; accepted: save_every=None, or a fixed-step "
+                f"method ({', '.join(repr(n) for n, m in METHODS.items() if not m.adaptive)})"
+            )
+        rtol = DEFAULT_RTOL if rtol is None else check_real(
+            "rtol", rtol, minimum=MIN_RTOL, accepted=f"a finite number >= {MIN_RTOL:.3g} "
+            "(100 machine epsilons)")
+        atol = DEFAULT_ATOL if atol is None else check_real(
+            "atol", atol, minimum=0.0, strict=True, accepted="a finite number > 0 "
+            "(rad and rad/s)")
+        # adaptive: dt is the first trial step and the largest step; no whole-step rule
+        return RunSettings(t0=t0, t_end=t_end, dt=dt, t_transient=t_transient, n_steps=0,
+                           n_transient=0, save_every=None, method=integrator.name,
+                           rtol=rtol, atol=atol, integrator=integrator)
+    for name, value in (("rtol", rtol), ("atol", atol)):
+        if value is not None:
+            raise ValueError(
+                f"{name} = {value!r} applies only to adaptive methods "
+                f"({', '.join(repr(n) for n, m in METHODS.items() if m.adaptive)}), but "
+                f"method {integrator.name!r} takes fixed steps dt; accepted: {name}=None "
+                "with a fixed-step method, or an adaptive method"
+            )
     n_steps = _steps("t_end - t0", t_end - t0, dt)
     # first step index whose time t0 + n dt is >= t0 + t_transient
     n_transient = math.ceil(t_transient / dt - _WHOLE_STEPS_RTOL * max(1.0, t_transient / dt))
@@ -109,11 +157,25 @@ def validate_settings(*, t_end, dt, t0, t_transient, save_every, method) -> RunS
             raise ValueError(f"save_every must be None or an int >= 1 (steps), got "
                              f"{save_every!r}")
         save_every = int(save_every)
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {', '.join(map(repr, METHODS))}, "
-                         f"got {method!r}")
     return RunSettings(t0=t0, t_end=t_end, dt=dt, t_transient=t_transient, n_steps=n_steps,
-                       n_transient=n_transient, save_every=save_every, method=method)
+                       n_transient=n_transient, save_every=save_every,
+                       method=integrator.name, integrator=integrator)
+
+
+def validate_method(method):
+    """The method object for ``method`` (a `METHODS` name or a method object).
+
+    Raises
+    ------
+    ValueError
+        Listing the valid names.
+    """
+    if isinstance(method, str) and method in METHODS:
+        return METHODS[method]
+    if isinstance(method, (_methods.ButcherTableau, _methods.SplittingMethod)):
+        return method
+    raise ValueError(f"method must be one of {', '.join(map(repr, METHODS))} (or a "
+                     f"sweep.methods.ButcherTableau or SplittingMethod), got {method!r}")
 
 
 def _progress_printer(enabled: bool, total: int):
@@ -135,6 +197,31 @@ def _progress_printer(enabled: bool, total: int):
     return report
 
 
+def _check_stroboscopic(names, scene: Scene, grid: Grid, settings) -> None:
+    """Observables that sample once per forcing period need forcing, W > 0, and a
+    period that is a whole number of steps (so every sample is at the same phase)."""
+    for name in names:
+        if not OBSERVABLES[name].requires_forcing:
+            continue
+        if scene.forcing is None:
+            raise ValueError(f"observable {name!r} samples once per forcing period and "
+                             "needs a forcing in the scene; accepted: a Scene with "
+                             "sweep.Forcing(amplitude, frequency, phase)")
+        frequencies = grid.axes.get("forcing_frequency",
+                                    np.array([scene.forcing.frequency]))
+        for frequency in np.unique(frequencies):
+            if frequency <= 0:
+                raise ValueError(f"observable {name!r} needs forcing_frequency > 0, got "
+                                 f"{float(frequency)!r}")
+            steps = 2 * np.pi / (frequency * settings.dt)
+            if abs(steps - round(steps)) > _WHOLE_STEPS_RTOL * max(1.0, steps) * 1e3:
+                raise ValueError(
+                    f"observable {name!r}: the forcing period 2 pi / {float(frequency)!r} is "
+                    f"not a whole number of steps dt = {settings.dt!r} ({steps:.6g}); "
+                    f"accepted: dt = period / N, e.g. dt = "
+                    f"{2 * np.pi / (frequency * max(round(steps), 1))!r}")
+
+
 def run(
     scene: Scene,
     grid: Grid,
@@ -145,7 +232,9 @@ def run(
     t_transient: float = 0.0,
     observe=DEFAULT_OBSERVE,
     save_every: int | None = None,
-    method: str = "rk4",
+    method="rk4",
+    rtol: float | None = None,
+    atol: float | None = None,
     progress: bool | None = None,
     chunk_size: int | None = None,
     specialize: bool = True,
@@ -159,9 +248,11 @@ def run(
     grid : Grid
         Named axes; the run covers their Cartesian product.
     t_end : float
-        Final time [s]; ``t_end - t0`` must be a whole number of steps ``dt``.
+        Final time [s]; ``t_end - t0`` must be a whole number of steps ``dt`` (fixed-step
+        methods).
     dt : float
-        Fixed step [s], > 0. Time at step n is ``t0 + n*dt``.
+        Fixed step [s], > 0. Time at step n is ``t0 + n*dt``. For an adaptive method:
+        the first trial step and the largest step any trajectory takes.
     t0 : float, default 0
         Initial time [s] (matters for the forcing phase).
     t_transient : float, default 0
@@ -173,9 +264,19 @@ def run(
         (energy_initial, energy_final). Only these are computed and stored.
     save_every : int, optional
         Also store ``theta`` and ``omega`` at every ``save_every``-th step (a ``time``
-        dimension). Refused if it would need more than half the available memory.
-    method : {"rk4"}
-        Fixed-step integrator.
+        dimension). Refused if it would need more than half the available memory, and
+        with an adaptive method (no common time axis).
+    method : str or method object, default "rk4"
+        A `sweep.methods.METHODS` name or object. Fixed step: ``"euler"`` (order 1),
+        ``"heun"`` (2), ``"rk4"`` (4), ``"rk38"`` (4); symplectic, for scenes without
+        damping and forcing only: ``"verlet"`` (2), ``"yoshida4"`` (4); adaptive:
+        ``"dopri5"`` (5(4), each trajectory controls its own step).
+    rtol, atol : float, optional
+        Adaptive methods only (an error otherwise): each accepted step has an error
+        estimate ``<= atol + rtol * |y|`` in the RMS norm over (theta, omega) [rad,
+        rad/s]. Defaults 1e-6 and 1e-9. Steady observables update at accepted steps;
+        the last step is clipped so every trajectory ends at ``t_end`` exactly. The
+        dataset gains ``steps_accepted`` and ``steps_rejected`` per trajectory.
     progress : bool, optional
         Print one aggregated progress line to stderr; default: when stderr is a tty.
     chunk_size : int, optional
@@ -207,7 +308,7 @@ def run(
         raise TypeError(f"grid must be a sweep.Grid, got {grid!r}")
     grid.check_against(scene)
     settings = validate_settings(t_end=t_end, dt=dt, t0=t0, t_transient=t_transient,
-                                 save_every=save_every, method=method)
+                                 save_every=save_every, method=method, rtol=rtol, atol=atol)
     names = resolve(observe)
     if not names and save_every is None:
         raise ValueError("observe is empty and save_every is None -- nothing would be "
@@ -220,18 +321,25 @@ def run(
         raise ValueError(f"chunk_size must be an int >= 1, got {chunk_size!r}")
 
     effects = grid.effects(scene)
+    integrator = settings.integrator
+    check_method_fits(integrator, damping="damping" in effects, forcing="forcing" in effects)
+    check_observables_fit(integrator, names)
+    _check_stroboscopic(names, scene, grid, settings)
+    # a symplectic method's kernel has no damping or forcing terms even when not
+    # specialising: the general kernel of a conservative-only method is the conservative one
+    general = not specialize and not integrator.conservative_only
     spec = KernelSpec(
         model=scene.model,
-        damping=("damping" in effects) or not specialize,
-        forcing=("forcing" in effects) or not specialize,
+        damping=("damping" in effects) or general,
+        forcing=("forcing" in effects) or general,
         observe=names,
         save=save_every is not None,
-        method=settings.method,
+        method=integrator,
     )
     n = grid.size
-    n_columns = len(columns(spec))
+    width = n_columns(spec)
     n_saved = settings.n_steps // save_every + 1 if save_every is not None else 0
-    needed = n * (n_columns * 8 + 1 + 2 * n_saved * 8)
+    needed = n * (width * 8 + 1 + 2 * n_saved * 8)
     available = _available_memory()
     if needed > available // 2:
         raise ValueError(
@@ -244,17 +352,23 @@ def run(
         )
 
     kernel = build(spec)
-    out = np.empty((n, n_columns), dtype=np.float64)
+    out = np.empty((n, width), dtype=np.float64)
     status = np.empty(n, dtype=np.int8)
     saved = np.full((n, 2, n_saved), np.nan) if save_every else np.empty((0, 2, 0))
     if progress is None:
         progress = sys.stderr.isatty()
     report = _progress_printer(bool(progress), n)
+    stats = np.zeros((n, 2), dtype=np.int64) if settings.adaptive else None
     for start, stop in grid.chunks(int(chunk_size)):
         table = grid.table(scene, start, stop)
-        kernel(table, settings.t0, settings.dt, settings.n_steps, settings.n_transient,
-               save_every or 1, out[start:stop], status[start:stop],
-               saved[start:stop] if save_every else saved)
+        if settings.adaptive:
+            kernel(table, settings.t0, settings.t_end, settings.dt, settings.t_transient,
+                   settings.rtol, settings.atol, out[start:stop], status[start:stop],
+                   stats[start:stop])
+        else:
+            kernel(table, settings.t0, settings.dt, settings.n_steps, settings.n_transient,
+                   save_every or 1, out[start:stop], status[start:stop],
+                   saved[start:stop] if save_every else saved)
         report(stop)
 
     failed = int(np.count_nonzero(status != Status.OK))
@@ -264,5 +378,23 @@ def run(
             RuntimeWarning,
             stacklevel=2,
         )
-    return io.to_dataset(scene=scene, grid=grid, settings=settings, spec=spec, out=out,
-                         status=status, saved=saved if save_every else None)
+    ds = io.to_dataset(scene=scene, grid=grid, settings=settings, spec=spec, out=out,
+                       status=status, saved=saved if save_every else None)
+    if settings.adaptive:
+        _add_step_statistics(ds, grid, settings, stats)
+    return ds
+
+
+def _add_step_statistics(ds, grid, settings, stats) -> None:
+    """Adaptive runs: tolerances and per-trajectory step counts (cost maps)."""
+    for k, (name, meaning) in enumerate((("steps_accepted", "accepted"),
+                                         ("steps_rejected", "rejected"))):
+        ds[name] = (grid.dims, grid.unflatten(stats[:, k]),
+                    {"units": "1", "long_name": f"number of {meaning} adaptive steps"})
+    ds.attrs.pop("n_steps", None)
+    ds.attrs["rtol"] = settings.rtol
+    ds.attrs["atol"] = settings.atol
+    ds.attrs["step_control"] = (
+        "per-trajectory embedded error control: error estimate <= atol + rtol |y| (RMS "
+        "over theta, omega); dt is the first trial and the largest step"
+    )

@@ -496,3 +496,58 @@ def save_figure(fig, path, dpi=150):
     finally:
         plt.close(fig)
     return Path(path)
+
+
+# ----------------------------------------------------------------------------- accuracy
+def work_precision(wp, ax=None, x="wall_time", y="error_max", title=None):
+    """Work-precision diagram: error against cost, log-log, one line per method.
+
+    In the convention of the SciML work-precision diagrams: error on the vertical axis,
+    cost (wall time by default) on the horizontal one; lower left is better.
+
+    Parameters
+    ----------
+    wp : xarray.Dataset
+        From `sweep.accuracy.work_precision` (dimensions ``integrator`` x ``level``).
+    ax : matplotlib Axes, optional
+    x : {"wall_time", "time_per_million", "rhs_evaluations"}
+        Cost on the horizontal axis.
+    y : {"error_max", "error_rms"}
+    title : str, optional
+        Default: the scene's model and ``t_end``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    for name in (x, y):
+        if name not in wp:
+            raise ValueError(f"{name!r} is not a variable of the work-precision dataset; "
+                             f"accepted: {', '.join(sorted(wp.data_vars))}")
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
+    else:
+        fig = ax.figure
+    markers = "osD^v<>phX*"
+    for k, method in enumerate(wp.integrator.values):
+        row = wp.isel(integrator=k)
+        cost, err = row[x].values, row[y].values
+        keep = np.isfinite(cost) & np.isfinite(err) & (err > 0)
+        order = ""
+        if "observed_order" in row and np.isfinite(row.observed_order.values):
+            order = f" (order {float(row.observed_order):.2f})"
+        ax.loglog(cost[keep], err[keep], marker=markers[k % len(markers)],
+                  label=f"{method}{order}")
+    ax.set_xlabel(_label(wp[x].attrs.get("long_name", x), None, wp[x].attrs.get("units", "")))
+    ax.set_ylabel(_label(wp[y].attrs.get("long_name", y), None, wp[y].attrs.get("units", "")))
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize="small")
+    ax.set_title(title if title is not None else
+                 f"{wp.attrs.get('model', '')} pendulum, t_end = {wp.attrs.get('t_end', '')} s, "
+                 f"{wp.attrs.get('n_trajectories', '')} trajectories", fontsize="medium")
+    return fig
+
+
+__all__ += ["work_precision"]

@@ -98,7 +98,7 @@ CASES = [
                   t_end=10.0, dt=0.1, save_every=1),
      ValueError, r"save_every = 1 with 2500000000 trajectories needs .* GiB but only"),
     ("unknown method", lambda: _run(method="rk5"), ValueError,
-     r"method must be one of 'rk4', got 'rk5'"),
+     r"method must be one of 'euler', 'heun', 'rk4', .*, got 'rk5'"),
     ("bad chunk size", lambda: _run(chunk_size=0), ValueError,
      r"chunk_size must be an int >= 1, got 0"),
     ("scene not a Scene", lambda: sweep.run({"length": 1}, sweep.Grid(theta0=[0.0]),
