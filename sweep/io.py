@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ._kernels import Status, columns
+from ._kernels import Status
+from .observables import OBSERVABLES
 from .scene import PARAMETER_INFO, Scene
 
 __all__ = ["to_dataset", "save", "load", "scene_from", "run_arguments"]
@@ -49,9 +50,20 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
         for name, values in grid.axes.items()
     }
     data_vars = {}
-    for k, (name, units, long_name) in enumerate(columns(spec)):
-        data_vars[name] = xr.Variable(dims, grid.unflatten(out[:, k]),
-                                      {"units": units, "long_name": long_name})
+    col = 0
+    for observable in (OBSERVABLES[name] for name in spec.observe):
+        width = observable.samples
+        for name, units, long_name in observable.variables:
+            attrs = {"units": units, "long_name": long_name}
+            if observable.sample_dim is None:
+                data_vars[name] = xr.Variable(dims, grid.unflatten(out[:, col]), attrs)
+            else:
+                data_vars[name] = xr.Variable(dims + (observable.sample_dim,),
+                                              grid.unflatten(out[:, col:col + width]), attrs)
+                coords[observable.sample_dim] = xr.Variable(
+                    observable.sample_dim, np.arange(1 - width, 1),
+                    {"units": "1", "long_name": "forcing periods before the last sample"})
+            col += width
     codes = np.array([s.value for s in Status], dtype=np.int8)
     data_vars["status"] = xr.Variable(
         dims,

@@ -152,27 +152,41 @@ def well(ds: xr.Dataset) -> xr.DataArray:
     return index.rename("well")
 
 
-def basins(ds: xr.Dataset, *, rest_position: bool = False) -> xr.DataArray:
+def basins(ds: xr.Dataset, *, rest_position: bool = False, max_period: int = 8,
+           tol: float = 1e-3) -> xr.DataArray:
     """Basins of attraction as integer labels with a catalogue of attractors.
 
     For unforced damped scenes the attractors are the rest states ``theta = 2 pi k``;
     with ``rest_position=True`` they are identified modulo ``2 pi`` (the physical
     rest position, so every captured start gets the same label).
 
+    For forced scenes (a run observing ``strobe``) the attractors are the periodic
+    orbits found in the stroboscopic samples by `identify_attractors`.
+
     Parameters
     ----------
     ds : xarray.Dataset
-        An unforced run observing ``final`` and ``energy``.
+        An unforced run observing ``final`` and ``energy``, or a forced run observing
+        ``strobe``.
     rest_position : bool, default False
-        Identify wells modulo 2 pi.
+        Unforced scenes: identify wells modulo 2 pi.
+    max_period, tol
+        Forced scenes: passed to `identify_attractors`.
 
     Returns
     -------
     xarray.DataArray, int32, grid dims
-        ``0 .. n-1`` attractor labels, ``-1`` unresolved (not yet captured, or
-        failed). Attribute ``attractor_theta`` lists each attractor's rest angle [rad]
-        (``attractor_theta[label]``).
+        ``0 .. n-1`` attractor labels, ``-1`` unresolved (not yet captured, chaotic,
+        not converged, or failed). Attributes list each attractor by label:
+        ``attractor_theta`` [rad] (and, forced, ``attractor_omega`` [rad/s],
+        ``attractor_period`` [forcing periods], ``attractor_turns_per_period``,
+        ``attractor_size`` [trajectories]).
     """
+    if "strobe_theta" in ds:
+        return _forced_basins(ds, max_period=max_period, tol=tol)
+    if "forcing" in str(ds.attrs.get("effects", "")).split():
+        raise ValueError("basins of a forced scene need stroboscopic samples; accepted: a "
+                         "dataset from sweep.run(..., observe=(..., 'strobe'))")
     index = well(ds)
     if rest_position:
         index = xr.where(index.notnull(), 0.0, np.nan)
@@ -186,6 +200,30 @@ def basins(ds: xr.Dataset, *, rest_position: bool = False) -> xr.DataArray:
         "long_name": "basin of attraction (attractor label)",
         "attractor_theta": (2 * np.pi * found).astype(np.float64),
         "attractor_kind": "rest state modulo 2 pi" if rest_position else "rest state",
+        "unresolved": UNRESOLVED,
+    }
+    return out
+
+
+def _forced_basins(ds: xr.Dataset, *, max_period: int, tol: float) -> xr.DataArray:
+    theta = ds["strobe_theta"]
+    dims = tuple(d for d in theta.dims if d != "strobe")
+    samples = theta.sizes["strobe"]
+    flat_theta = theta.transpose(*dims, "strobe").values.reshape(-1, samples)
+    flat_omega = ds["strobe_omega"].transpose(*dims, "strobe").values.reshape(-1, samples)
+    labels, catalogue = identify_attractors(flat_theta, flat_omega, max_period=max_period,
+                                            tol=tol)
+    shape = tuple(ds.sizes[d] for d in dims)
+    out = xr.DataArray(labels.reshape(shape), coords={d: ds[d] for d in dims}, dims=dims,
+                       name="basins")
+    out.attrs = {
+        "long_name": "basin of attraction (attractor label)",
+        "attractor_theta": catalogue["theta"],
+        "attractor_omega": catalogue["omega"],
+        "attractor_period": catalogue["period"],
+        "attractor_turns_per_period": catalogue["turns_per_period"],
+        "attractor_size": catalogue["size"],
+        "attractor_kind": "periodic orbit (stroboscopic point, angle modulo 2 pi)",
         "unresolved": UNRESOLVED,
     }
     return out

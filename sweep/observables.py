@@ -38,6 +38,13 @@ class Observable:
         True if it accumulates only over ``t >= t0 + t_transient``.
     uses_energy : bool
         True if a snippet calls ``energy(th, om, w0sq)``.
+    samples : int
+        Columns per variable: 1 for a scalar, more for a variable with an extra
+        dimension ``sample_dim`` (variable k occupies ``COL + k*samples ...``).
+    sample_dim : str or None
+        Name of that extra dimension.
+    requires_forcing : bool
+        True if the snippets read the forcing frequency ``W``.
     """
 
     name: str
@@ -47,7 +54,19 @@ class Observable:
     final: str = ""
     steady: bool = False
     uses_energy: bool = False
+    samples: int = 1
+    sample_dim: str | None = None
+    requires_forcing: bool = False
 
+    @property
+    def n_columns(self) -> int:
+        """Columns of the kernel's ``out`` array this observable fills."""
+        return len(self.variables) * self.samples
+
+
+#: Stroboscopic samples kept per trajectory by the ``strobe`` observable: enough to
+#: recognise periods up to STROBE_SAMPLES // 2 forcing periods.
+STROBE_SAMPLES = 16
 
 OBSERVABLES: dict[str, Observable] = {
     o.name: o
@@ -102,6 +121,35 @@ OBSERVABLES: dict[str, Observable] = {
             ),
             final="out[i, COL] = (th - acc_th_steady) / ((acc_n_steady - 1) * dt)",
             steady=True,
+        ),
+        Observable(
+            name="strobe",
+            variables=(
+                ("strobe_theta", "rad",
+                 f"angle (unwrapped) at the last {STROBE_SAMPLES} forcing periods: "
+                 "stroboscopic samples at t0 + n_transient dt + m 2 pi / W"),
+                ("strobe_omega", "rad s-1",
+                 f"angular velocity at the last {STROBE_SAMPLES} forcing periods"),
+            ),
+            init=(
+                "acc_sb_S = round(TWO_PI / (W * dt))\n"
+                "acc_sb_k = 0\n"
+                "acc_sb_M = (n_steps - max(n_transient, 0)) // acc_sb_S + 1\n"
+                f"for acc_sb_q in range({2 * STROBE_SAMPLES}):\n"
+                "    out[i, COL + acc_sb_q] = math.nan"
+            ),
+            update=(
+                "if acc_sb_k % acc_sb_S == 0:\n"
+                f"    acc_sb_col = acc_sb_k // acc_sb_S - acc_sb_M + {STROBE_SAMPLES}\n"
+                "    if acc_sb_col >= 0:\n"
+                "        out[i, COL + acc_sb_col] = th\n"
+                f"        out[i, COL + {STROBE_SAMPLES} + acc_sb_col] = om\n"
+                "acc_sb_k += 1"
+            ),
+            steady=True,
+            samples=STROBE_SAMPLES,
+            sample_dim="strobe",
+            requires_forcing=True,
         ),
         Observable(
             name="tension",
