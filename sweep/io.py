@@ -141,6 +141,9 @@ def run_arguments(ds: xr.Dataset) -> dict:
               "observe": tuple(str(a["observe"]).split())}
     if "save_every" in a:
         kwargs["save_every"] = int(a["save_every"])
+    for tolerance in ("rtol", "atol"):  # adaptive methods
+        if tolerance in a:
+            kwargs[tolerance] = float(a[tolerance])
     return kwargs
 
 

@@ -53,7 +53,8 @@ __all__ = ["ANGLE_AXES", "RUN_KEYS", "TABLES", "load_run", "parse_run"]
 TABLES = ("scene", "grid", "run")
 
 #: Keys of the ``[run]`` table (keyword arguments of `sweep.run`).
-RUN_KEYS = ("t_end", "dt", "t0", "t_transient", "observe", "save_every", "method")
+RUN_KEYS = ("t_end", "dt", "t0", "t_transient", "observe", "save_every", "method", "rtol",
+            "atol")
 
 #: Keys of ``[run]`` that must be present.
 REQUIRED_RUN_KEYS = ("t_end", "dt")
@@ -273,7 +274,8 @@ def _run(source: str, table: dict) -> dict[str, Any]:
                           t0=kwargs.get("t0", 0.0),
                           t_transient=kwargs.get("t_transient", 0.0),
                           save_every=kwargs.get("save_every"),
-                          method=kwargs.get("method", "rk4"))
+                          method=kwargs.get("method", "rk4"),
+                          rtol=kwargs.get("rtol"), atol=kwargs.get("atol"))
         if "observe" in kwargs:
             observe = kwargs["observe"]
             if isinstance(observe, list) and not all(isinstance(o, str) for o in observe):

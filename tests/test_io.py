@@ -78,3 +78,12 @@ def test_saved_file_gets_the_usual_permissions(dataset, tmp_path):
     finally:
         os.umask(umask)
     assert stat.S_IMODE(path.stat().st_mode) == 0o644
+
+
+def test_adaptive_run_reproduces_from_its_attributes():
+    ds = sweep.run(sweep.Scene(), sweep.Grid(theta0=[0.5, 2.0]), t_end=3.0, dt=0.1,
+                   method="dopri5", rtol=1e-9, atol=1e-12, observe=("final",))
+    kwargs = sweep.io.run_arguments(ds)
+    assert kwargs["rtol"] == 1e-9 and kwargs["atol"] == 1e-12
+    again = sweep.run(sweep.io.scene_from(ds), sweep.Grid(theta0=ds.theta0.values), **kwargs)
+    assert again.drop_attrs().identical(ds.drop_attrs())
