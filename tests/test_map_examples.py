@@ -46,3 +46,11 @@ def test_frequency_response(tmp_path, capsys):
 
 if __name__ == "__main__":  # pragma: no cover
     pytest.main([__file__])
+
+
+def test_forced_basins(tmp_path, capsys):
+    assert _load("forced_basins").main(["--size", "31", "--periods", "60",
+                                        "--out", str(tmp_path)]) == 0
+    _assert_png(tmp_path / "forced_basins.png")
+    out = capsys.readouterr().out
+    assert "turns/period" in out and "boundary basin entropy" in out
