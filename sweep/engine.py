@@ -238,6 +238,7 @@ def run(
     progress: bool | None = None,
     chunk_size: int | None = None,
     specialize: bool = True,
+    estimate_error: int | None = None,
 ):
     """Integrate every trajectory of ``grid`` under ``scene``; return a labelled Dataset.
 
@@ -284,6 +285,11 @@ def run(
     specialize : bool, default True
         False builds the fully general kernel (damping and forcing terms present and
         fed zeros when the scene lacks them): for tests and benchmarks.
+    estimate_error : int, optional
+        Opt-in accuracy estimate: re-run this many random trajectories with half the
+        step (or 100x tighter tolerances) and attach the estimated global error of the
+        final state to the attributes (``error_estimate_max``, ``error_estimate_rms``
+        [rad]); see `sweep.accuracy.estimate_error`.
 
     Returns
     -------
@@ -314,6 +320,10 @@ def run(
         raise ValueError("observe is empty and save_every is None -- nothing would be "
                          "computed; accepted: at least one of final, winding, theta_max, "
                          "amplitude, tension, energy, or a save_every")
+    if estimate_error is not None and (isinstance(estimate_error, bool) or not isinstance(
+            estimate_error, (int, np.integer)) or estimate_error < 1):
+        raise ValueError(f"estimate_error must be None or an int >= 1 (trajectories), got "
+                         f"{estimate_error!r}")
     if chunk_size is None:
         chunk_size = _config.CHUNK_SIZE
     if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) \
@@ -382,6 +392,12 @@ def run(
                        status=status, saved=saved if save_every else None)
     if settings.adaptive:
         _add_step_statistics(ds, grid, settings, stats)
+    if estimate_error is not None:
+        from .accuracy import estimate_error as _estimate
+
+        ds.attrs.update(_estimate(scene, grid, sample=estimate_error, t_end=t_end, dt=dt,
+                                  t0=t0, t_transient=t_transient, method=method, rtol=rtol,
+                                  atol=atol))
     return ds
 
 

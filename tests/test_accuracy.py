@@ -224,3 +224,24 @@ def test_work_precision_plot(tmp_path):
     assert sweep.plot.save_figure(fig, tmp_path / "wp.png").stat().st_size > 0
     with pytest.raises(ValueError, match=r"'speed' is not a variable of the work-precision"):
         sweep.plot.work_precision(wp, x="speed")
+
+
+def test_opt_in_error_estimate_brackets_the_true_error():
+    """The Richardson estimate attached to a run is close to the error against the exact
+    elliptic solution (RK4: the dt^5 term makes the estimate good to ~10-20 % at these
+    steps; we accept a factor 2 either way)."""
+    import sweep
+    from sweep import accuracy
+
+    scene = sweep.Scene(gravity=1.0, length=1.0)
+    grid = sweep.Grid(theta0=np.linspace(0.3, 2.5, 6), omega0=[0.0, 0.5])
+    ds = sweep.run(scene, grid, t_end=20.0, dt=0.1, observe=("final",), estimate_error=12)
+    assert ds.attrs["error_estimate_sample"] == 12
+    theta0, omega0 = np.meshgrid(grid.axes["theta0"], grid.axes["omega0"], indexing="ij")
+    theta_ref, omega_ref = accuracy.exact(scene, theta0.ravel(), omega0.ravel(), [20.0])
+    theta_ref, omega_ref = theta_ref[:, 0], omega_ref[:, 0]
+    true = accuracy.state_error(scene, ds.theta_final.values.ravel(),
+                                ds.omega_final.values.ravel(), theta_ref, omega_ref)
+    assert 0.5 * true.max() < ds.attrs["error_estimate_max"] < 2.0 * true.max()
+    with pytest.raises(ValueError, match=r"estimate_error must be None or an int >= 1"):
+        sweep.run(scene, grid, t_end=1.0, dt=0.1, estimate_error=0)
