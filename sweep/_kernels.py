@@ -108,6 +108,9 @@ class KernelSpec:
         Integrator: a `sweep.methods.METHODS` name or a method object. A registry
         object is stored as its name, so ``method=RK4`` and ``method="rk4"`` share one
         kernel; an unknown name is refused by `source`.
+    stop_early : bool
+        Stop each trajectory as soon as every observed observable says its answer is
+        settled (only observables with a ``settled`` snippet; see `sweep.observables`).
     """
 
     model: str
@@ -116,6 +119,7 @@ class KernelSpec:
     observe: tuple[str, ...]
     save: bool = False
     method: object = "rk4"
+    stop_early: bool = False
 
     def __post_init__(self) -> None:
         method = self.method
@@ -333,7 +337,7 @@ def method_of(spec: KernelSpec):
 
 # Names of the fixed-step kernel that an observable snippet may rely on (the step grid);
 # an adaptive kernel has no such grid, so observables using them are refused there.
-_STEP_GRID_NAMES = re.compile(r"\b(dt|step|n_steps|n_transient|save_every)\b")
+_STEP_GRID_NAMES = re.compile(r"\b(dt|step|k_state|n_steps|n_transient|save_every)\b")
 
 
 def check_observables_fit(method, observe) -> None:
@@ -389,6 +393,27 @@ def _snippets(spec: KernelSpec, part: str) -> str:
         if code:
             lines.append(f"# {name}\n" + code.replace("COL", str(col)))
         col += obs.n_columns
+    return "\n".join(lines)
+
+
+def _stop_source(spec: KernelSpec) -> str:
+    """Early stop (spec.stop_early): each observable's ``settled`` snippet sets its own
+    flag; the trajectory stops when all flags are set."""
+    if not spec.stop_early:
+        return ""
+    lines, flags, col = [], [], 0
+    for name in spec.observe:
+        obs = OBSERVABLES[name]
+        if not obs.settled:
+            raise ValueError(f"observable {name!r} has no settled test, so a trajectory "
+                             "cannot stop early; accepted with stop_early: "
+                             + ", ".join(n for n, o in OBSERVABLES.items() if o.settled))
+        flag = f"settled_{len(flags)}"
+        flags.append(flag)
+        lines.append(f"# {name} settled?\n"
+                     + obs.settled.replace("COL", str(col)).replace("SETTLED", flag))
+        col += obs.n_columns
+    lines.append(f"if {' and '.join(flags)}:\n    break")
     return "\n".join(lines)
 
 
@@ -471,6 +496,7 @@ def _fixed_kernel(spec: KernelSpec, method) -> str:
     """Kernel body of a fixed-step method (time at step n is t0 + n dt)."""
     parts = _STEPPERS[method.kind](spec, method)
     update = _snippets(spec, "update")
+    stop = _stop_source(spec)
     save_first = "saved[i, 0, 0] = th\nsaved[i, 1, 0] = om" if spec.save else ""
     save_step = textwrap.dedent("""\
         if (step + 1) % save_every == 0:
@@ -488,6 +514,7 @@ def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
         th = th0
         om = om0
 {_indent(_snippets(spec, "init"), 2)}
+        k_state = 0
 {_indent(("if n_transient <= 0:" + nl + _indent(update, 1)) if update else "", 2)}
 {_indent(save_first, 2)}
 {_indent(nl.join(parts["before"]), 2)}
@@ -497,7 +524,8 @@ def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
             if not (math.isfinite(th) and math.isfinite(om)):
                 ok = False
                 break
-{_indent(("if step + 1 >= n_transient:" + nl + _indent(update, 1)) if update else "", 3)}
+            k_state = step + 1
+{_indent(("if step + 1 >= n_transient:" + nl + _indent(update + nl + stop, 1)) if update else "", 3)}
 {_indent(save_step, 3)}
 {_final_block(spec)}'''
 

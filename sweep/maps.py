@@ -134,7 +134,8 @@ def well(ds: xr.Dataset) -> xr.DataArray:
     Parameters
     ----------
     ds : xarray.Dataset
-        An unforced run observing ``final`` and ``energy``.
+        An unforced run observing ``capture`` (its ``well`` is used directly), or
+        ``final`` and ``energy``.
 
     Returns
     -------
@@ -144,9 +145,12 @@ def well(ds: xr.Dataset) -> xr.DataArray:
         has not (still rotating at ``t_end``) or the trajectory failed.
     """
     _check_unforced(ds, "well")
-    _require(ds, ("theta_final",), "final", "well")
-    index = np.round(ds["theta_final"] / (2 * np.pi))
-    index = index.where(_captured(ds) & _ok(ds))
+    if "well" in ds:  # observed directly ("capture", possibly with stop_early)
+        index = ds["well"].where(_ok(ds))
+    else:
+        _require(ds, ("theta_final",), "final or capture", "well")
+        index = np.round(ds["theta_final"] / (2 * np.pi))
+        index = index.where(_captured(ds) & _ok(ds))
     index.attrs = {"long_name": "final potential well k (rest at theta = 2 pi k)",
                    "units": "1"}
     return index.rename("well")

@@ -45,6 +45,13 @@ class Observable:
         Name of that extra dimension.
     requires_forcing : bool
         True if the snippets read the forcing frequency ``W``.
+    settled : str
+        Optional snippet that sets ``SETTLED`` to True once the observable's answer can
+        no longer change; with ``run(..., stop_early=True)`` a trajectory stops when
+        every observed observable is settled (only observables that have one may be
+        observed then).
+    unforced_only : bool
+        True if the observable's meaning needs an unforced scene.
     """
 
     name: str
@@ -57,6 +64,8 @@ class Observable:
     samples: int = 1
     sample_dim: str | None = None
     requires_forcing: bool = False
+    settled: str = ""
+    unforced_only: bool = False
 
     @property
     def n_columns(self) -> int:
@@ -67,6 +76,9 @@ class Observable:
 #: Stroboscopic samples kept per trajectory by the ``strobe`` observable: enough to
 #: recognise periods up to STROBE_SAMPLES // 2 forcing periods.
 STROBE_SAMPLES = 16
+
+#: Periodicity tolerance [rad, rad/s] of the strobe observable's early-stop test.
+STROBE_TOL = 1e-4
 
 OBSERVABLES: dict[str, Observable] = {
     o.name: o
@@ -126,30 +138,98 @@ OBSERVABLES: dict[str, Observable] = {
             name="strobe",
             variables=(
                 ("strobe_theta", "rad",
-                 f"angle (unwrapped) at the last {STROBE_SAMPLES} forcing periods: "
-                 "stroboscopic samples at t0 + n_transient dt + m 2 pi / W"),
+                 f"angle (unwrapped) at the last {STROBE_SAMPLES} forcing periods "
+                 "(oldest first): stroboscopic samples at t0 + n_transient dt + m 2 pi / W"),
                 ("strobe_omega", "rad s-1",
-                 f"angular velocity at the last {STROBE_SAMPLES} forcing periods"),
+                 f"angular velocity at the last {STROBE_SAMPLES} forcing periods "
+                 "(oldest first)"),
             ),
+            # a ring of the last STROBE_SAMPLES samples; `final` rotates it oldest-first
             init=(
                 "acc_sb_S = round(TWO_PI / (W * dt))\n"
                 "acc_sb_k = 0\n"
-                "acc_sb_M = (n_steps - max(n_transient, 0)) // acc_sb_S + 1\n"
+                "acc_sb_m = 0\n"
+                "acc_sb_new = False\n"
                 f"for acc_sb_q in range({2 * STROBE_SAMPLES}):\n"
                 "    out[i, COL + acc_sb_q] = math.nan"
             ),
             update=(
-                "if acc_sb_k % acc_sb_S == 0:\n"
-                f"    acc_sb_col = acc_sb_k // acc_sb_S - acc_sb_M + {STROBE_SAMPLES}\n"
-                "    if acc_sb_col >= 0:\n"
-                "        out[i, COL + acc_sb_col] = th\n"
-                f"        out[i, COL + {STROBE_SAMPLES} + acc_sb_col] = om\n"
+                "acc_sb_new = acc_sb_k % acc_sb_S == 0\n"
+                "if acc_sb_new:\n"
+                f"    acc_sb_col = acc_sb_m % {STROBE_SAMPLES}\n"
+                "    out[i, COL + acc_sb_col] = th\n"
+                f"    out[i, COL + {STROBE_SAMPLES} + acc_sb_col] = om\n"
+                "    acc_sb_m += 1\n"
                 "acc_sb_k += 1"
+            ),
+            final=(
+                # rotate each block left by r = m mod N (three reversals, in place)
+                f"acc_sb_r = acc_sb_m % {STROBE_SAMPLES}\n"
+                "if acc_sb_r:\n"
+                "    for acc_sb_b in range(2):\n"
+                f"        acc_sb_o = COL + {STROBE_SAMPLES} * acc_sb_b\n"
+                "        for acc_sb_j in range(acc_sb_r // 2):\n"
+                "            acc_sb_x = acc_sb_o + acc_sb_j\n"
+                "            acc_sb_y = acc_sb_o + acc_sb_r - 1 - acc_sb_j\n"
+                "            out[i, acc_sb_x], out[i, acc_sb_y] = out[i, acc_sb_y], out[i, acc_sb_x]\n"
+                f"        for acc_sb_j in range(({STROBE_SAMPLES} - acc_sb_r) // 2):\n"
+                "            acc_sb_x = acc_sb_o + acc_sb_r + acc_sb_j\n"
+                f"            acc_sb_y = acc_sb_o + {STROBE_SAMPLES - 1} - acc_sb_j\n"
+                "            out[i, acc_sb_x], out[i, acc_sb_y] = out[i, acc_sb_y], out[i, acc_sb_x]\n"
+                f"        for acc_sb_j in range({STROBE_SAMPLES // 2}):\n"
+                "            acc_sb_x = acc_sb_o + acc_sb_j\n"
+                f"            acc_sb_y = acc_sb_o + {STROBE_SAMPLES - 1} - acc_sb_j\n"
+                "            out[i, acc_sb_x], out[i, acc_sb_y] = out[i, acc_sb_y], out[i, acc_sb_x]"
+            ),
+            # settled: the ring is full and periodic with some p <= N/2 within STROBE_TOL
+            # (ten times tighter than the maps' default tolerance, so a stopped
+            # trajectory is classified as it would be after a full run)
+            settled=(
+                "SETTLED = False\n"
+                f"if acc_sb_new and acc_sb_m >= {STROBE_SAMPLES}:\n"
+                f"    for acc_sb_p in range(1, {STROBE_SAMPLES // 2 + 1}):\n"
+                f"        acc_sb_a = (acc_sb_m - 1) % {STROBE_SAMPLES}\n"
+                f"        acc_sb_z = (acc_sb_m - 1 - acc_sb_p) % {STROBE_SAMPLES}\n"
+                "        acc_sb_turns = round((out[i, COL + acc_sb_a] - out[i, COL + acc_sb_z])"
+                " / TWO_PI)\n"
+                "        acc_sb_periodic = True\n"
+                f"        for acc_sb_j in range({STROBE_SAMPLES} - acc_sb_p):\n"
+                f"            acc_sb_x = (acc_sb_m + acc_sb_j) % {STROBE_SAMPLES}\n"
+                f"            acc_sb_y = (acc_sb_m + acc_sb_j + acc_sb_p) % {STROBE_SAMPLES}\n"
+                "            if abs(out[i, COL + acc_sb_y] - out[i, COL + acc_sb_x] - TWO_PI * "
+                f"acc_sb_turns) >= {STROBE_TOL!r} or abs(out[i, COL + {STROBE_SAMPLES} + "
+                f"acc_sb_y] - out[i, COL + {STROBE_SAMPLES} + acc_sb_x]) >= {STROBE_TOL!r}:\n"
+                "                acc_sb_periodic = False\n"
+                "                break\n"
+                "        if acc_sb_periodic:\n"
+                "            SETTLED = True\n"
+                "            break"
             ),
             steady=True,
             samples=STROBE_SAMPLES,
             sample_dim="strobe",
             requires_forcing=True,
+        ),
+        Observable(
+            name="capture",
+            variables=(
+                ("well", "1", "potential well k (rest at theta = 2 pi k) the pendulum is "
+                              "captured in: energy below the separatrix 2 g/L; NaN if never"),
+                ("capture_time", "s", "first time the energy is below the separatrix "
+                                      "energy 2 g/L (from t0 + t_transient on); NaN if never"),
+            ),
+            init="acc_cap = False\nacc_well = math.nan\nacc_tcap = math.nan",
+            update=(
+                "if not acc_cap and energy(th, om, w0sq) < 2.0 * w0sq:\n"
+                "    acc_cap = True\n"
+                "    acc_well = float(round(th / TWO_PI))\n"
+                "    acc_tcap = t0 + k_state * dt"
+            ),
+            final="out[i, COL] = acc_well\nout[i, COL + 1] = acc_tcap",
+            settled="SETTLED = acc_cap",
+            steady=True,
+            uses_energy=True,
+            unforced_only=True,
         ),
         Observable(
             name="tension",
