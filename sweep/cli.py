@@ -2,7 +2,7 @@
 
 ::
 
-    sweep run RUN.toml -o OUT.nc [--progress | --no-progress]
+    sweep run RUN.toml -o OUT.nc [--checkpoint DIR] [--resume] [--progress | --no-progress]
     sweep demo [-o FOLDER] [--size N]
     sweep plot FILE.nc --var NAME [--sel DIM=VALUE ...] -o OUT.png
     sweep plot FILE.nc --trajectory --sel theta0=VALUE --sel omega0=VALUE -o OUT.png
@@ -63,6 +63,14 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("run_file", metavar="RUN.toml", help="the run file")
     run.add_argument("-o", "--output", required=True, metavar="OUT.nc",
                      help="netCDF file to write (its folder must exist)")
+    run.add_argument("--checkpoint", metavar="DIR",
+                     help="write each finished chunk to the folder DIR (created if missing) "
+                     "so that an interrupted run can be resumed with --resume (default with "
+                     "--resume: OUT.nc.checkpoint); removed once OUT.nc is written")
+    run.add_argument("--resume", action="store_true",
+                     help="continue the interrupted run whose checkpoint is in DIR: finished "
+                     "chunks are loaded, not recomputed, and OUT.nc is bit-identical to an "
+                     "uninterrupted run (a checkpoint of a different run is refused)")
     _progress_option(run)
     run.set_defaults(handler=_command_run)
 
@@ -172,17 +180,61 @@ def _summary(ds, grid, seconds: float) -> str:
 
 
 # -------------------------------------------------------------------------------- run
+def default_checkpoint(output) -> Path:
+    """The checkpoint folder ``sweep run`` uses when ``--resume`` is given without
+    ``--checkpoint``: ``OUT.nc.checkpoint`` next to the output file."""
+    output = Path(output)
+    return output.with_name(output.name + ".checkpoint")
+
+
 def _command_run(args: argparse.Namespace) -> int:
-    """``sweep run``: read the run file, check the output path, run, save atomically."""
+    """``sweep run``: read the run file, check the output path, run, save atomically.
+
+    With ``--checkpoint``/``--resume`` each finished chunk is kept in the checkpoint
+    folder until the output file is saved; Ctrl-C then exits with status 130 and one
+    line that says how to resume. The output file is only ever written whole, at the end.
+    """
+    from . import checkpoint as _checkpoint
     from .io import check_output_path, save
     from .toml_spec import load_run
 
     scene, grid, kwargs = load_run(args.run_file)
     output = check_output_path(args.output)
-    ds, seconds = _run_quietly(scene, grid, progress=args.progress, **kwargs)
-    save(ds, output)
+    folder = None
+    if args.checkpoint is not None or args.resume:
+        folder = Path(args.checkpoint) if args.checkpoint is not None else \
+            default_checkpoint(output)
+        kwargs.update(checkpoint=folder, resume=args.resume, keep_checkpoint=True)
+    try:
+        ds, seconds = _run_quietly(scene, grid, progress=args.progress, **kwargs)
+        save(ds, output)
+    except KeyboardInterrupt:
+        if args.progress or (args.progress is None and sys.stderr.isatty()):
+            sys.stderr.write("\n")  # end the progress line
+        print(f"sweep: interrupted; {_resume_hint(args, folder, output)}", file=sys.stderr)
+        return 130
+    if folder is not None:
+        _checkpoint.remove(folder)
     print(f"wrote {output}: {_summary(ds, grid, seconds)}")
     return 0
+
+
+def _resume_hint(args: argparse.Namespace, folder, output: Path) -> str:
+    """The end of the one-line interruption message: how to resume (or why one cannot)."""
+    import shlex
+
+    from .checkpoint import _CHUNK
+
+    if folder is None:
+        return ("no output written; run with --checkpoint DIR (or --resume) to make a run "
+                "resumable")
+    done = sum(1 for p in folder.iterdir() if _CHUNK.match(p.name)) if folder.is_dir() else 0
+    command = ["sweep", "run", args.run_file, "-o", str(output)]
+    if args.checkpoint is not None and Path(args.checkpoint) != default_checkpoint(output):
+        command += ["--checkpoint", str(args.checkpoint)]
+    command.append("--resume")
+    return (f"{done} finished chunks are checkpointed in {str(folder)!r}; resume with: "
+            f"{shlex.join(command)}")
 
 
 # ------------------------------------------------------------------------------- demo

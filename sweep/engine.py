@@ -17,6 +17,7 @@ import numpy as np
 
 from . import _config, io
 from . import methods as _methods
+from . import stability as _stability
 from ._kernels import (KernelSpec, Status, build, check_method_fits, check_observables_fit,
                        n_columns)
 from ._validate import check_real
@@ -197,6 +198,27 @@ def _progress_printer(enabled: bool, total: int):
     return report
 
 
+def _check_stop_early(names, scene: Scene, grid: Grid, stop_early, save_every) -> None:
+    """Observables that need an unforced scene, and what early stopping allows."""
+    for name in names:
+        if OBSERVABLES[name].unforced_only and scene.forcing is not None:
+            raise ValueError(f"observable {name!r} is for unforced scenes (a forced pendulum "
+                             "can leave a well); accepted: a Scene without Forcing, or "
+                             "observe 'strobe' for forced basins")
+    if not isinstance(stop_early, (bool, np.bool_)):
+        raise TypeError(f"stop_early must be True or False, got {stop_early!r}")
+    if not stop_early:
+        return
+    stoppable = [n for n, o in OBSERVABLES.items() if o.settled]
+    for name in names:
+        if not OBSERVABLES[name].settled:
+            raise ValueError(f"stop_early=True: observable {name!r} needs the whole run; "
+                             f"accepted with stop_early: {', '.join(stoppable)}")
+    if save_every is not None:
+        raise ValueError("stop_early=True cannot save trajectories (they would end at "
+                         "different times); accepted: save_every=None")
+
+
 def _check_stroboscopic(names, scene: Scene, grid: Grid, settings) -> None:
     """Observables that sample once per forcing period need forcing, W > 0, and a
     period that is a whole number of steps (so every sample is at the same phase)."""
@@ -222,6 +244,22 @@ def _check_stroboscopic(names, scene: Scene, grid: Grid, settings) -> None:
                     f"{2 * np.pi / (frequency * max(round(steps), 1))!r}")
 
 
+def _check_stable_step(scene: Scene, grid: Grid, settings) -> None:
+    """Refuse a fixed step beyond the method's linear stability limit (see
+    `sweep.stability`): the extremes of damping and g/L over the grid are checked."""
+    p = scene.parameters()
+
+    def extremes(name):
+        values = np.asarray(grid.axes.get(name, [p[name]]), dtype=np.float64)
+        return float(values.min()), float(values.max())
+
+    c_lo, c_hi = extremes("damping")
+    g_lo, g_hi = extremes("gravity")
+    l_lo, l_hi = extremes("length")
+    _stability.check(settings.integrator, settings.dt, sorted({c_lo, c_hi}),
+                     sorted({g_lo / l_hi, g_hi / l_lo}))
+
+
 def run(
     scene: Scene,
     grid: Grid,
@@ -238,7 +276,12 @@ def run(
     progress: bool | None = None,
     chunk_size: int | None = None,
     specialize: bool = True,
+    check_stability: bool = True,
     estimate_error: int | None = None,
+    checkpoint=None,
+    resume: bool = False,
+    keep_checkpoint: bool = False,
+    stop_early: bool = False,
 ):
     """Integrate every trajectory of ``grid`` under ``scene``; return a labelled Dataset.
 
@@ -285,11 +328,38 @@ def run(
     specialize : bool, default True
         False builds the fully general kernel (damping and forcing terms present and
         fed zeros when the scene lacks them): for tests and benchmarks.
+    check_stability : bool, default True
+        Refuse a fixed ``dt`` beyond the method's linear stability limit for the scene
+        and grid (`sweep.stability`: the pendulum linearised at the bottom, eigenvalues
+        ``-c/2 +- sqrt(c^2/4 - g/L)`` at the extremes of the damping and ``g/L`` axes;
+        RK4: ``dt |lambda| <= 2.785`` on the real axis, ``<= 2.828`` on the imaginary
+        axis; Verlet ``w dt < 2``). It covers the scene's linear stiffness, not the
+        nonlinear pendulum's physical instability near the top nor the accuracy of fast
+        rotation. Adaptive methods are never checked. False integrates anyway: unstable
+        trajectories then grow, overflow and are flagged non-finite (for tests).
+    stop_early : bool, default False
+        Stop each trajectory as soon as its answer is settled: for ``capture`` (the
+        well of an unforced pendulum, final once its energy is below the separatrix)
+        and ``strobe`` (the stroboscopic samples are periodic, the attractor found).
+        Only observables with such a test may be observed; the saving is the point
+        (see the README's measurement).
     estimate_error : int, optional
         Opt-in accuracy estimate: re-run this many random trajectories with half the
         step (or 100x tighter tolerances) and attach the estimated global error of the
         final state to the attributes (``error_estimate_max``, ``error_estimate_rms``
         [rad]); see `sweep.accuracy.estimate_error`.
+    checkpoint : str or Path, optional
+        A folder (created if missing) where each finished chunk is written atomically,
+        so that an interrupted run can be resumed (see `sweep.checkpoint`). Without
+        ``resume`` the folder must not hold a checkpoint already.
+    resume : bool, default False
+        Load the chunks already in ``checkpoint`` instead of computing them; the
+        result is bit-identical to an uninterrupted run. Refused (ValueError naming
+        each difference) if the checkpoint belongs to another scene, grid, settings,
+        chunk size or sweep version; an absent checkpoint starts from scratch.
+    keep_checkpoint : bool, default False
+        Keep the checkpoint files after the chunks are all done (default: remove
+        them, and the folder if that leaves it empty).
 
     Returns
     -------
@@ -335,6 +405,11 @@ def run(
     check_method_fits(integrator, damping="damping" in effects, forcing="forcing" in effects)
     check_observables_fit(integrator, names)
     _check_stroboscopic(names, scene, grid, settings)
+    _check_stop_early(names, scene, grid, stop_early, save_every)
+    if not isinstance(check_stability, (bool, np.bool_)):
+        raise TypeError(f"check_stability must be True or False, got {check_stability!r}")
+    if check_stability:
+        _check_stable_step(scene, grid, settings)
     # a symplectic method's kernel has no damping or forcing terms even when not
     # specialising: the general kernel of a conservative-only method is the conservative one
     general = not specialize and not integrator.conservative_only
@@ -344,6 +419,7 @@ def run(
         forcing=("forcing" in effects) or general,
         observe=names,
         save=save_every is not None,
+        stop_early=bool(stop_early),
         method=integrator,
     )
     n = grid.size
@@ -361,6 +437,8 @@ def run(
             f"{available / 2**30:.2f} GiB is available; accepted: a smaller grid"
         )
 
+    store = _open_checkpoint(checkpoint, resume, scene=scene, grid=grid, settings=settings,
+                             spec=spec, chunk_size=int(chunk_size))
     kernel = build(spec)
     out = np.empty((n, width), dtype=np.float64)
     status = np.empty(n, dtype=np.int8)
@@ -369,7 +447,13 @@ def run(
         progress = sys.stderr.isatty()
     report = _progress_printer(bool(progress), n)
     stats = np.zeros((n, 2), dtype=np.int64) if settings.adaptive else None
+    # every per-trajectory array the kernel writes: a checkpoint stores and restores these
+    persisted = {"out": out, "status": status, **({"saved": saved} if save_every else {}),
+                 **({"stats": stats} if stats is not None else {})}
     for start, stop in grid.chunks(int(chunk_size)):
+        if store is not None and store.restore(start, stop, persisted):
+            report(stop)  # resumed chunks count as done
+            continue
         table = grid.table(scene, start, stop)
         if settings.adaptive:
             kernel(table, settings.t0, settings.t_end, settings.dt, settings.t_transient,
@@ -379,7 +463,11 @@ def run(
             kernel(table, settings.t0, settings.dt, settings.n_steps, settings.n_transient,
                    save_every or 1, out[start:stop], status[start:stop],
                    saved[start:stop] if save_every else saved)
+        if store is not None:
+            store.store(start, stop, persisted)
         report(stop)
+    if store is not None and not keep_checkpoint:
+        store.remove()
 
     failed = int(np.count_nonzero(status != Status.OK))
     if failed:
@@ -399,6 +487,25 @@ def run(
                                   t0=t0, t_transient=t_transient, method=method, rtol=rtol,
                                   atol=atol))
     return ds
+
+
+def _open_checkpoint(checkpoint, resume, **run):
+    """The run's `sweep.checkpoint.Checkpoint`, or None without ``checkpoint``."""
+    if not isinstance(resume, (bool, np.bool_)):
+        raise TypeError(f"resume must be True or False, got {resume!r}")
+    if checkpoint is None:
+        if resume:
+            raise ValueError("resume=True needs checkpoint= (the folder of the interrupted "
+                             "run's checkpoint); accepted: a checkpoint folder, or "
+                             "resume=False")
+        return None
+    if not isinstance(checkpoint, (str, os.PathLike)) or not str(checkpoint):
+        raise TypeError(f"checkpoint must be None or a folder path (str or Path), got "
+                        f"{checkpoint!r}")
+    from . import checkpoint as _checkpoint
+
+    fp = _checkpoint.fingerprint(version=io._version(), **run)
+    return _checkpoint.open_checkpoint(checkpoint, fp, resume=bool(resume))
 
 
 def _add_step_statistics(ds, grid, settings, stats) -> None:

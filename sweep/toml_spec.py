@@ -25,6 +25,7 @@ A run file has three tables::
     observe = ["final", "winding"]
     save_every = 10              # steps; stores theta(t), omega(t)
     method = "rk4"
+    chunk_size = 1000            # trajectories per chunk (progress and checkpoints)
 
 ``units = "deg"`` is accepted for the angle-like axes ``theta0`` (deg),
 ``omega0`` (deg/s) and ``forcing_phase`` (deg); values are converted to radians
@@ -54,7 +55,7 @@ TABLES = ("scene", "grid", "run")
 
 #: Keys of the ``[run]`` table (keyword arguments of `sweep.run`).
 RUN_KEYS = ("t_end", "dt", "t0", "t_transient", "observe", "save_every", "method", "rtol",
-            "atol")
+            "atol", "chunk_size", "stop_early", "check_stability", "estimate_error")
 
 #: Keys of ``[run]`` that must be present.
 REQUIRED_RUN_KEYS = ("t_end", "dt")
@@ -285,4 +286,12 @@ def _run(source: str, table: dict) -> dict[str, Any]:
                                  f"got {observe!r}")
             resolve(observe)
             kwargs["observe"] = (observe,) if isinstance(observe, str) else tuple(observe)
+        if "chunk_size" in kwargs:
+            chunk_size = kwargs["chunk_size"]
+            if isinstance(chunk_size, bool) or not isinstance(chunk_size, int):
+                raise TypeError(f"chunk_size must be an integer >= 1 (trajectories), "
+                                f"got {chunk_size!r}")
+            if chunk_size < 1:
+                raise ValueError(f"chunk_size must be an integer >= 1 (trajectories), "
+                                 f"got {chunk_size!r}")
     return kwargs

@@ -104,6 +104,29 @@ CASES = [
     ("scene not a Scene", lambda: sweep.run({"length": 1}, sweep.Grid(theta0=[0.0]),
                                             **GOOD_RUN), TypeError,
      r"scene must be a sweep\.Scene"),
+    # stability guard (sweep.stability): RK4 needs dt |lambda| <= 2.785 on the real axis
+    ("stiff damping beyond RK4's limit",
+     lambda: _run(scene=sweep.Scene(effects=(sweep.Damping(100.0),)), t_end=1.0, dt=0.05),
+     ValueError, (r"dt = 0\.05 exceeds RK4's stability limit 0\.0279 s for this scene "
+                  r"\(damping c = 100 1/s, g/L = 9\.81 1/s\^2: eigenvalue -99\.9\); "
+                  r"accepted: dt <= 0\.0278")),
+    ("stiff damping axis beyond RK4's limit",
+     lambda: _run(grid=dict(theta0=[0.1], damping=[0.0, 1e3]), t_end=1.0, dt=0.01),
+     ValueError, r"dt = 0\.01 exceeds RK4's stability limit 0\.00279 s .*damping c = 1000"),
+    ("fast oscillation beyond RK4's imaginary-axis limit",
+     lambda: _run(scene=sweep.Scene(length=0.01), t_end=1.0, dt=0.1), ValueError,
+     (r"dt = 0\.1 exceeds RK4's stability limit 0\.0903 s .*undamped, g/L = 981 1/s\^2: "
+      r"eigenvalue \+-31\.32i\); accepted: dt <= 0\.0903")),
+    ("short length axis beyond Verlet's limit",
+     lambda: _run(grid=dict(theta0=[0.1], length=[1.0, 1e-3]), t_end=1.0, dt=0.1,
+                  method="verlet"), ValueError,
+     r"dt = 0\.1 exceeds Verlet's stability limit 0\.0202 s"),
+    ("Euler on a damped scene beyond its disk",
+     lambda: _run(scene=sweep.Scene(effects=(sweep.Damping(0.1),)), t_end=1.0, dt=0.05,
+                  method="euler"), ValueError,
+     r"dt = 0\.05 exceeds Euler's stability limit 0\.0102 s .*eigenvalue -0\.05 \+-3\.132i"),
+    ("check_stability not a bool", lambda: _run(check_stability="no"), TypeError,
+     r"check_stability must be True or False, got 'no'"),
     ("grid not a Grid", lambda: sweep.run(sweep.Scene(), {"theta0": [0.0]}, **GOOD_RUN),
      TypeError, r"grid must be a sweep\.Grid"),
 ]

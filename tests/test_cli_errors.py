@@ -1,0 +1,148 @@
+"""Bad run files through the ``sweep run`` command (in-process, `sweep.cli.main`).
+
+Each case: exit status 2, nothing on stdout, exactly one ``sweep: error:`` line on
+stderr that names the offending parameter, no traceback, no output file created, and
+an output file that already exists left byte-identical.
+"""
+
+import contextlib
+import io
+from pathlib import Path
+
+import pytest
+
+from sweep import cli
+
+GOOD = """\
+[scene]
+gravity = 9.81
+length = 1.0
+model = "nonlinear"
+
+[scene.damping]
+coefficient = 0.3
+
+[grid]
+theta0 = {start = -180, stop = 180, num = 5, units = "deg"}
+omega0 = [-1.0, 0.0, 1.0]
+
+[run]
+t_end = 2.0
+dt = 0.05
+observe = ["final", "winding", "energy"]
+"""
+
+
+def _edit(old, new):
+    assert old in GOOD, old
+    return GOOD.replace(old, new)
+
+
+# label -> (run-file text, or a callable folder -> path of the run file; words the one
+# stderr line must contain: the parameter it names)
+CASES = {
+    "malformed TOML": ("[grid\ntheta0 = 1\n", "not valid TOML"),
+    "not TOML at all": ("\x00\x01 binary", "not valid TOML"),
+    "unknown table": (GOOD + "\n[plot]\ncmap = 'x'\n", "plot"),
+    "unknown [run] key": (_edit("dt =", "step ="), "step"),
+    "unknown [scene] key": (_edit("gravity =", "gravty ="), "gravty"),
+    "unknown grid axis": (_edit("omega0 =", "omega =") , "omega"),
+    "unknown effect key": (_edit("coefficient", "coef"), "coef"),
+    "string gravity": (_edit("gravity = 9.81", 'gravity = "9.81"'), "gravity"),
+    "nan length": (_edit("length = 1.0", "length = nan"), "length"),
+    "inf dt": (_edit("dt = 0.05", "dt = inf"), "dt"),
+    "negative length": (_edit("length = 1.0", "length = -1.0"), "length"),
+    "zero gravity": (_edit("gravity = 9.81", "gravity = 0.0"), "gravity"),
+    "negative damping": (_edit("coefficient = 0.3", "coefficient = -0.3"), "coefficient"),
+    "unknown model": (_edit('model = "nonlinear"', 'model = "quadratic"'), "model"),
+    "empty axis": (_edit("omega0 = [-1.0, 0.0, 1.0]", "omega0 = []"), "omega0"),
+    "2-D axis": (_edit("omega0 = [-1.0, 0.0, 1.0]", "omega0 = [[1.0, 2.0], [3.0, 4.0]]"),
+                 "omega0"),
+    "nan in axis": (_edit("omega0 = [-1.0, 0.0, 1.0]", "omega0 = [0.0, nan]"), "omega0"),
+    "string axis": (_edit("omega0 = [-1.0, 0.0, 1.0]", 'omega0 = "fast"'), "omega0"),
+    "bad units": (_edit('units = "deg"', 'units = "grad"'), "units"),
+    "zero-point range": (_edit("num = 5", "num = 0"), "num"),
+    "missing t_end": (_edit("t_end = 2.0\n", ""), "t_end"),
+    "t_end equals t0": (_edit("t_end = 2.0", "t_end = 2.0\nt0 = 2.0"), "t_end"),
+    "t_end before t0": (_edit("t_end = 2.0", "t_end = -1.0"), "t_end"),
+    "zero dt": (_edit("dt = 0.05", "dt = 0.0"), "dt"),
+    "dt not dividing the span": (_edit("dt = 0.05", "dt = 0.3"), "dt"),
+    "t_transient too long": (_edit("dt = 0.05", "dt = 0.05\nt_transient = 5.0"),
+                             "t_transient"),
+    "unknown observable": (_edit('"energy"]', '"energie"]'), "energie"),
+    "observe not a list": (_edit('observe = ["final", "winding", "energy"]', "observe = 3"),
+                           "observe"),
+    "unknown method": (_edit("dt = 0.05", 'dt = 0.05\nmethod = "rk5"'), "method"),
+    "symplectic with damping": (_edit("dt = 0.05", 'dt = 0.05\nmethod = "verlet"'),
+                                "verlet"),
+    "float save_every": (_edit("dt = 0.05", "dt = 0.05\nsave_every = 2.5"), "save_every"),
+    "unstable step (stiff damping)": (_edit("coefficient = 0.3", "coefficient = 200.0"),
+                                      "stability limit"),
+    "run file is a folder": (lambda d: _folder(d), "run.toml"),
+    "missing run file": (lambda d: d / "missing.toml", "missing.toml"),
+}
+
+
+def _folder(folder: Path) -> Path:
+    # chmod 000 does not stop root from reading, so unreadability is a directory
+    path = folder / "run.toml"
+    path.mkdir()
+    return path
+
+
+def _call(*argv):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = cli.main([str(a) for a in argv])
+    return code, out.getvalue(), err.getvalue()
+
+
+def _run_file(folder: Path, spec) -> Path:
+    if callable(spec):
+        return spec(folder)
+    path = folder / "run.toml"
+    path.write_text(spec, encoding="utf-8")
+    return path
+
+
+def test_the_good_file_runs(tmp_path):
+    path = _run_file(tmp_path, GOOD)
+    code, _, err = _call("run", path, "-o", tmp_path / "out.nc")
+    assert code == 0, err
+    assert (tmp_path / "out.nc").is_file()
+
+
+def test_battery_is_large_enough():
+    assert len(CASES) >= 15
+
+
+@pytest.mark.parametrize("existing", [False, True], ids=["no output", "output exists"])
+@pytest.mark.parametrize("label", list(CASES))
+def test_bad_run_file_gives_one_line_status_2_and_touches_no_file(label, existing, tmp_path):
+    spec, words = CASES[label]
+    path = _run_file(tmp_path, spec)
+    output = tmp_path / "out.nc"
+    previous = b"previous results, not to be damaged\n"
+    if existing:
+        output.write_bytes(previous)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    code, out, err = _call("run", path, "-o", output)
+    assert code == 2, err
+    assert out == ""
+    assert err.count("\n") == 1 and err.startswith("sweep: error: "), err
+    assert words in err, err
+    assert "Traceback" not in err
+    if existing:
+        assert output.read_bytes() == previous
+    else:
+        assert not output.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # no stray files
+
+
+def test_output_in_a_missing_folder_is_refused(tmp_path):
+    path = _run_file(tmp_path, GOOD)
+    output = tmp_path / "nowhere" / "out.nc"
+    code, out, err = _call("run", path, "-o", output)
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "nowhere" in err
+    assert not output.parent.exists()
