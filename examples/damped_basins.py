@@ -3,8 +3,9 @@
 An unforced pendulum with damping c loses energy until it is captured in one of the
 wells theta = 2 pi k. Which well depends on how many turns it makes first, so the
 basins in the (theta0, omega0) plane are bands that wind around the origin. The run
-observes only what the maps need: the final state and the energy (capture: final
-energy below the separatrix energy 2 g/L, after which the well can never change).
+observes only what the map needs: ``capture``, the well at the moment the energy first
+drops below the separatrix energy 2 g/L (after which the well can never change), and
+with ``stop_early=True`` each trajectory stops right there.
 
 Usage::
 
@@ -32,7 +33,8 @@ def compute(size: int):
     scene = sweep.Scene(gravity=9.81, length=1.0, effects=(sweep.Damping(0.25),))
     grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, size),
                       omega0=np.linspace(-12.0, 12.0, size))
-    return sweep.run(scene, grid, t_end=40.0, dt=0.02, observe=("final", "energy"))
+    return sweep.run(scene, grid, t_end=40.0, dt=0.02, observe=("capture",),
+                     stop_early=True)
 
 
 def main(argv=None) -> int:
