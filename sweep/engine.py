@@ -21,6 +21,8 @@ from . import stability as _stability
 from ._kernels import (KernelSpec, Status, build, check_method_fits, check_observables_fit,
                        n_columns)
 from ._validate import check_real
+from .distributed import allocate as _allocate
+from .distributed import integrate as _integrate
 from .grid import Grid
 from .methods import METHODS
 from .observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
@@ -260,6 +262,58 @@ def _check_stable_step(scene: Scene, grid: Grid, settings) -> None:
                      sorted({g_lo / l_hi, g_hi / l_lo}))
 
 
+def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, method,
+             rtol, atol, chunk_size, specialize, check_stability, estimate_error,
+             stop_early):
+    """Validate the arguments of `run` (before any compute); return the time
+    settings, the kernel spec and the chunk size. Raises ValueError/TypeError."""
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a sweep.Scene, got {scene!r}")
+    if not isinstance(grid, Grid):
+        raise TypeError(f"grid must be a sweep.Grid, got {grid!r}")
+    grid.check_against(scene)
+    settings = validate_settings(t_end=t_end, dt=dt, t0=t0, t_transient=t_transient,
+                                 save_every=save_every, method=method, rtol=rtol, atol=atol)
+    names = resolve(observe)
+    if not names and save_every is None:
+        raise ValueError("observe is empty and save_every is None -- nothing would be "
+                         "computed; accepted: at least one of final, winding, theta_max, "
+                         "amplitude, tension, energy, or a save_every")
+    if estimate_error is not None and (isinstance(estimate_error, bool) or not isinstance(
+            estimate_error, (int, np.integer)) or estimate_error < 1):
+        raise ValueError(f"estimate_error must be None or an int >= 1 (trajectories), got "
+                         f"{estimate_error!r}")
+    if chunk_size is None:
+        chunk_size = _config.CHUNK_SIZE
+    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) \
+            or chunk_size < 1:
+        raise ValueError(f"chunk_size must be an int >= 1, got {chunk_size!r}")
+
+    effects = grid.effects(scene)
+    integrator = settings.integrator
+    check_method_fits(integrator, damping="damping" in effects, forcing="forcing" in effects)
+    check_observables_fit(integrator, names)
+    _check_stroboscopic(names, scene, grid, settings)
+    _check_stop_early(names, scene, grid, stop_early, save_every)
+    if not isinstance(check_stability, (bool, np.bool_)):
+        raise TypeError(f"check_stability must be True or False, got {check_stability!r}")
+    if check_stability:
+        _check_stable_step(scene, grid, settings)
+    # a symplectic method's kernel has no damping or forcing terms even when not
+    # specialising: the general kernel of a conservative-only method is the conservative one
+    general = not specialize and not integrator.conservative_only
+    spec = KernelSpec(
+        model=scene.model,
+        damping=("damping" in effects) or general,
+        forcing=("forcing" in effects) or general,
+        observe=names,
+        save=save_every is not None,
+        stop_early=bool(stop_early),
+        method=integrator,
+    )
+    return settings, spec, int(chunk_size)
+
+
 def run(
     scene: Scene,
     grid: Grid,
@@ -282,6 +336,7 @@ def run(
     resume: bool = False,
     keep_checkpoint: bool = False,
     stop_early: bool = False,
+    client=None,
 ):
     """Integrate every trajectory of ``grid`` under ``scene``; return a labelled Dataset.
 
@@ -360,6 +415,11 @@ def run(
     keep_checkpoint : bool, default False
         Keep the checkpoint files after the chunks are all done (default: remove
         them, and the folder if that leaves it empty).
+    client : dask.distributed.Client, optional
+        Run each chunk as a task on this Dask cluster (`sweep.distributed`; needs the
+        ``dask`` extra) and gather the chunks as they finish; the dataset is
+        bit-identical to a local run. A lost worker's chunks are rerun elsewhere;
+        ``chunk_size`` is the task size. Works with ``checkpoint``/``resume``.
 
     Returns
     -------
@@ -378,50 +438,11 @@ def run(
     RuntimeWarning
         When some trajectories became non-finite (count given; see ``ds.status``).
     """
-    if not isinstance(scene, Scene):
-        raise TypeError(f"scene must be a sweep.Scene, got {scene!r}")
-    if not isinstance(grid, Grid):
-        raise TypeError(f"grid must be a sweep.Grid, got {grid!r}")
-    grid.check_against(scene)
-    settings = validate_settings(t_end=t_end, dt=dt, t0=t0, t_transient=t_transient,
-                                 save_every=save_every, method=method, rtol=rtol, atol=atol)
-    names = resolve(observe)
-    if not names and save_every is None:
-        raise ValueError("observe is empty and save_every is None -- nothing would be "
-                         "computed; accepted: at least one of final, winding, theta_max, "
-                         "amplitude, tension, energy, or a save_every")
-    if estimate_error is not None and (isinstance(estimate_error, bool) or not isinstance(
-            estimate_error, (int, np.integer)) or estimate_error < 1):
-        raise ValueError(f"estimate_error must be None or an int >= 1 (trajectories), got "
-                         f"{estimate_error!r}")
-    if chunk_size is None:
-        chunk_size = _config.CHUNK_SIZE
-    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) \
-            or chunk_size < 1:
-        raise ValueError(f"chunk_size must be an int >= 1, got {chunk_size!r}")
-
-    effects = grid.effects(scene)
-    integrator = settings.integrator
-    check_method_fits(integrator, damping="damping" in effects, forcing="forcing" in effects)
-    check_observables_fit(integrator, names)
-    _check_stroboscopic(names, scene, grid, settings)
-    _check_stop_early(names, scene, grid, stop_early, save_every)
-    if not isinstance(check_stability, (bool, np.bool_)):
-        raise TypeError(f"check_stability must be True or False, got {check_stability!r}")
-    if check_stability:
-        _check_stable_step(scene, grid, settings)
-    # a symplectic method's kernel has no damping or forcing terms even when not
-    # specialising: the general kernel of a conservative-only method is the conservative one
-    general = not specialize and not integrator.conservative_only
-    spec = KernelSpec(
-        model=scene.model,
-        damping=("damping" in effects) or general,
-        forcing=("forcing" in effects) or general,
-        observe=names,
-        save=save_every is not None,
-        stop_early=bool(stop_early),
-        method=integrator,
-    )
+    settings, spec, chunk_size = _prepare(
+        scene, grid, t_end=t_end, dt=dt, t0=t0, t_transient=t_transient, observe=observe,
+        save_every=save_every, method=method, rtol=rtol, atol=atol, chunk_size=chunk_size,
+        specialize=specialize, check_stability=check_stability,
+        estimate_error=estimate_error, stop_early=stop_early)
     n = grid.size
     width = n_columns(spec)
     n_saved = settings.n_steps // save_every + 1 if save_every is not None else 0
@@ -437,35 +458,46 @@ def run(
             f"{available / 2**30:.2f} GiB is available; accepted: a smaller grid"
         )
 
+    if client is not None:
+        from . import distributed as _distributed
+
+        _distributed.check_client(client)
     store = _open_checkpoint(checkpoint, resume, scene=scene, grid=grid, settings=settings,
                              spec=spec, chunk_size=int(chunk_size))
-    kernel = build(spec)
-    out = np.empty((n, width), dtype=np.float64)
-    status = np.empty(n, dtype=np.int8)
-    saved = np.full((n, 2, n_saved), np.nan) if save_every else np.empty((0, 2, 0))
+    # every per-trajectory array the kernel writes (out, status, [saved], [stats]); a
+    # checkpoint stores and restores these, a distributed task returns its rows of them
+    persisted = _allocate(spec, settings, n)
+    out, status = persisted["out"], persisted["status"]
+    saved = persisted.get("saved", np.empty((0, 2, 0)))
+    stats = persisted.get("stats")
     if progress is None:
         progress = sys.stderr.isatty()
     report = _progress_printer(bool(progress), n)
-    stats = np.zeros((n, 2), dtype=np.int64) if settings.adaptive else None
-    # every per-trajectory array the kernel writes: a checkpoint stores and restores these
-    persisted = {"out": out, "status": status, **({"saved": saved} if save_every else {}),
-                 **({"stats": stats} if stats is not None else {})}
-    for start, stop in grid.chunks(int(chunk_size)):
-        if store is not None and store.restore(start, stop, persisted):
-            report(stop)  # resumed chunks count as done
-            continue
-        table = grid.table(scene, start, stop)
-        if settings.adaptive:
-            kernel(table, settings.t0, settings.t_end, settings.dt, settings.t_transient,
-                   settings.rtol, settings.atol, out[start:stop], status[start:stop],
-                   stats[start:stop])
-        else:
-            kernel(table, settings.t0, settings.dt, settings.n_steps, settings.n_transient,
-                   save_every or 1, out[start:stop], status[start:stop],
-                   saved[start:stop] if save_every else saved)
+    done = 0
+
+    def finished(start, stop):
+        nonlocal done
         if store is not None:
             store.store(start, stop, persisted)
-        report(stop)
+        done += stop - start
+        report(done)
+
+    todo = []
+    for start, stop in grid.chunks(int(chunk_size)):
+        if store is not None and store.restore(start, stop, persisted):
+            done += stop - start
+            report(done)  # resumed chunks count as done
+        else:
+            todo.append((start, stop))
+    if client is None:
+        kernel = build(spec)
+        for start, stop in todo:
+            _integrate(kernel, grid.table(scene, start, stop), settings,
+                       {name: array[start:stop] for name, array in persisted.items()})
+            finished(start, stop)
+    else:  # one task per chunk on the cluster, gathered as they finish
+        _distributed.run_chunks(client, _distributed.RunContext(scene, grid, spec, settings),
+                                todo, persisted, finished, retries=2)
     if store is not None and not keep_checkpoint:
         store.remove()
 
