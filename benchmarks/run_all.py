@@ -1,0 +1,770 @@
+"""The benchmark suite: sweep beside the alternatives, every ratio from the same run.
+
+Workload (the performance issue's): damped, forced, nonlinear pendulum
+theta'' = A sin(W t) - c theta' - (g/L) sin(theta), g/L = 1, c = 0.5, A = 1.2, W = 2/3,
+2**17 trajectories (512 x 256 grid of theta0 in [-pi, pi], omega0 in [-2, 2]) x 2000
+RK4 steps of dt = 0.01, float64, final state only. Throughput is trajectory-steps per
+second (trajectories x steps / wall seconds).
+
+Measured:
+
+* ``sweep.run`` per effect combination (linear/nonlinear x damping x forcing), each
+  beside the general kernel fed zeros (``specialize=False``);
+* the same work in vectorised NumPy RK4, SciPy ``solve_ivp`` DOP853 per trajectory
+  (subset, extrapolated), a seed-style pure-Python RK4 (subset, extrapolated), a naive
+  numba kernel (prange over trajectories, ``math.sin``), the C reference
+  (``benchmarks/c_reference/pendulum.c``, built here with gcc when present: libm sin,
+  glibc's vector sin, the polynomial sin of ``sweep._vecmath``; results checked against
+  sweep's), JAX when importable;
+* ``sweep._vecmath.sin`` against ``math.sin`` in a numba loop (fastmath flags without
+  ``reassoc``), and whether the loop vectorises;
+* compile time cold (fresh ``SWEEP_CACHE_DIR``, new process) and warm (next process),
+  ``import sweep`` time, peak memory of a 2048 x 2048 final-state run (``VmHWM``;
+  ``ru_maxrss`` beside it, which on Linux also counts the parent's memory at exec),
+  scaling with trajectories (1e3 .. 1e6; 1e7 with ``--full``) and threads (1 vs 2).
+
+Writes ``benchmarks/results/run_all.json``, ``run_all.md`` and ``run_all.png``
+(``--quick``: ``run_all_quick.*``, so a smoke test leaves the full results alone).
+
+Usage::
+
+    python benchmarks/run_all.py            # the issue's workload (~4 min on 2 cores)
+    python benchmarks/run_all.py --quick    # small sizes, a smoke test (~1 min)
+    python benchmarks/run_all.py --full     # adds 1e7 trajectories to the scaling
+"""
+
+from __future__ import annotations
+
+import argparse
+import ctypes
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+from numba import njit, prange
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent))
+
+from forced_basins import machine
+
+import sweep
+from sweep import _vecmath
+
+G_OVER_L, DAMPING, AMPLITUDE, FREQUENCY, PHASE = 1.0, 0.5, 1.2, 2.0 / 3.0, 0.0
+DT = 0.01
+REPEATS = 1  # best of at least this many calls (--repeats)
+MIN_SECONDS = 0.0  # every timing repeats until this much wall time (--quick: 0.3 s)
+VEC_FLAGS = {"nsz", "arcp", "contract", "afn"}  # fast-math without reassoc
+
+
+# ----------------------------------------------------------------------------- helpers
+def timed(fn, *, repeats=1, min_seconds=0.0):
+    """Best wall time of ``fn()`` over ``repeats`` calls (more calls, up to 50, while
+    the total is under ``min_seconds``); returns (seconds, last result)."""
+    min_seconds = max(min_seconds, MIN_SECONDS)
+    repeats = max(repeats, REPEATS)
+    best, total, calls, result = math.inf, 0.0, 0, None
+    while calls < repeats or (total < min_seconds and calls < 50):
+        start = time.perf_counter()
+        result = fn()
+        elapsed = time.perf_counter() - start
+        best, total, calls = min(best, elapsed), total + elapsed, calls + 1
+    return best, result
+
+
+def scene_of(model="nonlinear", damping=True, forcing=True):
+    effects = []
+    if damping:
+        effects.append(sweep.Damping(DAMPING))
+    if forcing:
+        effects.append(sweep.Forcing(AMPLITUDE, FREQUENCY, PHASE))
+    return sweep.Scene(gravity=G_OVER_L, length=1.0, model=model, effects=tuple(effects))
+
+
+def grid_axes(n):
+    """(theta0, omega0) axes with n trajectories: 2 x 1 aspect like 512 x 256."""
+    cols = max(1, round(math.sqrt(n / 2)))
+    rows = max(1, n // cols)
+    return np.linspace(-np.pi, np.pi, rows), np.linspace(-2.0, 2.0, cols)
+
+
+def initial_states(theta0, omega0):
+    th, om = np.meshgrid(theta0, omega0, indexing="ij")
+    return th.ravel().copy(), om.ravel().copy()
+
+
+def run_sweep(scene, theta0, omega0, steps, **options):
+    grid = sweep.Grid(theta0=theta0, omega0=omega0)
+    return sweep.run(scene, grid, t_end=steps * DT, dt=DT, observe=("final",),
+                     progress=False, **options)
+
+
+# --------------------------------------------------------------------- alternatives
+def numpy_rk4(th0, om0, steps):
+    """RK4 vectorised across trajectories, sweep's operations and forcing times."""
+    th, om = th0.copy(), om0.copy()
+    w0sq, c, A, W, phi = G_OVER_L, DAMPING, AMPLITUDE, FREQUENCY, PHASE
+    dt_2, dt_6, cdt1 = DT / 2.0, DT / 6.0, DT * 0.5
+
+    def accel(x, v, f):
+        return -w0sq * np.sin(x) - c * v + f
+
+    f0 = A * math.sin(W * 0.0 + phi)
+    for step in range(steps):
+        f1 = A * math.sin(W * (step * DT + cdt1) + phi)
+        f2 = A * math.sin(W * ((step + 1) * DT) + phi)
+        k1t = om
+        k1o = accel(th, k1t, f0)
+        k2t = om + dt_2 * k1o
+        k2o = accel(th + dt_2 * k1t, k2t, f1)
+        k3t = om + dt_2 * k2o
+        k3o = accel(th + dt_2 * k2t, k3t, f1)
+        k4t = om + DT * k3o
+        k4o = accel(th + DT * k3t, k4t, f2)
+        th = th + dt_6 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t)
+        om = om + dt_6 * (k1o + 2.0 * k2o + 2.0 * k3o + k4o)
+        f0 = f2
+    return th, om
+
+
+def python_rk4(th0, om0, steps):
+    """Seed-style textbook RK4: pure Python floats, one trajectory at a time."""
+    def f(t, th, om):
+        return om, AMPLITUDE * math.sin(FREQUENCY * t + PHASE) - DAMPING * om \
+            - G_OVER_L * math.sin(th)
+
+    out_th, out_om = [], []
+    for th, om in zip(th0.tolist(), om0.tolist()):
+        for n in range(steps):
+            t = n * DT
+            a1, b1 = f(t, th, om)
+            a2, b2 = f(t + DT / 2, th + DT / 2 * a1, om + DT / 2 * b1)
+            a3, b3 = f(t + DT / 2, th + DT / 2 * a2, om + DT / 2 * b2)
+            a4, b4 = f(t + DT, th + DT * a3, om + DT * b3)
+            th = th + DT / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
+            om = om + DT / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
+        out_th.append(th)
+        out_om.append(om)
+    return np.array(out_th), np.array(out_om)
+
+
+def scipy_dop853(th0, om0, steps, rtol=1e-10, atol=1e-12):
+    from scipy.integrate import solve_ivp
+
+    def f(t, y):
+        return (y[1], AMPLITUDE * math.sin(FREQUENCY * t + PHASE) - DAMPING * y[1]
+                - G_OVER_L * math.sin(y[0]))
+
+    th, om = [], []
+    for a, b in zip(th0, om0):
+        sol = solve_ivp(f, (0.0, steps * DT), (a, b), method="DOP853", rtol=rtol, atol=atol)
+        th.append(sol.y[0, -1])
+        om.append(sol.y[1, -1])
+    return np.array(th), np.array(om)
+
+
+@njit(parallel=True, cache=True)
+def numba_naive(th0, om0, steps, w0sq, c, A, W, phi, dt):
+    """prange over trajectories, time loop inside, math.sin: the obvious numba kernel."""
+    n = th0.size
+    th_out = np.empty(n)
+    om_out = np.empty(n)
+    for i in prange(n):
+        th, om = th0[i], om0[i]
+        for step in range(steps):
+            t = step * dt
+            f0 = A * math.sin(W * t + phi)
+            f1 = A * math.sin(W * (t + 0.5 * dt) + phi)
+            f2 = A * math.sin(W * (t + dt) + phi)
+            k1t = om
+            k1o = -w0sq * math.sin(th) - c * k1t + f0
+            k2t = om + 0.5 * dt * k1o
+            k2o = -w0sq * math.sin(th + 0.5 * dt * k1t) - c * k2t + f1
+            k3t = om + 0.5 * dt * k2o
+            k3o = -w0sq * math.sin(th + 0.5 * dt * k2t) - c * k3t + f1
+            k4t = om + dt * k3o
+            k4o = -w0sq * math.sin(th + dt * k3t) - c * k4t + f2
+            th = th + dt / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t)
+            om = om + dt / 6.0 * (k1o + 2.0 * k2o + 2.0 * k3o + k4o)
+        th_out[i] = th
+        om_out[i] = om
+    return th_out, om_out
+
+
+BLOCK = 512
+
+
+@njit(parallel=True, fastmath=VEC_FLAGS, cache=True)
+def numba_blocked_vsin(th0, om0, steps, w0sq, c, A, W, phi, dt):
+    """Prototype (not sweep's kernel): blocks of BLOCK trajectories, time loop outside,
+    lane loop inside, `sweep._vecmath.sin`, fast-math without reassoc."""
+    n = th0.size
+    n_blocks = (n + BLOCK - 1) // BLOCK
+    th_out = np.empty(n)
+    om_out = np.empty(n)
+    dt_2 = dt / 2.0
+    dt_6 = dt / 6.0
+    cdt1 = dt * 0.5
+    for b in prange(n_blocks):
+        start = b * BLOCK
+        m = min(BLOCK, n - start)
+        th = np.zeros(BLOCK)
+        om = np.zeros(BLOCK)
+        th[:m] = th0[start:start + m]
+        om[:m] = om0[start:start + m]
+        f0 = A * math.sin(W * 0.0 + phi)
+        for step in range(steps):
+            f1 = A * math.sin(W * (step * dt + cdt1) + phi)
+            f2 = A * math.sin(W * ((step + 1) * dt) + phi)
+            for j in range(BLOCK):
+                x = th[j]
+                v = om[j]
+                k1t = v
+                k1o = -w0sq * _vecmath.sin(x) - c * k1t + f0
+                k2t = v + dt_2 * k1o
+                k2o = -w0sq * _vecmath.sin(x + dt_2 * k1t) - c * k2t + f1
+                k3t = v + dt_2 * k2o
+                k3o = -w0sq * _vecmath.sin(x + dt_2 * k2t) - c * k3t + f1
+                k4t = v + dt * k3o
+                k4o = -w0sq * _vecmath.sin(x + dt * k3t) - c * k4t + f2
+                th[j] = x + dt_6 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t)
+                om[j] = v + dt_6 * (k1o + 2.0 * k2o + 2.0 * k3o + k4o)
+            f0 = f2
+        th_out[start:start + m] = th[:m]
+        om_out[start:start + m] = om[:m]
+    return th_out, om_out
+
+
+def jax_rk4(th0, om0, steps):
+    import jax
+    jax.config.update("jax_enable_x64", True)
+    import jax.numpy as jnp
+
+    def one(th, om):
+        def step(state, n):
+            th, om = state
+            t = n * DT
+
+            def acc(x, v, t):
+                return AMPLITUDE * jnp.sin(FREQUENCY * t + PHASE) - DAMPING * v \
+                    - G_OVER_L * jnp.sin(x)
+            k1t, k1o = om, acc(th, om, t)
+            k2t = om + DT / 2 * k1o
+            k2o = acc(th + DT / 2 * k1t, k2t, t + DT / 2)
+            k3t = om + DT / 2 * k2o
+            k3o = acc(th + DT / 2 * k2t, k3t, t + DT / 2)
+            k4t = om + DT * k3o
+            k4o = acc(th + DT * k3t, k4t, t + DT)
+            return (th + DT / 6 * (k1t + 2 * k2t + 2 * k3t + k4t),
+                    om + DT / 6 * (k1o + 2 * k2o + 2 * k3o + k4o)), None
+        (th, om), _ = jax.lax.scan(step, (th, om), jnp.arange(steps, dtype=jnp.float64))
+        return th, om
+    f = jax.jit(jax.vmap(one))
+    a, b = jnp.asarray(th0), jnp.asarray(om0)
+    jax.block_until_ready(f(a[:8], b[:8]))  # compile for another shape: not timed
+    jax.block_until_ready(f(a, b))  # compile for this shape
+    start = time.perf_counter()
+    th, om = jax.block_until_ready(f(a, b))
+    return time.perf_counter() - start, (np.asarray(th), np.asarray(om))
+
+
+# ------------------------------------------------------------------------ C reference
+# -ffp-contract=off: no a*b+c -> FMA, so the operations are exactly sweep's (numba
+# without fastmath does not contract); the last variant lets gcc contract (its default).
+C_VARIANTS = {
+    "libm sin": ["-DSIN_VARIANT=0", "-ffp-contract=off"],
+    "glibc vector sin (libmvec)": ["-DSIN_VARIANT=1", "-ffp-contract=off"],
+    "polynomial sin (_vecmath)": ["-DSIN_VARIANT=2", "-ffp-contract=off"],
+    "polynomial sin (_vecmath), FMA contraction": ["-DSIN_VARIANT=2"],
+    "linear model (no sin)": ["-DLINEAR", "-ffp-contract=off"],
+}
+
+
+def build_c(build_dir: Path):
+    """{variant: ctypes function or error string}; None if gcc is absent."""
+    gcc = shutil.which("gcc")
+    if gcc is None:
+        return None
+    source = HERE / "c_reference" / "pendulum.c"
+    built = {}
+    for k, (name, flags) in enumerate(C_VARIANTS.items()):
+        lib = build_dir / f"pendulum_{k}.so"
+        cmd = [gcc, "-O3", "-march=native", "-fopenmp", "-shared", "-fPIC", *flags,
+               str(source), "-o", str(lib), "-lm"]
+        proc = subprocess.run(cmd, check=False, capture_output=True, text=True)
+        if proc.returncode != 0:
+            built[name] = "build failed: " + proc.stderr.strip().splitlines()[-1]
+            continue
+        fn = ctypes.CDLL(str(lib)).pendulum_rk4
+        fn.restype = None
+        p = ctypes.POINTER(ctypes.c_double)
+        fn.argtypes = [ctypes.c_int64, p, p, *[ctypes.c_double] * 7, ctypes.c_int64, p, p]
+        built[name] = fn
+    return built
+
+
+def call_c(fn, th0, om0, steps):
+    n = th0.size
+    th, om = np.empty(n), np.empty(n)
+    p = ctypes.POINTER(ctypes.c_double)
+    fn(n, th0.ctypes.data_as(p), om0.ctypes.data_as(p), G_OVER_L, DAMPING, AMPLITUDE,
+       FREQUENCY, PHASE, 0.0, DT, steps, th.ctypes.data_as(p), om.ctypes.data_as(p))
+    return th, om
+
+
+# ------------------------------------------------------------------ vecmath in numba
+# not cached: numba cannot show the machine code of a kernel loaded from its disk cache
+@njit(fastmath=VEC_FLAGS, cache=False)
+def loop_vsin(x, out):
+    for i in range(x.size):
+        out[i] = _vecmath.sin(x[i])
+
+
+@njit(fastmath=VEC_FLAGS, cache=False)
+def loop_math_sin(x, out):
+    for i in range(x.size):
+        out[i] = math.sin(x[i])
+
+
+@njit(cache=False)
+def loop_vsin_strict(x, out):
+    for i in range(x.size):
+        out[i] = _vecmath.sin(x[i])
+
+
+def vectorised(fn) -> bool:
+    """Whether fn's machine code does packed double arithmetic on ymm/zmm registers
+    (vmulpd, vaddpd, vsubpd, vfmadd...pd): the loop body runs several lanes at once."""
+    asm = "".join(fn.inspect_asm().values())
+    return re.search(r"\bv(?:mul|add|sub|fmadd\w*)pd\s+%?[yz]mm", asm) is not None
+
+
+# ------------------------------------------------------------------- subprocesses
+def in_subprocess(code: str, env_extra=None) -> dict:
+    env = dict(os.environ, **(env_extra or {}))
+    env["PYTHONPATH"] = str(HERE.parent) + os.pathsep + env.get("PYTHONPATH", "")
+    proc = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], check=False, env=env,
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(proc.stderr)
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+FIRST_CALL = """
+    import json, time
+    start = time.perf_counter()
+    import numpy as np
+    import sweep
+    imported = time.perf_counter() - start
+    scene = sweep.Scene(gravity=1.0, length=1.0, effects=(sweep.Damping(0.5),
+                        sweep.Forcing(1.2, 2 / 3, 0.0)))
+    start = time.perf_counter()
+    sweep.run(scene, sweep.Grid(theta0=np.linspace(-1, 1, 64), omega0=[0.0]), t_end=0.1,
+              dt=0.01, observe=("final",), progress=False)
+    first = time.perf_counter() - start
+    print(json.dumps({"import_s": imported, "first_run_s": first}))
+"""
+
+MEMORY = """
+    import json, resource, time
+    import numpy as np
+    import sweep
+
+    def status(key):  # kB -> MiB, from /proc/self/status (Linux)
+        with open("/proc/self/status") as handle:
+            for line in handle:
+                if line.startswith(key + ":"):
+                    return int(line.split()[1]) / 1024
+
+    n, steps = {n}, {steps}
+    scene = sweep.Scene(gravity=1.0, length=1.0, effects=(sweep.Damping(0.5),
+                        sweep.Forcing(1.2, 2 / 3, 0.0)))
+    sweep.run(scene, sweep.Grid(theta0=[0.0]), t_end=0.01, dt=0.01, observe=("final",),
+              progress=False)
+    hwm_before, rss_before = status("VmHWM"), status("VmRSS")
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, n), omega0=np.linspace(-2, 2, n))
+    start = time.perf_counter()
+    ds = sweep.run(scene, grid, t_end=steps * 0.01, dt=0.01, observe=("final",),
+                   progress=False)
+    seconds = time.perf_counter() - start
+    print(json.dumps({{"peak_MiB": status("VmHWM"), "hwm_before_run_MiB": hwm_before,
+                      "rss_before_run_MiB": rss_before,
+                      "ru_maxrss_MiB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                      "trajectories": n * n, "steps": steps, "seconds": seconds,
+                      "output_MiB": ds.nbytes / 2**20}}))
+"""
+
+
+# --------------------------------------------------------------------------- main
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    size = parser.add_mutually_exclusive_group()
+    size.add_argument("--quick", action="store_true", help="small sizes: a smoke test")
+    size.add_argument("--full", action="store_true", help="scaling up to 1e7 trajectories")
+    parser.add_argument("--out", type=Path, default=HERE / "results")
+    parser.add_argument("--repeats", type=int, default=1,
+                        help="best of N for each throughput timing (default 1)")
+    args = parser.parse_args(argv)
+
+    global MIN_SECONDS, REPEATS
+    REPEATS = max(1, args.repeats)
+    if args.quick:
+        MIN_SECONDS = 0.3
+        n_traj, steps, sub_scipy, sub_python = 2**12, 200, 4, 8
+        scaling_n, scaling_steps, mem_side, mem_steps = [10**3, 10**4, 10**5], 50, 256, 20
+        thread_steps, vec_points = 100, 10**6
+    else:
+        n_traj, steps, sub_scipy, sub_python = 2**17, 2000, 32, 64
+        scaling_n, scaling_steps, mem_side, mem_steps = [10**3, 10**4, 10**5, 10**6], 200, \
+            2048, 20
+        thread_steps, vec_points = 500, 10**7
+        if args.full:
+            scaling_n.append(10**7)
+    total = time.perf_counter()
+    load_start = os.getloadavg()[0]
+    n_threads = numba.get_num_threads()
+    result = {"machine": machine(), "mode": "quick" if args.quick else
+              ("full" if args.full else "default"), "repeats": REPEATS,
+              "workload": {"trajectories": n_traj, "steps": steps, "dt": DT,
+                           "g_over_L": G_OVER_L, "damping": DAMPING, "amplitude": AMPLITUDE,
+                           "frequency": FREQUENCY, "observe": "final", "dtype": "float64"},
+              "throughput": {}, "agreement": {}, "notes": []}
+    thr = result["throughput"]
+
+    def record(name, seconds, trajectories=n_traj, n_steps=steps, **extra):
+        rate = trajectories * n_steps / seconds
+        thr[name] = {"seconds": seconds, "trajectories": trajectories, "steps": n_steps,
+                     "traj_steps_per_s": rate, **extra}
+        print(f"  {name:55s} {rate / 1e6:10.2f} M/s  ({seconds:.3f} s)", flush=True)
+
+    theta0, omega0 = grid_axes(n_traj)
+    n_traj = theta0.size * omega0.size
+    result["workload"]["trajectories"] = n_traj
+    th0, om0 = initial_states(theta0, omega0)
+    print(f"{result['machine']}\nworkload: {n_traj} trajectories x {steps} RK4 steps",
+          flush=True)
+
+    # --- sweep per effect combination, and the general kernel fed zeros
+    print("sweep.run per effect combination:", flush=True)
+    reference = None
+    for model in ("nonlinear", "linear"):
+        for damping in (True, False):
+            for forcing in (True, False):
+                scene = scene_of(model, damping, forcing)
+                label = f"{model}, {'damping' if damping else 'no damping'}, " \
+                        f"{'forcing' if forcing else 'no forcing'}"
+                for specialize in (True, False):
+                    # compile (or load from the disk cache) first: not timed
+                    run_sweep(scene, [0.1], [0.0], 1, specialize=specialize)
+                    seconds, ds = timed(lambda s=scene, k=specialize: run_sweep(
+                        s, theta0, omega0, steps, specialize=k))
+                    name = f"sweep: {label}" + ("" if specialize else " [general kernel]")
+                    record(name, seconds, group="sweep", model=model, damping=damping,
+                           forcing=forcing, specialize=specialize)
+                    if model == "nonlinear" and damping and forcing and specialize:
+                        reference = (ds.theta_final.values.ravel(),
+                                     ds.omega_final.values.ravel())
+    full_name = "sweep: nonlinear, damping, forcing"
+    sweep_full = thr[full_name]["traj_steps_per_s"]
+
+    def agree(name, got, rows=slice(None)):
+        diff = max(float(np.max(np.abs(got[0] - reference[0][rows]))),
+                   float(np.max(np.abs(got[1] - reference[1][rows]))))
+        result["agreement"][name] = diff
+        print(f"  {'':55s} max |difference| from sweep: {diff:.2e}", flush=True)
+
+    print("the same work, other ways:", flush=True)
+    seconds, got = timed(lambda: numpy_rk4(th0, om0, steps))
+    record("NumPy RK4, vectorised across trajectories", seconds, group="alternative")
+    agree("NumPy RK4, vectorised across trajectories", got)
+
+    pick = np.linspace(0, n_traj - 1, sub_scipy).round().astype(int)
+    seconds, got = timed(lambda: scipy_dop853(th0[pick], om0[pick], steps))
+    record("SciPy solve_ivp DOP853 (rtol 1e-10), per trajectory", seconds,
+           trajectories=len(pick), group="alternative", extrapolated_from=len(pick))
+    agree("SciPy solve_ivp DOP853 (rtol 1e-10), per trajectory", got, pick)
+
+    pick = np.linspace(0, n_traj - 1, sub_python).round().astype(int)
+    seconds, got = timed(lambda: python_rk4(th0[pick], om0[pick], steps))
+    record("pure-Python RK4 (seed style), per trajectory", seconds, trajectories=len(pick),
+           group="alternative", extrapolated_from=len(pick))
+    agree("pure-Python RK4 (seed style), per trajectory", got, pick)
+
+    args_naive = (steps, G_OVER_L, DAMPING, AMPLITUDE, FREQUENCY, PHASE, DT)
+    numba_naive(th0[:2], om0[:2], *args_naive)
+    seconds, got = timed(lambda: numba_naive(th0, om0, *args_naive))
+    record("numba naive (prange, time loop inside, math.sin)", seconds, group="alternative")
+    agree("numba naive (prange, time loop inside, math.sin)", got)
+
+    numba_blocked_vsin(th0[:2], om0[:2], *args_naive)
+    seconds, got = timed(lambda: numba_blocked_vsin(th0, om0, *args_naive))
+    record("numba prototype: blocked lanes + _vecmath.sin, fastmath w/o reassoc",
+           seconds, group="alternative")
+    agree("numba prototype: blocked lanes + _vecmath.sin, fastmath w/o reassoc", got)
+
+    try:
+        import jax  # noqa: F401
+    except ImportError:
+        result["notes"].append("JAX not installed: skipped")
+        print("  JAX not installed: skipped", flush=True)
+    else:
+        try:
+            seconds, got = jax_rk4(th0, om0, steps)
+        except Exception as error:  # a broken JAX install must not sink the suite
+            result["notes"].append(f"JAX failed ({type(error).__name__}: {error}): skipped")
+            print(f"  JAX failed: {error}", flush=True)
+        else:
+            record("JAX jit(vmap(scan))", seconds, group="alternative")
+            agree("JAX jit(vmap(scan))", got)
+
+    with tempfile.TemporaryDirectory() as build_dir:
+        built = build_c(Path(build_dir))
+        if built is None:
+            result["notes"].append("gcc not found: C reference skipped")
+            print("  gcc not found: C reference skipped", flush=True)
+        else:
+            for name, fn in built.items():
+                label = f"C reference (gcc -O3 -march=native -fopenmp): {name}"
+                if isinstance(fn, str):
+                    result["notes"].append(f"{label}: {fn}")
+                    print(f"  {label}: {fn}", flush=True)
+                    continue
+                call_c(fn, th0[:8], om0[:8], 2)
+                seconds, got = timed(lambda f=fn: call_c(f, th0, om0, steps), min_seconds=1.0)
+                record(label, seconds, group="C")
+                if "linear" in name:
+                    ds = run_sweep(scene_of("linear"), theta0, omega0, steps)
+                    ref = (ds.theta_final.values.ravel(), ds.omega_final.values.ravel())
+                    diff = max(float(np.max(np.abs(got[0] - ref[0]))),
+                               float(np.max(np.abs(got[1] - ref[1]))))
+                    result["agreement"][label] = diff
+                    print(f"  {'':55s} max |difference| from sweep (linear): {diff:.2e}")
+                else:
+                    agree(label, got)
+
+    # --- vecmath sin in a numba loop
+    print("sweep._vecmath.sin vs math.sin in a numba loop:", flush=True)
+    x = np.random.default_rng(0).uniform(-50.0, 50.0, vec_points)
+    out = np.empty_like(x)
+    vec = {}
+    for name, fn in (("math.sin, fastmath nsz/arcp/contract/afn", loop_math_sin),
+                     ("_vecmath.sin, fastmath nsz/arcp/contract/afn", loop_vsin),
+                     ("_vecmath.sin, no fastmath", loop_vsin_strict)):
+        fn(x[:8], out[:8])
+        seconds, _ = timed(lambda f=fn: f(x, out), repeats=3)
+        vec[name] = {"seconds": seconds, "sines_per_s": x.size / seconds,
+                     "vectorised": vectorised(fn),
+                     "max_abs_error_vs_np_sin": float(np.max(np.abs(out - np.sin(x))))}
+        print(f"  {name:55s} {x.size / seconds / 1e6:10.1f} M sin/s  vectorised: "
+              f"{vec[name]['vectorised']}  max err {vec[name]['max_abs_error_vs_np_sin']:.1e}",
+              flush=True)
+    result["vecmath"] = vec
+
+    # --- compile and import time, memory (subprocesses)
+    print("compile, import, memory (fresh processes):", flush=True)
+    with tempfile.TemporaryDirectory() as cache:
+        env = {"SWEEP_CACHE_DIR": cache}
+        cold = in_subprocess(FIRST_CALL, env)
+        warm = in_subprocess(FIRST_CALL, env)
+    result["startup"] = {"import_sweep_s": warm["import_s"],
+                         "first_run_cold_cache_s": cold["first_run_s"],
+                         "first_run_warm_cache_s": warm["first_run_s"]}
+    print(f"  import sweep {warm['import_s']:.2f} s; first run: cold cache "
+          f"{cold['first_run_s']:.2f} s, warm cache {warm['first_run_s']:.2f} s", flush=True)
+    # twice: the first run may compile (numba's compiler alone peaks at a few 100 MiB);
+    # the second loads the kernel from the disk cache, as a user's run does
+    in_subprocess(MEMORY.format(n=mem_side, steps=1))
+    mem = in_subprocess(MEMORY.format(n=mem_side, steps=mem_steps))
+    result["memory"] = mem
+    print(f"  {mem_side} x {mem_side} final-state run: peak RSS {mem['peak_MiB']:.0f} MiB "
+          f"(before the run: peak {mem['hwm_before_run_MiB']:.0f} MiB, resident "
+          f"{mem['rss_before_run_MiB']:.0f} MiB)", flush=True)
+
+    # --- scaling with trajectories and threads
+    print("scaling:", flush=True)
+    scene = scene_of()
+    scaling = []
+    for n in scaling_n:
+        th_axis, om_axis = grid_axes(n)  # the main workload's states, n of them
+        n = th_axis.size * om_axis.size
+        # at least `scaling_steps`, more for few trajectories so that each call does
+        # ~2e7 trajectory-steps (quick: 2e6) and the fixed per-call cost of sweep.run
+        # (dataset construction, ~ms) does not hide the kernel's time per step
+        n_steps = max(scaling_steps, min(20_000, (2 * 10**6 if args.quick else 2 * 10**7)
+                                         // n))
+        seconds, _ = timed(lambda a=th_axis, b=om_axis, k=n_steps: run_sweep(scene, a, b, k),
+                           repeats=1, min_seconds=1.0)
+        rate = n * n_steps / seconds
+        scaling.append({"trajectories": n, "steps": n_steps, "seconds": seconds,
+                        "traj_steps_per_s": rate, "ns_per_traj_step": 1e9 / rate})
+        print(f"  {n:>10d} trajectories x {n_steps} steps: {rate / 1e6:8.2f} M/s "
+              f"({1e9 / rate:.2f} ns per trajectory-step)", flush=True)
+    result["scaling_trajectories"] = scaling
+    threads = {}
+    for k in sorted({1, min(2, numba.config.NUMBA_NUM_THREADS)}):
+        numba.set_num_threads(k)
+        seconds, _ = timed(lambda: run_sweep(scene, theta0, omega0, thread_steps))
+        threads[k] = n_traj * thread_steps / seconds
+        print(f"  {k} thread(s): {threads[k] / 1e6:8.2f} M/s", flush=True)
+    numba.set_num_threads(n_threads)
+    result["scaling_threads"] = {"steps": thread_steps, "traj_steps_per_s": threads,
+                                 "speedup_2_vs_1": threads.get(2, math.nan) / threads[1]}
+
+    # --- the full scene again, now (the denominator of every ratio): on a shared
+    # machine a burst of other work during its first timing would skew all ratios
+    seconds, _ = timed(lambda: run_sweep(scene_of(), theta0, omega0, steps))
+    first = thr[full_name]
+    first["seconds_each_time"] = [first["seconds"], seconds]
+    if seconds < first["seconds"]:
+        first["seconds"] = seconds
+        first["traj_steps_per_s"] = n_traj * steps / seconds
+    sweep_full = first["traj_steps_per_s"]
+    print(f"  {full_name} (timed again at the end; best kept): "
+          f"{sweep_full / 1e6:.2f} M/s", flush=True)
+
+    # --- ratios (all from this run)
+    ratios = {name: v["traj_steps_per_s"] / sweep_full for name, v in thr.items()}
+    result["ratio_to_sweep_full_scene"] = ratios
+    c_best = [v["traj_steps_per_s"] for name, v in thr.items()
+              if v.get("group") == "C" and "linear" not in name]
+    if c_best:
+        c_libm = thr.get("C reference (gcc -O3 -march=native -fopenmp): libm sin")
+        result["sweep_over_best_C"] = sweep_full / max(c_best)
+        if c_libm:
+            result["sweep_over_C_libm"] = sweep_full / c_libm["traj_steps_per_s"]
+    result["total_seconds"] = time.perf_counter() - total
+    result["load_average_1min"] = {"start": load_start, "end": os.getloadavg()[0]}
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    stem = "run_all_quick" if args.quick else "run_all"  # a smoke test keeps the results
+    (args.out / f"{stem}.json").write_text(json.dumps(result, indent=2))
+    md = markdown(result)
+    (args.out / f"{stem}.md").write_text(md)
+    chart(result, args.out / f"{stem}.png")
+    print(md)
+    print(f"wrote {args.out / stem}.json, .md, .png ({result['total_seconds']:.0f} s)")
+    return 0
+
+
+def load_warning(r) -> list[str]:
+    """A warning line when other processes were busy on the machine during the run."""
+    load = r["load_average_1min"]
+    cores = os.cpu_count() or 1
+    if load["start"] < 0.25 * cores:
+        return []
+    return [f"**Note:** the 1-minute load average was {load['start']:.1f} when this run "
+            f"started ({load['end']:.1f} at its end, {cores} cores; it averages the minute "
+            "before, earlier benchmarks included): if other processes were using the CPU, "
+            "the rates below are lower bounds and the ratios noisy. The full scene and its "
+            "general kernel (the same kernel) show how noisy. Re-run on an idle machine or "
+            "with `--repeats 3` to be sure.", ""]
+
+
+def markdown(r) -> str:
+    w = r["workload"]
+    lines = [f"# sweep benchmark suite ({r['mode']}, best of {r['repeats']})", "",
+             f"Machine: {r['machine']}", "",
+             f"Workload: damped (c = {w['damping']}), forced (A = {w['amplitude']}, "
+             f"W = {w['frequency']:.4g}), nonlinear pendulum, g/L = {w['g_over_L']}, "
+             f"{w['trajectories']} trajectories x {w['steps']} RK4 steps (dt = {w['dt']}), "
+             "float64, final state only. All numbers from this one run; rates in "
+             "trajectory-steps per second; ratio to `sweep.run` on the full scene.", "",
+             *load_warning(r),
+             "| what | M traj-steps/s | ratio | max abs diff from sweep | note |",
+             "|---|---|---|---|---|"]
+    for name, v in r["throughput"].items():
+        note = f"{v['trajectories']} trajectories, extrapolated" \
+            if "extrapolated_from" in v else ""
+        diff = r["agreement"].get(name)
+        lines.append(f"| {name} | {v['traj_steps_per_s'] / 1e6:.3g} | "
+                     f"{r['ratio_to_sweep_full_scene'][name]:.3g} | "
+                     f"{'' if diff is None else f'{diff:.1e}'} | {note} |")
+    lines += [""] + [f"- {n}" for n in r["notes"]]
+    lines += [
+        "- `[general kernel]`: `sweep.run(..., specialize=False)`, every term present and "
+        "the absent effects fed zeros. For the full scene it is the same kernel as the "
+        "specialised one, so that pair shows the run-to-run noise. The full scene is timed "
+        "at the start and again at the end of the run; the better time is shown.",
+        "- Max abs diff: final theta and omega against `sweep.run`'s, over the same "
+        "trajectories. The C reference with libm sin does sweep's operations in sweep's "
+        "order (`-ffp-contract=off`), so it should agree to the last bit or nearly. Every "
+        "other sine (glibc's vector sin, the polynomial) differs from libm's by up to an "
+        "ulp per call, and this workload is chaotic (c = 0.5, A = 1.2, W = 2/3): "
+        "over 2000 steps it amplifies those last-bit differences to about 1e-10. That "
+        "is the same work done with a different (equally accurate) sine. DOP853 "
+        "differs by its own error and RK4's.",
+        "- SciPy and pure Python run a subset of the trajectories, and the throughput is "
+        "extrapolated (the trajectories are independent).",
+    ]
+    if "sweep_over_best_C" in r:
+        lines += ["", f"`sweep.run` (full scene) / fastest C reference: "
+                  f"**{r['sweep_over_best_C']:.2f}** (target >= 0.9); / C with libm sin: "
+                  f"{r.get('sweep_over_C_libm', math.nan):.2f}."]
+    lines += ["", "## sin in a numba loop", "",
+              "| loop | M sin/s | vectorised (packed ymm/zmm arithmetic in its machine code) "
+              "| max abs error vs np.sin |",
+              "|---|---|---|---|"]
+    for name, v in r["vecmath"].items():
+        lines.append(f"| {name} | {v['sines_per_s'] / 1e6:.1f} | {v['vectorised']} | "
+                     f"{v['max_abs_error_vs_np_sin']:.1e} |")
+    s, m = r["startup"], r["memory"]
+    lines += ["", "## Start-up and memory", "",
+              f"- `import sweep`: {s['import_sweep_s']:.2f} s",
+              f"- first `sweep.run` in a fresh process, cold cache (compiles): "
+              f"{s['first_run_cold_cache_s']:.2f} s; warm on-disk cache: "
+              f"{s['first_run_warm_cache_s']:.2f} s (target < 1 s)",
+              f"- peak memory (VmHWM), {m['trajectories']} trajectories "
+              f"({math.isqrt(m['trajectories'])}^2 grid), final state, {m['steps']} steps: "
+              f"{m['peak_MiB']:.0f} MiB (VmHWM; before the run, after import and a first "
+              f"tiny run: peak {m['hwm_before_run_MiB']:.0f} MiB, resident "
+              f"{m['rss_before_run_MiB']:.0f} MiB; ru_maxrss {m['ru_maxrss_MiB']:.0f} MiB, "
+              "which on Linux also counts the parent's memory at exec; "
+              f"dataset {m['output_MiB']:.0f} MiB; target < 1024 MiB)",
+              "", "## Scaling", "",
+              "| trajectories | steps | M traj-steps/s | ns per traj-step |", "|---|---|---|---|"]
+    for row in r["scaling_trajectories"]:
+        lines.append(f"| {row['trajectories']:.3g} | {row['steps']} | "
+                     f"{row['traj_steps_per_s'] / 1e6:.2f} | {row['ns_per_traj_step']:.2f} |")
+    t = r["scaling_threads"]
+    lines += ["", "| threads | M traj-steps/s |", "|---|---|"]
+    for k, v in t["traj_steps_per_s"].items():
+        lines.append(f"| {k} | {v / 1e6:.2f} |")
+    lines += ["", f"2 threads / 1 thread: {t['speedup_2_vs_1']:.2f} (target >= 1.8)", ""]
+    return "\n".join(lines)
+
+
+def chart(r, path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    items = sorted(r["throughput"].items(), key=lambda kv: kv[1]["traj_steps_per_s"])
+    colours = {"sweep": "tab:blue", "alternative": "tab:gray", "C": "tab:orange"}
+    fig, ax = plt.subplots(figsize=(10, 0.32 * len(items) + 1.5))
+    ax.barh([name for name, _ in items], [v["traj_steps_per_s"] for _, v in items],
+            color=[colours.get(v.get("group"), "tab:gray") for _, v in items])
+    ax.set_xscale("log")
+    ax.set_xlabel("trajectory-steps per second (log)")
+    w = r["workload"]
+    ax.set_title(f"{w['trajectories']} trajectories x {w['steps']} RK4 steps, float64\n"
+                 f"{r['machine']}", fontsize=9)
+    ax.tick_params(axis="y", labelsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
