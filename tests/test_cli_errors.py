@@ -13,24 +13,8 @@ import pytest
 
 from sweep import cli
 
-GOOD = """\
-[scene]
-gravity = 9.81
-length = 1.0
-model = "nonlinear"
-
-[scene.damping]
-coefficient = 0.3
-
-[grid]
-theta0 = {start = -180, stop = 180, num = 5, units = "deg"}
-omega0 = [-1.0, 0.0, 1.0]
-
-[run]
-t_end = 2.0
-dt = 0.05
-observe = ["final", "winding", "energy"]
-"""
+# the valid run file of test_cli, which each case below breaks in one place
+from test_cli import RUN_FILE as GOOD  # noqa: E402
 
 
 def _edit(old, new):
