@@ -78,6 +78,12 @@ def _steps(name: str, span: float, dt: float) -> int:
     return n
 
 
+def transient_steps(t_transient: float, dt: float) -> int:
+    """First step index n whose time ``t0 + n dt`` is >= ``t0 + t_transient`` (a
+    transient meant to end on a step counts as ending there, despite rounding)."""
+    return math.ceil(t_transient / dt - _WHOLE_STEPS_RTOL * max(1.0, t_transient / dt))
+
+
 def _available_memory() -> int:
     """Bytes of memory available to this process (MemAvailable on Linux, else the
     free physical pages)."""
@@ -144,7 +150,7 @@ def validate_settings(*, t_end, dt, t0, t_transient, save_every, method, rtol=No
             )
     n_steps = _steps("t_end - t0", t_end - t0, dt)
     # first step index whose time t0 + n dt is >= t0 + t_transient
-    n_transient = math.ceil(t_transient / dt - _WHOLE_STEPS_RTOL * max(1.0, t_transient / dt))
+    n_transient = transient_steps(t_transient, dt)
     if n_transient >= n_steps:
         raise ValueError(
             f"t_transient = {t_transient!r} leaves no step to observe before t_end - t0 = "

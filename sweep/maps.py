@@ -20,6 +20,7 @@ import numpy as np
 import xarray as xr
 
 from ._kernels import Status
+from .engine import transient_steps
 
 __all__ = ["motion", "well", "basins", "amplitude", "natural_frequency_squared",
            "UNRESOLVED"]
@@ -61,7 +62,7 @@ def _ok(ds: xr.Dataset) -> xr.DataArray:
 def _steady_window(ds: xr.Dataset) -> float:
     """Duration [s] of the steady window ``t >= t0 + t_transient`` (step-aligned)."""
     dt = float(ds.attrs["dt"])
-    n_transient = int(np.ceil(float(ds.attrs["t_transient"]) / dt - 1e-9))
+    n_transient = transient_steps(float(ds.attrs["t_transient"]), dt)
     return (int(ds.attrs["n_steps"]) - n_transient) * dt
 
 
