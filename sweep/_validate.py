@@ -38,6 +38,20 @@ def check_real(
     return value
 
 
+def check_positive_int(name: str, value: Any, accepted: str = "an int >= 1") -> int:
+    """Return ``value`` as an int if it is an integer >= 1 (booleans refused).
+
+    Raises
+    ------
+    ValueError
+        ``"{name} must be {accepted}, got {value!r}"``.
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
+            or value < 1:
+        raise ValueError(f"{name} must be {accepted}, got {value!r}")
+    return int(value)
+
+
 def check_choice(name: str, value: Any, choices: Sequence[str]) -> str:
     """Return ``value`` if it is one of ``choices``; otherwise raise ValueError."""
     if not isinstance(value, str) or value not in choices:

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._validate import check_positive_int
 from .grid import Grid
 from .scene import PARAMETERS, Scene
 
@@ -517,8 +518,7 @@ def work_precision(scene: Scene, sample, methods, *, t_end: float, t0: float = 0
         raise ValueError("fixed-step methods need dts=[...]")
     if any(m.adaptive for m in integrators) and not adaptive_levels:
         raise ValueError("adaptive methods need tolerances=[...]")
-    if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
-        raise ValueError(f"repeats must be an int >= 1, got {repeats!r}")
+    check_positive_int("repeats", repeats)
     span = t_end - t0
     dt_max = span / 10.0 if dt_max is None else float(dt_max)
     n_levels = max(len(fixed_levels), len(adaptive_levels))
@@ -662,9 +662,7 @@ def estimate_error(scene: Scene, grid: Grid, *, sample: int = 32, seed: int = 0,
     """
     from . import engine, methods
 
-    if isinstance(sample, bool) or not isinstance(sample, (int, np.integer)) or sample < 1:
-        raise ValueError(f"estimate_error must be None or an int >= 1 (trajectories), got "
-                         f"{sample!r}")
+    check_positive_int("estimate_error", sample, "None or an int >= 1 (trajectories)")
     method = methods.resolve(run_kwargs.get("method", "rk4"))
     rng = np.random.default_rng(seed)
     picks = rng.choice(grid.size, size=min(int(sample), grid.size), replace=False)

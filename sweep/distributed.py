@@ -50,6 +50,8 @@ import uuid
 
 import numpy as np
 
+from ._validate import check_positive_int
+
 __all__ = ["RunContext", "check_client", "run_chunk_task", "run_chunks", "run_to_netcdf"]
 
 #: numba's default (workqueue) threading layer must not be entered by two threads of one
@@ -255,9 +257,7 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     inner = grid.size // grid.shape[0]
     if rows_per_task is None:
         rows_per_task = max(1, chunk_size // max(inner, 1))
-    if isinstance(rows_per_task, bool) or not isinstance(rows_per_task, (int, np.integer)) \
-            or rows_per_task < 1:
-        raise ValueError(f"rows_per_task must be None or an int >= 1, got {rows_per_task!r}")
+    check_positive_int("rows_per_task", rows_per_task, "None or an int >= 1")
     blocks = [(i, min(i + int(rows_per_task), grid.shape[0]))
               for i in range(0, grid.shape[0], int(rows_per_task))]
 

@@ -20,7 +20,7 @@ from . import methods as _methods
 from . import stability as _stability
 from ._kernels import (KernelSpec, Status, build, check_method_fits, check_observables_fit,
                        n_columns)
-from ._validate import check_real
+from ._validate import check_positive_int, check_real
 from .distributed import allocate as _allocate
 from .distributed import integrate as _integrate
 from .grid import Grid
@@ -285,15 +285,12 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         raise ValueError("observe is empty and save_every is None -- nothing would be "
                          "computed; accepted: at least one of final, winding, theta_max, "
                          "amplitude, tension, energy, or a save_every")
-    if estimate_error is not None and (isinstance(estimate_error, bool) or not isinstance(
-            estimate_error, (int, np.integer)) or estimate_error < 1):
-        raise ValueError(f"estimate_error must be None or an int >= 1 (trajectories), got "
-                         f"{estimate_error!r}")
+    if estimate_error is not None:
+        check_positive_int("estimate_error", estimate_error,
+                           "None or an int >= 1 (trajectories)")
     if chunk_size is None:
         chunk_size = _config.CHUNK_SIZE
-    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) \
-            or chunk_size < 1:
-        raise ValueError(f"chunk_size must be an int >= 1, got {chunk_size!r}")
+    check_positive_int("chunk_size", chunk_size)
 
     effects = grid.effects(scene)
     integrator = settings.integrator

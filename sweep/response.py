@@ -9,19 +9,13 @@ import numpy as np
 import xarray as xr
 
 from . import engine, maps
-from ._validate import check_axis, check_choice, check_real
+from ._validate import check_axis, check_choice, check_positive_int, check_real
 from .grid import Grid
 from .scene import Forcing, Scene
 
 __all__ = ["frequency_response"]
 
 _DIRECTIONS = ("up", "down", "both")
-
-
-def _positive_int(name: str, value) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{name} must be an int >= 1, got {value!r}")
-    return int(value)
 
 
 def frequency_response(
@@ -73,9 +67,9 @@ def frequency_response(
     theta0 = check_real("theta0", theta0)
     omega0 = check_real("omega0", omega0)
     check_choice("direction", direction, _DIRECTIONS)
-    periods_transient = _positive_int("periods_transient", periods_transient)
-    periods_measure = _positive_int("periods_measure", periods_measure)
-    steps_per_period = _positive_int("steps_per_period", steps_per_period)
+    periods_transient = check_positive_int("periods_transient", periods_transient)
+    periods_measure = check_positive_int("periods_measure", periods_measure)
+    steps_per_period = check_positive_int("steps_per_period", steps_per_period)
     directions = ("up", "down") if direction == "both" else (direction,)
 
     names = ("amplitude", "omega_mean", "motion", "theta_final", "omega_final")
