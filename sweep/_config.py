@@ -9,10 +9,17 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-#: numba ``fastmath``. Off: reassociation makes results drift from the NumPy
-#: oracle and between machines. (The performance issue may switch on a set
-#: *without* ``reassoc`` and justify it with a benchmark.)
-FASTMATH: bool | frozenset = False
+#: numba ``fastmath`` flags. Never ``reassoc`` (it would let LLVM reorder sums, so
+#: results would drift from the NumPy oracle and break `sweep._vecmath`'s exact
+#: argument reduction), nor ``nnan``/``ninf`` (non-finite states must be detected).
+#: ``contract`` lets LLVM fuse a*b + c into one FMA instruction (one rounding instead
+#: of two: never less accurate); ``nsz`` lets it ignore the sign of zero.
+#: Measured by ``benchmarks/run_all.py`` (flag table in its results).
+FASTMATH: bool | frozenset = frozenset({"contract", "nsz"})
+
+#: Trajectories per block of the fixed-step kernels: the lanes one thread advances
+#: together, step by step (a multiple of the SIMD width). Results do not depend on it.
+BLOCK = 64
 
 #: numba ``boundscheck``: off in production; tests index-check through the oracle.
 BOUNDSCHECK = False

@@ -40,12 +40,19 @@ stats : int64[n, 2]                   accepted and rejected steps per trajectory
 Each trajectory advances its own time ``t`` (a sum of accepted steps) and clips its
 last step so that it ends at ``t_end`` exactly.
 
-Iteration ``i`` reads ``params[i]`` and writes only ``out[i]``, ``status[i]``,
+Trajectory ``i`` reads ``params[i]`` and writes only ``out[i]``, ``status[i]``,
 ``saved[i]`` (``stats[i]``); nothing is allocated inside the time loop; no exception is
-raised: a non-finite state sets ``status[i] = NONFINITE``, stops that trajectory, and
-fills its outputs with NaN (its saved samples from then on stay NaN). An adaptive
-trajectory whose step would have to shrink below ``16 eps max(|t0|, |t_end|)`` (which
-only a state on its way to overflow does) is flagged the same way.
+raised: a trajectory whose state became non-finite gets ``status[i] = NONFINITE`` and
+NaN outputs (its saved samples from the failure on are NaN). An adaptive trajectory
+whose step would have to shrink below ``16 eps max(|t0|, |t_end|)`` (which only a state
+on its way to overflow does) is flagged the same way.
+
+Fixed-step kernels run trajectories in blocks of ``spec.block`` SIMD lanes, time loop
+outside and lane loop inside (see `_fixed_kernel`); every sine is
+`sweep._vecmath.sin`, which LLVM vectorises, and the JIT flags of `sweep._config`
+let it fuse multiply-adds. Results do not depend on the block size, the number of
+trajectories per call, chunks or threads (``tests/test_blocks.py``). Adaptive kernels
+keep one trajectory per iteration (each controls its own step).
 """
 
 from __future__ import annotations
@@ -111,6 +118,16 @@ class KernelSpec:
     stop_early : bool
         Stop each trajectory as soon as every observed observable says its answer is
         settled (only observables with a ``settled`` snippet; see `sweep.observables`).
+    shared_forcing : bool
+        True when the forcing frequency and phase are the same for every trajectory
+        of a call: the fixed-step kernel then evaluates ``sin(W t + phase)`` once per
+        step for a whole block instead of once per lane (the same arithmetic, so the
+        same results; a test checks it). False (the default) is right for any
+        parameter table; `sweep.run` sets it when its grid has no frequency or phase
+        axis.
+    block : int
+        Trajectories per block of the fixed-step kernel (SIMD lanes; a multiple of 8).
+        Results do not depend on it (a test checks it); `_config.BLOCK` by default.
     """
 
     model: str
@@ -120,12 +137,19 @@ class KernelSpec:
     save: bool = False
     method: object = "rk4"
     stop_early: bool = False
+    shared_forcing: bool = False
+    block: int = None
 
     def __post_init__(self) -> None:
         method = self.method
         if not isinstance(method, str) and \
                 _methods.METHODS.get(getattr(method, "name", None)) == method:
             object.__setattr__(self, "method", method.name)
+        object.__setattr__(self, "shared_forcing", bool(self.shared_forcing and self.forcing))
+        block = _config.BLOCK if self.block is None else self.block
+        if not isinstance(block, int) or block < 8 or block % 8:
+            raise ValueError(f"block must be a positive multiple of 8, got {block!r}")
+        object.__setattr__(self, "block", block)
 
 
 def n_columns(spec: KernelSpec) -> int:
@@ -136,12 +160,15 @@ def n_columns(spec: KernelSpec) -> int:
 
 # --------------------------------------------------------------------------- source
 _COL = {name: k for k, name in enumerate(PARAMETERS)}
+# The kernels inline sweep._vecmath; its text is part of every kernel's source hash.
+_VECMATH_DIGEST = hashlib.sha1(
+    (Path(__file__).parent / "_vecmath.py").read_bytes()).hexdigest()[:16]
 
 
 def _accel_source(spec: KernelSpec) -> str:
     """``accel(th, om, w0sq[, c][, f])``: theta'' with only the scene's terms."""
     args = ["th", "om", "w0sq"]
-    terms = ["-w0sq * " + ("math.sin(th)" if spec.model == "nonlinear" else "th")]
+    terms = ["-w0sq * " + ("vsin(th)" if spec.model == "nonlinear" else "th")]
     if spec.damping:
         args.append("c")
         terms.append("- c * om")
@@ -156,7 +183,7 @@ def _accel_source(spec: KernelSpec) -> str:
 
 
 def _energy_source(spec: KernelSpec) -> str:
-    potential = "w0sq * (1.0 - math.cos(th))" if spec.model == "nonlinear" else \
+    potential = "w0sq * (1.0 - vcos(th))" if spec.model == "nonlinear" else \
         "0.5 * w0sq * th * th"
     return (
         "@njit(inline='always', **JIT)\n"
@@ -226,16 +253,17 @@ def _combination(coeffs, names, scale: str, constants: dict[str, str] | None):
 
 def _forcing_times(spec: KernelSpec, c, *, time: str, step: str | None, scale: str,
                    constants: dict[str, str] | None):
-    """Forcing variable per distinct node c_i, and the lines computing them.
+    """Forcing variable per distinct node c_i, and the time at which each is evaluated.
 
     Fixed step (``step`` given): time of node c is ``t0 + step * dt + c * dt`` (c = 0:
     ``t0 + step * dt``; c = 1: ``t0 + (step + 1) * dt``), never accumulated. Adaptive
     (``step`` None): ``time + c * h``.
-    Returns ({c: variable}, [lines]).
+    Returns ({c: variable}, [(variable, time expression)]); the variable holds
+    ``A * sin(W * time + phi)`` (see `_forcing_line`).
     """
     if not spec.forcing:
         return {}, []
-    names, lines = {}, []
+    names, nodes = {}, []
     for x in sorted(set(c)):
         name = f"f{len(names)}"
         names[x] = name
@@ -250,8 +278,13 @@ def _forcing_times(spec: KernelSpec, c, *, time: str, step: str | None, scale: s
             const = f"cdt{len(names) - 1}"
             constants[const] = f"{const} = dt * {_float(x)}"
             at = f"t0 + {step} * dt + {const}"
-        lines.append(f"{name} = A * math.sin(W * ({at}) + phi)")
-    return names, lines
+        nodes.append((name, at))
+    return names, nodes
+
+
+def _forcing_line(name: str, at: str) -> str:
+    """``name = A * sin(W * (at) + phi)``: the forcing term at time ``at``."""
+    return f"{name} = A * vsin(W * ({at}) + phi)"
 
 
 def _rk_stages(spec: KernelSpec, tableau, scale: str, constants, forcing: dict) -> list[str]:
@@ -269,24 +302,35 @@ def _rk_stages(spec: KernelSpec, tableau, scale: str, constants, forcing: dict) 
     return lines
 
 
-def _explicit_stepper(spec: KernelSpec, tableau) -> dict[str, list[str]]:
-    """One fixed step of an explicit Runge-Kutta method, from its tableau."""
+def _explicit_stepper(spec: KernelSpec, tableau) -> dict[str, list]:
+    """One fixed step of an explicit Runge-Kutta method, from its tableau.
+
+    Returns the parts `_fixed_kernel` assembles: ``preamble`` (constants, once per
+    call), ``forcing_init`` and ``forcing_step`` ((variable, time) pairs evaluated
+    before the first step and at the start of every step), ``forcing_carry``
+    ((destination, source) pairs copied at the end of every step), ``before`` (lane
+    lines before the first step), ``step`` (lane lines of one step) and ``carried``
+    (lane variables that live from one step to the next besides th, om).
+    """
     constants: dict[str, str] = {}
     c = tableau.c
     carry = spec.forcing and 0 in c and 1 in c  # f(t_{n+1}) is the next step's f(t_n)
-    forcing, f_lines = _forcing_times(spec, c, time="", step="step", scale="dt",
-                                      constants=constants)
-    before, after = [], []
+    forcing, nodes = _forcing_times(spec, c, time="", step="step", scale="dt",
+                                    constants=constants)
+    init, pairs = [], []
     if carry:
-        f_lines = f_lines[1:]  # f at c = 0 comes from the previous step
-        before.append(f"{forcing[Fraction(0)]} = A * math.sin(W * t0 + phi)")
-        after.append(f"{forcing[Fraction(0)]} = {forcing[Fraction(1)]}")
-    step = f_lines + _rk_stages(spec, tableau, "dt", constants, forcing)
+        first = forcing[Fraction(0)]
+        nodes = [(name, at) for name, at in nodes if name != first]  # from the last step
+        init.append((first, "t0"))
+        pairs.append((first, forcing[Fraction(1)]))
+    step = _rk_stages(spec, tableau, "dt", constants, forcing)
     kt = [f"k{j + 1}t" for j in range(tableau.stages)]
     ko = [f"k{j + 1}o" for j in range(tableau.stages)]
     step.append(f"th = th + {_combination(tableau.b, kt, 'dt', constants)}")
     step.append(f"om = om + {_combination(tableau.b, ko, 'dt', constants)}")
-    return {"preamble": list(constants.values()), "before": before, "step": step + after}
+    return {"preamble": list(constants.values()), "forcing_init": init,
+            "forcing_step": nodes, "forcing_carry": pairs, "before": [], "step": step,
+            "carried": []}
 
 
 def _symplectic_stepper(spec: KernelSpec, method) -> dict[str, list[str]]:
@@ -318,7 +362,8 @@ def _symplectic_stepper(spec: KernelSpec, method) -> dict[str, list[str]]:
             stale = True
     if stale:
         step.append(force)
-    return {"preamble": list(constants.values()), "before": [force], "step": step}
+    return {"preamble": list(constants.values()), "forcing_init": [], "forcing_step": [],
+            "forcing_carry": [], "before": [force], "step": step, "carried": ["acc"]}
 
 
 #: How each kind of fixed-step method becomes kernel source (keyed by ``method.kind``).
@@ -396,9 +441,9 @@ def _snippets(spec: KernelSpec, part: str) -> str:
     return "\n".join(lines)
 
 
-def _stop_source(spec: KernelSpec) -> str:
+def _stop_source(spec: KernelSpec, action: str = "break") -> str:
     """Early stop (spec.stop_early): each observable's ``settled`` snippet sets its own
-    flag; the trajectory stops when all flags are set."""
+    flag; ``action`` runs when all flags are set."""
     if not spec.stop_early:
         return ""
     lines, flags, col = [], [], 0
@@ -413,7 +458,7 @@ def _stop_source(spec: KernelSpec) -> str:
         lines.append(f"# {name} settled?\n"
                      + obs.settled.replace("COL", str(col)).replace("SETTLED", flag))
         col += obs.n_columns
-    lines.append(f"if {' and '.join(flags)}:\n    break")
+    lines.append(f"if {' and '.join(flags)}:\n" + _indent(action, 1))
     return "\n".join(lines)
 
 
@@ -446,16 +491,22 @@ def source(spec: KernelSpec) -> str:
         raise ValueError(f"method {method.name!r} is adaptive: its steps are not on a fixed "
                          "grid, so it cannot save every k-th step; accepted: save=False")
     check_observables_fit(method, spec.observe)
-    jit = {"fastmath": _config.FASTMATH, "boundscheck": _config.BOUNDSCHECK,
-           "error_model": "numpy", "cache": True}
+    fastmath = _config.FASTMATH
+    if not isinstance(fastmath, bool):  # a set, written in a fixed order (stable hash)
+        fastmath = "{" + ", ".join(repr(flag) for flag in sorted(fastmath)) + "}"
+    jit = (f"{{'fastmath': {fastmath}, 'boundscheck': {_config.BOUNDSCHECK!r}, "
+           "'error_model': 'numpy', 'cache': True}")
     uses_energy = any(OBSERVABLES[n].uses_energy for n in spec.observe)
     body = (_adaptive_kernel if method.adaptive else _fixed_kernel)(spec, method)
     header = f'''\
 """Generated by sweep._kernels for {spec!r}. Do not edit."""
+# sweep._vecmath {_VECMATH_DIGEST} (numba's cache does not track inlined imports)
 import math
+import numpy as np
 from numba import njit, prange
+from sweep._vecmath import cos as vcos, sin as vsin
 
-JIT = {jit!r}
+JIT = {jit}
 
 
 {_accel_source(spec)}
@@ -492,42 +543,193 @@ def _final_block(spec: KernelSpec) -> str:
 '''
 
 
+# Kernel variables holding a parameter, and the parameter's column.
+_PARAMETER_OF = {"th0": "theta0", "om0": "omega0", "L": "length", "g": "gravity",
+                 "c": "damping", "A": "forcing_amplitude", "W": "forcing_frequency",
+                 "phi": "forcing_phase"}
+_IDENTIFIER = re.compile(r"\b[A-Za-z_]\w*\b")
+_ASSIGNED = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:[-+*/]?=)(?!=)", re.MULTILINE)
+
+
+def _lane_snippet(code: str) -> str:
+    """A per-trajectory snippet inside a block: ``out[i, ...]`` becomes the block's
+    row buffer ``obuf[j, ...]`` (padding lanes then write nowhere shared)."""
+    return code.replace("out[i,", "obuf[j,")
+
+
+def _lane_loop(body: str, lane: dict[str, str], *, level: int, head: str = "",
+               stores: list[str] | None = None, count: str = "BLOCK",
+               load: bool = True) -> str:
+    """``for j in range(count):`` around ``body``: loads each lane variable the body
+    reads from its array ``lane_<name>[j]`` first (unless ``load`` is False) and
+    stores back those it assigns (or ``stores``)."""
+    used = set(_IDENTIFIER.findall(body)) if load else set()
+    loads = [f"{name} = lane_{name}[j]" for name in lane if name in used]
+    if stores is None:
+        stores = [name for name in lane if name in set(_ASSIGNED.findall(body))]
+    lines = loads + [body] + [f"lane_{name}[j] = {name}" for name in stores]
+    return _indent(f"for j in range({count}):\n{head}" + _indent("\n".join(lines), 1),
+                   level)
+
+
 def _fixed_kernel(spec: KernelSpec, method) -> str:
-    """Kernel body of a fixed-step method (time at step n is t0 + n dt)."""
+    """Kernel body of a fixed-step method (time at step n is t0 + n dt).
+
+    Trajectories go in blocks of ``spec.block`` SIMD lanes (one ``prange`` iteration
+    per block); the time loop is outside and the lane loop inside, so the lane loop
+    is straight-line arithmetic that LLVM vectorises (``vsin`` is branch-free). A
+    partial last block is padded with copies of the last trajectory, so every lane
+    runs the same code whatever the number of trajectories, blocks, chunks or threads:
+    the results do not depend on how the work is cut. Per-lane state lives in small
+    arrays ``lane_<name>``; observables write a per-block row buffer ``obuf``.
+
+    Non-finite states are detected once, at the end (or when a trajectory stops
+    early): a NaN never becomes finite again in this arithmetic (an infinite angle
+    or velocity turns into NaN within a step), so the status is the same as with a
+    test after every step, and samples saved after the failure are set to NaN.
+    """
     parts = _STEPPERS[method.kind](spec, method)
-    update = _snippets(spec, "update")
-    stop = _stop_source(spec)
-    save_first = "saved[i, 0, 0] = th\nsaved[i, 1, 0] = om" if spec.save else ""
-    save_step = textwrap.dedent("""\
+    nl = "\n"
+    # Every parameter is a lane variable (read per lane: no slower, and a product
+    # such as A * sin(...) is then never hoisted out of the lane loop, which would
+    # change where LLVM contracts it into an FMA, and the last bits of the result),
+    # except W and phi when the forcing sine is shared by the block.
+    shared_sine = spec.shared_forcing
+    per_lane = ["L", "g", "w0sq"] + (["c"] if spec.damping else []) + \
+        (["A"] if spec.forcing else []) + (["W", "phi"] if spec.forcing and not shared_sine
+                                          else [])
+    shared = ["W", "phi"] if shared_sine else []
+    # lane variables (name -> dtype): state, per-lane parameters, carried values,
+    # observable state, early-stop bookkeeping
+    lane = {"th": "float64", "om": "float64", "th0": "float64", "om0": "float64"}
+    lane.update({p: "float64" for p in per_lane})
+    lane.update({name: "float64" for name in parts["carried"]})
+    for name in spec.observe:
+        lane.update(dict(OBSERVABLES[name].state))
+    if spec.stop_early:
+        lane.update({"done": "bool_", "th_stop": "float64", "om_stop": "float64"})
+
+    def load(p, row):
+        return f"{p} = g / L" if p == "w0sq" else f"{p} = params[{row}, {_COL[_PARAMETER_OF[p]]}]"
+
+    # forcing: the sines sin(W t + phi) once per block and step when W and phi are
+    # shared, else per lane in a loop of their own; either way the step loop reads
+    # them as plain values s<f> and forms f = A * s<f> itself, so LLVM fuses the same
+    # products into FMAs and both forms give the same bits (a test checks it)
+    f_names = [name for name, _ in parts["forcing_init"] + parts["forcing_step"]]
+    sines = {"init": [f"s{name} = vsin(W * ({at}) + phi)" for name, at in parts["forcing_init"]],
+             "step": [f"s{name} = vsin(W * ({at}) + phi)" for name, at in parts["forcing_step"]],
+             "carry": [f"s{dst} = s{src}" for dst, src in parts["forcing_carry"]]}
+    block_init, block_step, block_after = (sines["init"], sines["step"], sines["carry"]) \
+        if shared_sine else ([], [], [])
+    lane_init = [] if shared_sine else sines["init"]
+    lane_step = [f"{name} = A * s{name}" for name in f_names]
+    if not shared_sine:
+        lane.update({f"s{name}": "float64" for name in f_names})
+    update = _lane_snippet(_snippets(spec, "update"))
+    init = _lane_snippet(_snippets(spec, "init"))
+    final = _lane_snippet(_snippets(spec, "final"))
+    width = n_columns(spec)
+
+    # --- once per lane: parameters, initial state, observables' init
+    first = [f"i = min(base + j, n - 1)  # padding lanes repeat the last trajectory",
+             load("th0", "i"), load("om0", "i")] + [load(p, "i") for p in per_lane] + \
+        ["th = th0", "om = om0", init]
+    if update:
+        first += ["if n_transient <= 0:", _indent(update, 1)]
+    if spec.save:
+        first += ["if base + j < n:", "    saved[base + j, 0, 0] = th",
+                  "    saved[base + j, 1, 0] = om"]
+    first += parts["before"] + lane_init
+    if spec.stop_early:
+        first += ["done = False", "th_stop = th", "om_stop = om"]
+
+    # --- one step of every lane: straight-line arithmetic, vectorised
+    step_body = lane_step + parts["step"]
+    step_stores = ["th", "om"] + parts["carried"]
+
+    # --- observables' update (steady window) and the early-stop test, per lane
+    observe_block = observe_body = observe_head = ""
+    if update:
+        observe_body = update
+        if spec.stop_early:
+            observe_head = "    if lane_done[j]:\n        continue\n"
+            observe_body += nl + _lane_snippet(_stop_source(
+                spec, action="done = True\nth_stop = th\nom_stop = om\nn_done += 1"))
+        observe_block = "if step + 1 >= n_transient:\n{loop}"  # lane loop: below
+        if spec.stop_early:
+            observe_block += "\n    if n_done == BLOCK:\n        break"
+    save_block = textwrap.dedent("""\
         if (step + 1) % save_every == 0:
-            j = (step + 1) // save_every
-            saved[i, 0, j] = th
-            saved[i, 1, j] = om""") if spec.save else ""
-    nl = chr(10)
+            k_save = (step + 1) // save_every
+            for j in range(n_real):
+                saved[base + j, 0, k_save] = lane_th[j]
+                saved[base + j, 1, k_save] = lane_om[j]""") if spec.save else ""
+
+    # --- per real lane: status, observables' final values, copy out
+    fail_saved = textwrap.dedent("""\
+        for k_save in range(saved.shape[2]):
+            for q in range(2):
+                if not math.isfinite(saved[i, q, k_save]):
+                    saved[i, q, k_save] = math.nan""") if spec.save else ""
+    stop_state = "if done:\n    th = th_stop\n    om = om_stop\n" if spec.stop_early else ""
+    finish = f"""i = base + j
+{stop_state}if math.isfinite(th) and math.isfinite(om):
+    status[i] = {int(Status.OK)}
+{_indent(final, 1) or "    pass"}
+else:
+    status[i] = {int(Status.NONFINITE)}
+    for col in range({width}):
+        obuf[j, col] = math.nan
+{_indent(fail_saved, 1)}
+for col in range({width}):
+    out[i, col] = obuf[j, col]"""
+    # lane arrays only for what the loops after the first one read
+    later = set(_IDENTIFIER.findall(nl.join(step_body + sines["step"] + sines["carry"] +
+                                            [observe_head, observe_body, finish])))
+    lane = {name: dtype for name, dtype in lane.items() if name in later}
+    init_loop = _lane_loop(nl.join(first), lane, level=2, load=False)
+    step_loop = _lane_loop(nl.join(step_body), lane, level=3,
+                           stores=[name for name in lane if name in step_stores])
+    if not shared_sine and sines["step"]:
+        step_loop = _lane_loop(nl.join(sines["step"]), lane, level=3) + nl + step_loop
+    if not shared_sine and sines["carry"]:
+        step_loop += nl + _lane_loop(nl.join(sines["carry"]), lane, level=3)
+    if observe_block:
+        observe_block = observe_block.format(loop=_lane_loop(observe_body, lane, level=1,
+                                                             head=observe_head))
+    finish_loop = _lane_loop(finish, lane, level=2, stores=[], count="n_real")
+
+    allocate = [f"lane_{name} = np.empty(BLOCK, dtype=np.{dtype})"
+                for name, dtype in lane.items()]
     return f'''
+BLOCK = {spec.block}
+
+
 @njit(parallel=True, **JIT)
 def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
     TWO_PI = 2.0 * math.pi
+    n = params.shape[0]
 {_indent(nl.join(parts["preamble"]), 1)}
-    for i in prange(params.shape[0]):
-{_indent(nl.join(_load_lines(spec)), 2)}
-        th = th0
-        om = om0
-{_indent(_snippets(spec, "init"), 2)}
+    for b in prange((n + BLOCK - 1) // BLOCK):
+        base = b * BLOCK
+        n_real = min(BLOCK, n - base)
+{_indent(nl.join(load(p, "base") for p in shared), 2)}
+{_indent(nl.join(allocate), 2)}
+        obuf = np.empty((BLOCK, {width}))
         k_state = 0
-{_indent(("if n_transient <= 0:" + nl + _indent(update, 1)) if update else "", 2)}
-{_indent(save_first, 2)}
-{_indent(nl.join(parts["before"]), 2)}
-        ok = True
+        n_done = 0
+{init_loop}
+{_indent(nl.join(block_init), 2)}
         for step in range(n_steps):
-{_indent(nl.join(parts["step"]), 3)}
-            if not (math.isfinite(th) and math.isfinite(om)):
-                ok = False
-                break
+{_indent(nl.join(block_step), 3)}
+{step_loop}
+{_indent(nl.join(block_after), 3)}
             k_state = step + 1
-{_indent(("if step + 1 >= n_transient:" + nl + _indent(update + nl + stop, 1)) if update else "", 3)}
-{_indent(save_step, 3)}
-{_final_block(spec)}'''
+{_indent(observe_block, 3)}
+{_indent(save_block, 3)}
+{finish_loop}
+'''
 
 
 # Step-size control of the adaptive kernels ([HNW] II.4, as in DOPRI5 and SciPy's RK45):
@@ -541,8 +743,9 @@ _FACMAX = 10.0
 def _adaptive_kernel(spec: KernelSpec, tableau) -> str:
     """Kernel body of an embedded pair: each trajectory controls its own step."""
     s = tableau.stages
-    forcing, f_lines = _forcing_times(spec, tableau.c, time="t", step=None, scale="h",
-                                      constants=None)
+    forcing, nodes = _forcing_times(spec, tableau.c, time="t", step=None, scale="h",
+                                    constants=None)
+    f_lines = [_forcing_line(name, at) for name, at in nodes]
     stages = _rk_stages(spec, tableau, "h", None, forcing)
     kt = [f"k{j + 1}t" for j in range(s)]
     ko = [f"k{j + 1}o" for j in range(s)]

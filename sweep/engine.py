@@ -18,8 +18,8 @@ import numpy as np
 from . import _config, io
 from . import methods as _methods
 from . import stability as _stability
-from ._kernels import (KernelSpec, Status, build, check_method_fits, check_observables_fit,
-                       n_columns)
+from ._kernels import (KernelSpec, Status, build, check_method_fits,
+                       check_observables_fit, n_columns)
 from ._validate import check_positive_int, check_real
 from .distributed import allocate as _allocate
 from .distributed import integrate as _integrate
@@ -313,6 +313,9 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         save=save_every is not None,
         stop_early=bool(stop_early),
         method=integrator,
+        # one forcing sine per step for a whole block when no trajectory differs in it
+        shared_forcing=not any(grid.axes.get(name, np.zeros(1)).size > 1
+                               for name in ("forcing_frequency", "forcing_phase")),
     )
     return settings, spec, int(chunk_size)
 

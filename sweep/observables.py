@@ -8,8 +8,16 @@ pastes in only the snippets of the observables a run asks for, so a run that obs
 only the final state keeps no running maxima.
 
 Names available to the snippets: ``th, om`` (state, unwrapped angle), ``th0, om0``
-(initial state), ``L, g`` (length, gravity), ``w0sq = g/L`` and ``energy(th, om, w0sq)``, the mechanical
-energy per unit ``m L^2`` of the scene's model.
+(initial state), ``L, g`` (length, gravity), ``w0sq = g/L``, ``W`` (forcing frequency),
+``energy(th, om, w0sq)`` (the mechanical energy per unit ``m L^2`` of the scene's
+model), ``vsin``/``vcos`` (`sweep._vecmath`: vectorisable, use them rather than
+``math.sin``/``math.cos``), ``k_state`` (step index of the state), ``dt``, ``t0`` and
+``TWO_PI``. Snippets are per trajectory: ``out[i, ...]`` is this trajectory's row.
+
+Every variable that lives from one snippet to the next (set in ``init``, read in
+``update``, ``settled`` or ``final``) is declared in ``state`` with its dtype: the
+fixed-step kernel integrates trajectories in blocks of SIMD lanes with the time loop
+outside the lane loop, so such a variable becomes one array element per lane.
 
 Memory is O(number of trajectories): one row of ``out`` per trajectory, whatever the
 number of steps.
@@ -52,6 +60,10 @@ class Observable:
         observed then).
     unforced_only : bool
         True if the observable's meaning needs an unforced scene.
+    state : tuple of (name, dtype)
+        Variables kept per trajectory between snippets (numpy dtype names:
+        ``"float64"``, ``"int64"``, ``"bool_"``); every name assigned in ``init``
+        (other than loop variables) must be here.
     """
 
     name: str
@@ -66,6 +78,7 @@ class Observable:
     requires_forcing: bool = False
     settled: str = ""
     unforced_only: bool = False
+    state: tuple[tuple[str, str], ...] = ()
 
     @property
     def n_columns(self) -> int:
@@ -106,6 +119,7 @@ OBSERVABLES: dict[str, Observable] = {
             update="acc_abs_max = max(acc_abs_max, abs(th))",
             final="out[i, COL] = acc_abs_max",
             steady=True,
+            state=(("acc_abs_max", "float64"),),
         ),
         Observable(
             name="amplitude",
@@ -117,6 +131,7 @@ OBSERVABLES: dict[str, Observable] = {
             update="acc_th_max = max(acc_th_max, th)\nacc_th_min = min(acc_th_min, th)",
             final="out[i, COL] = 0.5 * (acc_th_max - acc_th_min)",
             steady=True,
+            state=(("acc_th_max", "float64"), ("acc_th_min", "float64")),
         ),
         Observable(
             name="omega_mean",
@@ -133,6 +148,7 @@ OBSERVABLES: dict[str, Observable] = {
             ),
             final="out[i, COL] = (th - acc_th_steady) / ((acc_n_steady - 1) * dt)",
             steady=True,
+            state=(("acc_n_steady", "int64"), ("acc_th_steady", "float64")),
         ),
         Observable(
             name="strobe",
@@ -154,13 +170,16 @@ OBSERVABLES: dict[str, Observable] = {
                 "    out[i, COL + acc_sb_q] = math.nan"
             ),
             update=(
-                "acc_sb_new = acc_sb_k % acc_sb_S == 0\n"
+                # acc_sb_k counts steps modulo acc_sb_S (no integer division per step)
+                "acc_sb_new = acc_sb_k == 0\n"
                 "if acc_sb_new:\n"
                 f"    acc_sb_col = acc_sb_m % {STROBE_SAMPLES}\n"
                 "    out[i, COL + acc_sb_col] = th\n"
                 f"    out[i, COL + {STROBE_SAMPLES} + acc_sb_col] = om\n"
                 "    acc_sb_m += 1\n"
-                "acc_sb_k += 1"
+                "acc_sb_k += 1\n"
+                "if acc_sb_k == acc_sb_S:\n"
+                "    acc_sb_k = 0"
             ),
             final=(
                 # rotate each block left by r = m mod N (three reversals, in place)
@@ -209,6 +228,8 @@ OBSERVABLES: dict[str, Observable] = {
             samples=STROBE_SAMPLES,
             sample_dim="strobe",
             requires_forcing=True,
+            state=(("acc_sb_S", "int64"), ("acc_sb_k", "int64"), ("acc_sb_m", "int64"),
+                   ("acc_sb_new", "bool_")),
         ),
         Observable(
             name="capture",
@@ -230,6 +251,7 @@ OBSERVABLES: dict[str, Observable] = {
             steady=True,
             uses_energy=True,
             unforced_only=True,
+            state=(("acc_cap", "bool_"), ("acc_well", "float64"), ("acc_tcap", "float64")),
         ),
         Observable(
             name="tension",
@@ -243,12 +265,13 @@ OBSERVABLES: dict[str, Observable] = {
             ),
             init="acc_T_min = math.inf\nacc_T_max = -math.inf",
             update=(
-                "tension = L * om * om + g * math.cos(th)\n"
+                "tension = L * om * om + g * vcos(th)\n"
                 "acc_T_min = min(acc_T_min, tension)\n"
                 "acc_T_max = max(acc_T_max, tension)"
             ),
             final="out[i, COL] = acc_T_min\nout[i, COL + 1] = acc_T_max",
             steady=True,
+            state=(("acc_T_min", "float64"), ("acc_T_max", "float64")),
         ),
         Observable(
             name="energy",
@@ -261,6 +284,7 @@ OBSERVABLES: dict[str, Observable] = {
             init="acc_E0 = energy(th, om, w0sq)",
             final="out[i, COL] = acc_E0\nout[i, COL + 1] = energy(th, om, w0sq)",
             uses_energy=True,
+            state=(("acc_E0", "float64"),),
         ),
     )
 }

@@ -117,7 +117,8 @@ def test_kernel_is_not_recompiled_per_task(client):
     _same(local, remote)
 
     spec = sweep._kernels.KernelSpec(model="linear", damping=True, forcing=False,
-                                     observe=("theta_max", "energy"))
+                                     observe=("theta_max", "energy"),
+                                     )
     state = client.run(_worker_kernel_state, spec)
     tasks = {}
     for record in stream.data:
@@ -208,7 +209,7 @@ async def _die():
 def test_a_worker_killed_mid_run_still_gives_the_full_identical_result(client):
     # last in the file: it kills a worker (the nanny restarts it; waited for below)
     grid = sweep.Grid(theta0=np.linspace(-3.0, 3.0, 60), omega0=np.linspace(-2, 2, 20))
-    kw = dict(t_end=200.0, dt=0.01, observe=("final", "winding", "amplitude"),
+    kw = dict(t_end=2000.0, dt=0.01, observe=("final", "winding", "amplitude"),
               chunk_size=30)  # 40 chunks of ~50 ms each
     local = sweep.run(FORCED, grid, **kw)
     pids = client.run(os.getpid)

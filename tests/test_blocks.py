@@ -1,0 +1,161 @@
+"""The blocked fixed-step kernels: trajectories advance in blocks of SIMD lanes (time
+loop outside, lane loop inside), and a partial block is padded with copies of the
+last trajectory. Whatever the block size, the number of trajectories per call (so the
+padding), the thread count, and whether the forcing sine is shared by the block, every
+trajectory must get the same bits -- including its observables, saved samples, status
+and early stop."""
+
+import re
+
+import numba
+import numpy as np
+import pytest
+
+import sweep
+from sweep import _kernels
+from sweep._kernels import KernelSpec, Status
+from sweep.methods import METHODS
+from sweep.observables import OBSERVABLES
+
+DT = 0.05
+N_STEPS = 600  # 30 s: the forced scene is chaotic, so a last-bit change would show
+ALL_OBSERVE = ("final", "winding", "theta_max", "amplitude", "omega_mean", "tension",
+               "energy")
+
+
+def _table(n, *, damping=0.5, amplitude=1.2, frequency=2 / 3, phase=0.3):
+    """n parameter rows (PARAMETERS order) with distinct starts; row 5 overflows
+    (c = 1e4 is far outside RK4's stability region at this dt)."""
+    rng = np.random.default_rng(7)
+    params = np.empty((n, len(sweep.scene.PARAMETERS)))
+    params[:, 0] = rng.uniform(-np.pi, np.pi, n)
+    params[:, 1] = rng.uniform(-2.0, 2.0, n)
+    params[:, 2] = damping
+    params[:, 3] = amplitude
+    params[:, 4] = frequency
+    params[:, 5] = phase
+    params[:, 6] = 1.0
+    params[:, 7] = 1.0
+    if n > 5:
+        params[5, 2] = 1e4
+    return params
+
+
+def _call(spec, params, *, n_transient=100, save_every=0):
+    kernel = _kernels.build(spec)
+    n = params.shape[0]
+    out = np.full((n, _kernels.n_columns(spec)), -7.0)
+    status = np.full(n, 99, dtype=np.int8)
+    saved = np.full((n, 2, N_STEPS // save_every + 1), np.nan) if save_every else \
+        np.empty((0, 2, 0))
+    kernel(params, 0.0, DT, N_STEPS, n_transient, save_every or 1, out, status, saved)
+    return out, status, saved
+
+
+def _one_by_one(spec, params, **kwargs):
+    """Each trajectory alone in its call: a block of one real lane and padding."""
+    parts = [_call(spec, params[k:k + 1], **kwargs) for k in range(params.shape[0])]
+    return tuple(np.concatenate([p[q] for p in parts]) for q in range(3))
+
+
+def _assert_same(a, b):
+    for x, y in zip(a, b):
+        np.testing.assert_array_equal(x, y)
+
+
+@pytest.mark.parametrize("shared", [False, True])
+def test_forced_run_with_every_observable_and_saving_is_the_same_for_any_blocking(shared):
+    params = _table(77)  # not a multiple of any block size: the last block is padded
+    specs = [KernelSpec("nonlinear", True, True, ALL_OBSERVE, save=True, block=block,
+                        shared_forcing=shared) for block in (8, 64, 256)]
+    reference = _call(specs[0], params, save_every=7)
+    out, status, saved = reference
+    assert (status[np.arange(77) != 5] == Status.OK).all() and status[5] == Status.NONFINITE
+    assert np.isnan(out[5]).all() and np.isfinite(out[np.arange(77) != 5]).all()
+    assert np.isnan(saved[5, :, -1]).all()  # samples after the failure are NaN
+    for spec in specs[1:]:
+        _assert_same(_call(spec, params, save_every=7), reference)
+    _assert_same(_one_by_one(specs[1], params, save_every=7), reference)
+    # the shared sine is the per-lane sine, evaluated once: the same bits
+    per_lane = KernelSpec("nonlinear", True, True, ALL_OBSERVE, save=True,
+                          shared_forcing=not shared)
+    _assert_same(_call(per_lane, params, save_every=7), reference)
+
+
+def test_frequencies_that_differ_per_trajectory_are_each_honoured():
+    params = _table(40)
+    params[:, 4] = np.linspace(0.5, 1.5, 40)  # forcing_frequency differs per lane
+    spec = KernelSpec("nonlinear", True, True, ("final", "amplitude"))
+    _assert_same(_call(spec, params), _one_by_one(spec, params))
+    # and one frequency per call, with the shared sine, is the same again
+    shared = KernelSpec("nonlinear", True, True, ("final", "amplitude"), shared_forcing=True)
+    _assert_same(_one_by_one(shared, params), _call(spec, params))
+
+
+@pytest.mark.parametrize("observe,forcing", [(("strobe",), True), (("capture",), False)])
+def test_early_stop_is_the_same_for_any_blocking(observe, forcing):
+    params = _table(50, amplitude=1.66 if forcing else 0.0, frequency=1.0, damping=0.2)
+    params[5, 2] = 0.2
+    references = None
+    for block in (8, 64):
+        spec = KernelSpec("nonlinear", True, forcing, observe, stop_early=True, block=block,
+                          shared_forcing=forcing)
+        got = _call(spec, params, n_transient=0)
+        if references is None:
+            references = got
+            # a lane that stops must not disturb its block: alone it gives the same
+            _assert_same(_one_by_one(spec, params[:12], n_transient=0),
+                         tuple(a[:12] for a in got))
+        else:
+            _assert_same(got, references)
+
+
+@pytest.mark.parametrize("method", [m for m, v in METHODS.items() if not v.adaptive])
+def test_every_fixed_step_method_is_the_same_for_any_blocking(method):
+    conservative = METHODS[method].conservative_only
+    params = _table(30, damping=0.0 if conservative else 0.5)
+    if conservative:
+        params[5, 2] = 0.0
+    spec = [KernelSpec("nonlinear", not conservative, not conservative, ("final", "energy"),
+                       method=method, block=block) for block in (8, 128)]
+    _assert_same(_call(spec[0], params), _call(spec[1], params))
+
+
+def test_thread_count_does_not_matter_within_a_call():
+    params = _table(300)
+    spec = KernelSpec("nonlinear", True, True, ALL_OBSERVE, block=8)
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = _call(spec, params)
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+        many = _call(spec, params)
+    finally:
+        numba.set_num_threads(before)
+    _assert_same(one, many)
+
+
+def test_lane_code_never_writes_a_row_of_out_directly():
+    """Padding lanes repeat the last trajectory's row index; only the final copy of
+    real lanes may touch ``out`` (snippets write the block's row buffer)."""
+    for name, obs in OBSERVABLES.items():
+        spec = KernelSpec("nonlinear", True, bool(obs.requires_forcing), (name,),
+                          stop_early=bool(obs.settled))
+        text = _kernels.source(spec)
+        assert re.findall(r"\bout\[", text) == ["out["], name
+
+
+def test_every_observable_declares_the_state_it_keeps():
+    """A variable assigned in ``init`` lives across steps, so in a blocked kernel it
+    must be a per-lane array: it has to be declared in ``state``."""
+    assigned = re.compile(r"^\s*([A-Za-z_]\w*)\s*=(?!=)", re.MULTILINE)
+    for name, obs in OBSERVABLES.items():
+        declared = {var for var, _ in obs.state}
+        assert set(assigned.findall(obs.init)) <= declared, name
+        for _, dtype in obs.state:
+            assert dtype in ("float64", "int64", "bool_"), name
+
+
+def test_block_must_be_a_multiple_of_eight():
+    with pytest.raises(ValueError, match=r"block must be a positive multiple of 8, got 12"):
+        KernelSpec("linear", False, False, ("final",), block=12)
