@@ -16,6 +16,8 @@ Measured:
   (``benchmarks/c_reference/pendulum.c``, built here with gcc when present: libm sin,
   glibc's vector sin, the polynomial sin of ``sweep._vecmath``; results checked against
   sweep's), JAX when importable;
+* the kernel with the forcing sine per lane (as for a grid over forcing frequency),
+  and the full scene under each set of fast-math flags (``sweep._config.FASTMATH``);
 * ``sweep._vecmath.sin`` against ``math.sin`` in a numba loop (fastmath flags without
   ``reassoc``), and whether the loop vectorises;
 * compile time cold (fresh ``SWEEP_CACHE_DIR``, new process) and warm (next process),
@@ -60,13 +62,13 @@ sys.path.insert(0, str(HERE.parent))
 from forced_basins import machine
 
 import sweep
-from sweep import _vecmath
+from sweep import _config, _kernels, _vecmath
 
 G_OVER_L, DAMPING, AMPLITUDE, FREQUENCY, PHASE = 1.0, 0.5, 1.2, 2.0 / 3.0, 0.0
 DT = 0.01
 REPEATS = 1  # best of at least this many calls (--repeats)
 MIN_SECONDS = 0.0  # every timing repeats until this much wall time (--quick: 0.3 s)
-VEC_FLAGS = {"nsz", "arcp", "contract", "afn"}  # fast-math without reassoc
+VEC_FLAGS = set(_config.FASTMATH)  # sweep's kernels' fast-math flags (no reassoc)
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -103,6 +105,16 @@ def grid_axes(n):
 def initial_states(theta0, omega0):
     th, om = np.meshgrid(theta0, omega0, indexing="ij")
     return th.ravel().copy(), om.ravel().copy()
+
+
+def run_kernel(spec, scene, theta0, omega0, steps):
+    """sweep's kernel for ``spec`` called directly on the grid's parameter table
+    (for variants `sweep.run` picks only for other grids); final theta, omega."""
+    table = sweep.Grid(theta0=theta0, omega0=omega0).table(scene)
+    out = np.empty((table.shape[0], _kernels.n_columns(spec)))
+    status = np.empty(table.shape[0], dtype=np.int8)
+    _kernels.build(spec)(table, 0.0, DT, steps, 0, 1, out, status, np.empty((0, 2, 0)))
+    return out[:, 0], out[:, 1]
 
 
 def run_sweep(scene, theta0, omega0, steps, **options):
@@ -203,50 +215,6 @@ def numba_naive(th0, om0, steps, w0sq, c, A, W, phi, dt):
     return th_out, om_out
 
 
-BLOCK = 512
-
-
-@njit(parallel=True, fastmath=VEC_FLAGS, cache=True)
-def numba_blocked_vsin(th0, om0, steps, w0sq, c, A, W, phi, dt):
-    """Prototype (not sweep's kernel): blocks of BLOCK trajectories, time loop outside,
-    lane loop inside, `sweep._vecmath.sin`, fast-math without reassoc."""
-    n = th0.size
-    n_blocks = (n + BLOCK - 1) // BLOCK
-    th_out = np.empty(n)
-    om_out = np.empty(n)
-    dt_2 = dt / 2.0
-    dt_6 = dt / 6.0
-    cdt1 = dt * 0.5
-    for b in prange(n_blocks):
-        start = b * BLOCK
-        m = min(BLOCK, n - start)
-        th = np.zeros(BLOCK)
-        om = np.zeros(BLOCK)
-        th[:m] = th0[start:start + m]
-        om[:m] = om0[start:start + m]
-        f0 = A * math.sin(W * 0.0 + phi)
-        for step in range(steps):
-            f1 = A * math.sin(W * (step * dt + cdt1) + phi)
-            f2 = A * math.sin(W * ((step + 1) * dt) + phi)
-            for j in range(BLOCK):
-                x = th[j]
-                v = om[j]
-                k1t = v
-                k1o = -w0sq * _vecmath.sin(x) - c * k1t + f0
-                k2t = v + dt_2 * k1o
-                k2o = -w0sq * _vecmath.sin(x + dt_2 * k1t) - c * k2t + f1
-                k3t = v + dt_2 * k2o
-                k3o = -w0sq * _vecmath.sin(x + dt_2 * k2t) - c * k3t + f1
-                k4t = v + dt * k3o
-                k4o = -w0sq * _vecmath.sin(x + dt * k3t) - c * k4t + f2
-                th[j] = x + dt_6 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t)
-                om[j] = v + dt_6 * (k1o + 2.0 * k2o + 2.0 * k3o + k4o)
-            f0 = f2
-        th_out[start:start + m] = th[:m]
-        om_out[start:start + m] = om[:m]
-    return th_out, om_out
-
-
 def jax_rk4(th0, om0, steps):
     import jax
     jax.config.update("jax_enable_x64", True)
@@ -281,8 +249,9 @@ def jax_rk4(th0, om0, steps):
 
 
 # ------------------------------------------------------------------------ C reference
-# -ffp-contract=off: no a*b+c -> FMA, so the operations are exactly sweep's (numba
-# without fastmath does not contract); the last variant lets gcc contract (its default).
+# -ffp-contract=off: no a*b+c -> FMA; the variant with contraction (gcc's default) does
+# what sweep's kernels do (they let LLVM contract: sweep._config.FASTMATH), though
+# gcc and LLVM need not fuse the same products.
 C_VARIANTS = {
     "libm sin": ["-DSIN_VARIANT=0", "-ffp-contract=off"],
     "glibc vector sin (libmvec)": ["-DSIN_VARIANT=1", "-ffp-contract=off"],
@@ -479,6 +448,37 @@ def main(argv=None) -> int:
     full_name = "sweep: nonlinear, damping, forcing"
     sweep_full = thr[full_name]["traj_steps_per_s"]
 
+    # the forcing sine per lane, as when the grid varies the forcing frequency or phase
+    spec = _kernels.KernelSpec("nonlinear", True, True, ("final",), shared_forcing=False)
+    run_kernel(spec, scene_of(), [0.1], [0.0], 1)
+    seconds, got = timed(lambda: run_kernel(spec, scene_of(), theta0, omega0, steps))
+    per_lane = "sweep: nonlinear, damping, forcing [forcing sine per lane, as when W varies]"
+    record(per_lane, seconds, group="sweep", model="nonlinear", damping=True, forcing=True)
+    result["agreement"][per_lane] = max(float(np.max(np.abs(got[0] - reference[0]))),
+                                        float(np.max(np.abs(got[1] - reference[1]))))
+
+    # the fast-math flags of the kernels (sweep._config.FASTMATH), each measured here
+    print("fast-math flags of sweep's kernels (full scene):", flush=True)
+    default = _config.FASTMATH
+    result["fastmath"] = {}
+    try:
+        for flags in (False, {"nsz"}, {"contract"}, {"contract", "nsz"}):
+            _config.FASTMATH = flags if flags is False else frozenset(flags)
+            _kernels.build.cache_clear()
+            run_sweep(scene_of(), [0.1], [0.0], 1)  # compile: not timed
+            seconds, ds = timed(lambda: run_sweep(scene_of(), theta0, omega0, steps))
+            label = "none" if flags is False else ", ".join(sorted(flags))
+            diff = max(float(np.max(np.abs(ds.theta_final.values.ravel() - reference[0]))),
+                       float(np.max(np.abs(ds.omega_final.values.ravel() - reference[1]))))
+            rate = n_traj * steps / seconds
+            result["fastmath"][label] = {"traj_steps_per_s": rate,
+                                         "max_abs_diff_from_default": diff,
+                                         "default": _config.FASTMATH == default}
+            print(f"  {label:55s} {rate / 1e6:10.2f} M/s  max |diff| {diff:.1e}", flush=True)
+    finally:
+        _config.FASTMATH = default
+        _kernels.build.cache_clear()
+
     def agree(name, got, rows=slice(None)):
         diff = max(float(np.max(np.abs(got[0] - reference[0][rows]))),
                    float(np.max(np.abs(got[1] - reference[1][rows]))))
@@ -507,12 +507,6 @@ def main(argv=None) -> int:
     seconds, got = timed(lambda: numba_naive(th0, om0, *args_naive))
     record("numba naive (prange, time loop inside, math.sin)", seconds, group="alternative")
     agree("numba naive (prange, time loop inside, math.sin)", got)
-
-    numba_blocked_vsin(th0[:2], om0[:2], *args_naive)
-    seconds, got = timed(lambda: numba_blocked_vsin(th0, om0, *args_naive))
-    record("numba prototype: blocked lanes + _vecmath.sin, fastmath w/o reassoc",
-           seconds, group="alternative")
-    agree("numba prototype: blocked lanes + _vecmath.sin, fastmath w/o reassoc", got)
 
     try:
         import jax  # noqa: F401
@@ -559,8 +553,9 @@ def main(argv=None) -> int:
     x = np.random.default_rng(0).uniform(-50.0, 50.0, vec_points)
     out = np.empty_like(x)
     vec = {}
-    for name, fn in (("math.sin, fastmath nsz/arcp/contract/afn", loop_math_sin),
-                     ("_vecmath.sin, fastmath nsz/arcp/contract/afn", loop_vsin),
+    flags = "/".join(sorted(VEC_FLAGS))
+    for name, fn in ((f"math.sin, fastmath {flags}", loop_math_sin),
+                     (f"_vecmath.sin, fastmath {flags}", loop_vsin),
                      ("_vecmath.sin, no fastmath", loop_vsin_strict)):
         fn(x[:8], out[:8])
         seconds, _ = timed(lambda f=fn: f(x, out), repeats=3)
@@ -698,13 +693,16 @@ def markdown(r) -> str:
         "specialised one, so that pair shows the run-to-run noise. The full scene is timed "
         "at the start and again at the end of the run; the better time is shown.",
         "- Max abs diff: final theta and omega against `sweep.run`'s, over the same "
-        "trajectories. The C reference with libm sin does sweep's operations in sweep's "
-        "order (`-ffp-contract=off`), so it should agree to the last bit or nearly. Every "
-        "other sine (glibc's vector sin, the polynomial) differs from libm's by up to an "
-        "ulp per call, and this workload is chaotic (c = 0.5, A = 1.2, W = 2/3): "
-        "over 2000 steps it amplifies those last-bit differences to about 1e-10. That "
-        "is the same work done with a different (equally accurate) sine. DOP853 "
-        "differs by its own error and RK4's.",
+        "trajectories. sweep uses the polynomial sine of `sweep._vecmath` and lets LLVM "
+        "fuse multiply-adds (FMA); the alternatives use libm's or glibc's vector sine "
+        "(each within an ulp of sin) and fuse other products or none. This workload is "
+        "chaotic (c = 0.5, A = 1.2, W = 2/3): over 2000 steps it amplifies those "
+        "last-bit differences to about 1e-10. That is the same work done with "
+        "different (equally accurate) roundings. DOP853 differs by its own error and "
+        "RK4's.",
+        "- `[forcing sine per lane]`: the kernel `sweep.run` uses when the grid varies "
+        "the forcing frequency or phase: sin(W t + phase) for every trajectory instead "
+        "of once per step for a block of 64; the same bits (`tests/test_blocks.py`).",
         "- SciPy and pure Python run a subset of the trajectories, and the throughput is "
         "extrapolated (the trajectories are independent).",
     ]
@@ -712,6 +710,17 @@ def markdown(r) -> str:
         lines += ["", f"`sweep.run` (full scene) / fastest C reference: "
                   f"**{r['sweep_over_best_C']:.2f}** (target >= 0.9); / C with libm sin: "
                   f"{r.get('sweep_over_C_libm', math.nan):.2f}."]
+    lines += ["", "## Fast-math flags of the kernels", "",
+              "The full scene with each set of numba fast-math flags (`reassoc` is never "
+              "considered: it would reorder sums, drift from the NumPy oracle and break "
+              "the exact argument reduction of `sweep._vecmath.sin`). `contract` lets "
+              "LLVM fuse a*b + c into one FMA, one rounding instead of two.", "",
+              "| flags | M traj-steps/s | max abs diff from the default | default |",
+              "|---|---|---|---|"]
+    for name, v in r["fastmath"].items():
+        lines.append(f"| {name} | {v['traj_steps_per_s'] / 1e6:.3g} | "
+                     f"{v['max_abs_diff_from_default']:.1e} | "
+                     f"{'yes' if v['default'] else ''} |")
     lines += ["", "## sin in a numba loop", "",
               "| loop | M sin/s | vectorised (packed ymm/zmm arithmetic in its machine code) "
               "| max abs error vs np.sin |",

@@ -313,6 +313,8 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         save=save_every is not None,
         stop_early=bool(stop_early),
         method=integrator,
+        block=_config.SMALL_BLOCK if stop_early or grid.size < 16 * _config.BLOCK
+        else _config.BLOCK,
         # one forcing sine per step for a whole block when no trajectory differs in it
         shared_forcing=not any(grid.axes.get(name, np.zeros(1)).size > 1
                                for name in ("forcing_frequency", "forcing_phase")),

@@ -118,7 +118,7 @@ def test_kernel_is_not_recompiled_per_task(client):
 
     spec = sweep._kernels.KernelSpec(model="linear", damping=True, forcing=False,
                                      observe=("theta_max", "energy"),
-                                     )
+                                     block=sweep._config.SMALL_BLOCK)  # 1200 starts: small
     state = client.run(_worker_kernel_state, spec)
     tasks = {}
     for record in stream.data:

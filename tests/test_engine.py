@@ -85,8 +85,11 @@ def test_compiled_kernels_have_the_scene_terms_only_and_vectorised_lanes(tmp_pat
         for model in ("linear", "nonlinear"):
             sweep.run(sweep.Scene(model=model), sweep.Grid(theta0=[0.1]), t_end=1.0, dt=0.1,
                       observe=("final",))
-            kernel = _kernels.build(_kernels.KernelSpec(model, False, False, ("final",)))
+            # the spec sweep.run compiled (a one-trajectory grid runs in small blocks)
+            kernel = _kernels.build(_kernels.KernelSpec(model, False, False, ("final",),
+                                                        block=sweep._config.SMALL_BLOCK))
             ir = "".join(kernel.inspect_llvm().values())
+            assert ir, "not compiled in this process"
             print(model, re.search(r"@(llvm\\.sin\\.[fv]|sin)\\(", ir) is not None,
                   two_over_pi in ir, re.search(r"<\\d+ x double>", ir) is not None)
     """)
@@ -266,8 +269,10 @@ def test_fresh_process_loads_the_kernel_from_the_disk_cache(tmp_path):
         from sweep import _kernels
         sweep.run(sweep.Scene(effects=(sweep.Damping(0.1),)), sweep.Grid(theta0=[0.1]),
                   t_end=1.0, dt=0.1, observe=("final", "energy"))
+        # the spec sweep.run built: a one-trajectory grid runs in small blocks
         kernel = _kernels.build(_kernels.KernelSpec("nonlinear", True, False,
-                                                    ("final", "energy")))
+                                                    ("final", "energy"),
+                                                    block=sweep._config.SMALL_BLOCK))
         print(sum(kernel.stats.cache_hits.values()), sum(kernel.stats.cache_misses.values()))
     """)
     env = dict(os.environ, SWEEP_CACHE_DIR=str(tmp_path))
