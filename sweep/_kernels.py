@@ -176,7 +176,7 @@ def _accel_source(spec: KernelSpec) -> str:
         args.append("f")
         terms.append("+ f")
     return (
-        "@njit(inline='always', **JIT)\n"
+        "@njit(**JIT)\n"
         f"def accel({', '.join(args)}):\n"
         f"    return {' '.join(terms)}\n"
     )
@@ -186,7 +186,7 @@ def _energy_source(spec: KernelSpec) -> str:
     potential = "w0sq * (1.0 - vcos(th))" if spec.model == "nonlinear" else \
         "0.5 * w0sq * th * th"
     return (
-        "@njit(inline='always', **JIT)\n"
+        "@njit(**JIT)\n"
         "def energy(th, om, w0sq):\n"
         f"    return 0.5 * om * om + {potential}\n"
     )

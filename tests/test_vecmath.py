@@ -21,7 +21,9 @@ from sweep import _config, _vecmath
 TOL = 1e-15
 
 
-# compiled as the kernels compile it: with their fast-math flags (FMA contraction)
+# called as the kernels call it: from a loop with their fast-math flags (the sine is
+# compiled on its own without them, but if it were ever inlined at numba's level the
+# flags would reach it: `_vsin_strict` below covers the other case)
 KERNEL_FLAGS = set(_config.FASTMATH)
 
 
