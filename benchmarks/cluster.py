@@ -88,7 +88,7 @@ def main(argv=None) -> int:
     chunk_sizes = [int(c) for c in args.chunk_sizes.split(",")]
 
     load_before = os.getloadavg()[0]
-    sweep.run(scene, sweep.Grid(theta0=[0.0]), **kwargs)  # compile or load, locally
+    sweep.engine.warm_up(scene, grid, **kwargs)  # compile or load, locally
     local, t_local = _timed(scene, grid, args.repeats, **kwargs)
 
     began = time.perf_counter()

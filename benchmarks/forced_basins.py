@@ -74,7 +74,7 @@ def main(argv=None) -> int:
                 "stop_early": dict(kwargs, t_transient=20 * period, stop_early=True)}
     labels = {}
     for name, options in variants.items():
-        sweep.run(scene, sweep.Grid(theta0=[0.0]), **options)  # compile (or load) first
+        sweep.engine.warm_up(scene, grid, **options)  # compile (or load) first
         start = time.perf_counter()
         ds = sweep.run(scene, grid, **options)
         run_s = time.perf_counter() - start

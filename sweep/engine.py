@@ -6,6 +6,7 @@ dataset in `io`.
 
 from __future__ import annotations
 
+import inspect
 import math
 import os
 import sys
@@ -28,7 +29,7 @@ from .methods import METHODS
 from .observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
 from .scene import Scene
 
-__all__ = ["run", "RunSettings", "METHODS"]
+__all__ = ["run", "warm_up", "RunSettings", "METHODS"]
 
 #: Default tolerances of the adaptive methods (per step, RMS norm over theta, omega):
 #: about 1e-6 global error on a few periods of the pendulum.
@@ -527,6 +528,34 @@ def run(
                                   t0=t0, t_transient=t_transient, method=method, rtol=rtol,
                                   atol=atol))
     return ds
+
+
+def warm_up(scene: Scene, grid: Grid, **kwargs) -> KernelSpec:
+    """Compile (or load from the disk cache) the kernel that ``run(scene, grid,
+    **kwargs)`` would use, integrating nothing: to time a run apart from compilation.
+
+    The kernel depends on the grid (its size sets the block of SIMD lanes, its axes
+    whether the forcing sine is shared), so a smaller stand-in grid may compile
+    another kernel; this takes the run's own grid and arguments.
+
+    Parameters
+    ----------
+    scene, grid, **kwargs
+        As for `run` (validated the same way, before anything is compiled).
+
+    Returns
+    -------
+    sweep._kernels.KernelSpec
+        What was compiled.
+    """
+    bound = inspect.signature(run).bind(scene, grid, **kwargs)
+    bound.apply_defaults()
+    wanted = inspect.signature(_prepare).parameters
+    settings, spec, _ = _prepare(**{name: value for name, value in bound.arguments.items()
+                                    if name in wanted})
+    _integrate(build(spec), grid.table(scene, 0, 0), settings,
+               _allocate(spec, settings, 0))  # no trajectories: compiles, runs nothing
+    return spec
 
 
 def _open_checkpoint(checkpoint, resume, **run):

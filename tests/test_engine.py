@@ -280,3 +280,19 @@ def test_fresh_process_loads_the_kernel_from_the_disk_cache(tmp_path):
                            text=True, check=True).stdout.split() for _ in range(2)]
     assert runs[0] == ["0", "1"]  # first process compiles...
     assert runs[1] == ["1", "0"]  # ...the second loads machine code from disk
+
+
+def test_warm_up_compiles_the_kernel_the_run_then_uses():
+    scene = sweep.Scene(effects=(sweep.Damping(0.3),))
+    grid = sweep.Grid(theta0=np.linspace(-1.0, 1.0, 3000))  # > 16 blocks: large blocks
+    kwargs = dict(t_end=1.0, dt=0.01, observe=("final", "theta_max"))
+    spec = sweep.engine.warm_up(scene, grid, **kwargs)
+    assert spec.block == sweep._config.BLOCK and spec.observe == ("final", "theta_max")
+    kernel = _kernels.build(spec)
+    assert len(kernel.signatures) == 1  # compiled (or loaded) for the run's types
+    misses = _kernels.build.cache_info().misses
+    sweep.run(scene, grid, **kwargs)
+    assert _kernels.build.cache_info().misses == misses  # the run's spec: memo hit
+    assert len(kernel.signatures) == 1  # and nothing new compiled
+    with pytest.raises(ValueError, match=r"t_end must be > t0"):
+        sweep.engine.warm_up(scene, grid, t_end=-1.0, dt=0.01)  # validated like run
