@@ -91,7 +91,13 @@ class Observable:
 STROBE_SAMPLES = 16
 
 #: Periodicity tolerance [rad, rad/s] of the strobe observable's early-stop test.
-STROBE_TOL = 1e-4
+#: Tight on purpose: a start near the stable manifold of an *unstable* periodic orbit
+#: repeats it for a while before it leaves, and the chance of repeating it for 16
+#: periods shrinks with the tolerance. At 1e-4, 2 of 48,000 starts of the 1200^2
+#: forced map stopped on an unstable period-2 orbit; at 1e-8, none, and a stable
+#: orbit (contracting geometrically) needs only a few more periods to get there
+#: (`benchmarks/forced_basins.py`: 32 s -> 46 s for the whole map).
+STROBE_TOL = 1e-8
 
 OBSERVABLES: dict[str, Observable] = {
     o.name: o
@@ -201,8 +207,8 @@ OBSERVABLES: dict[str, Observable] = {
                 "            out[i, acc_sb_x], out[i, acc_sb_y] = out[i, acc_sb_y], out[i, acc_sb_x]"
             ),
             # settled: the ring is full and periodic with some p <= N/2 within STROBE_TOL
-            # (ten times tighter than the maps' default tolerance, so a stopped
-            # trajectory is classified as it would be after a full run)
+            # (far tighter than the maps' default tolerance, so a stopped trajectory is
+            # classified as it would be after a full run; see STROBE_TOL)
             settled=(
                 "SETTLED = False\n"
                 f"if acc_sb_new and acc_sb_m >= {STROBE_SAMPLES}:\n"
