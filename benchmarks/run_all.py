@@ -117,7 +117,7 @@ def run_kernel(spec, scene, theta0, omega0, steps):
     return out[:, 0], out[:, 1]
 
 
-def warm(scene, theta0, omega0, steps, **options):
+def warm_kernel(scene, theta0, omega0, steps, **options):
     """Compile (or load) the kernel `run_sweep` will use on this very grid: the
     grid's size sets the kernel's block, so a one-start stand-in would compile
     another kernel and leave this one's compilation inside the timing."""
@@ -443,7 +443,7 @@ def main(argv=None) -> int:
                         f"{'forcing' if forcing else 'no forcing'}"
                 for specialize in (True, False):
                     # compile (or load from the disk cache) first: not timed
-                    warm(scene, theta0, omega0, steps, specialize=specialize)
+                    warm_kernel(scene, theta0, omega0, steps, specialize=specialize)
                     seconds, ds = timed(lambda s=scene, k=specialize: run_sweep(
                         s, theta0, omega0, steps, specialize=k))
                     name = f"sweep: {label}" + ("" if specialize else " [general kernel]")
@@ -472,7 +472,7 @@ def main(argv=None) -> int:
         for flags in (False, {"nsz"}, {"contract"}, {"contract", "nsz"}):
             _config.FASTMATH = flags if flags is False else frozenset(flags)
             _kernels.build.cache_clear()
-            warm(scene_of(), theta0, omega0, steps)  # compile: not timed
+            warm_kernel(scene_of(), theta0, omega0, steps)  # compile: not timed
             seconds, ds = timed(lambda: run_sweep(scene_of(), theta0, omega0, steps))
             label = "none" if flags is False else ", ".join(sorted(flags))
             diff = max(float(np.max(np.abs(ds.theta_final.values.ravel() - reference[0]))),
@@ -606,7 +606,7 @@ def main(argv=None) -> int:
         # (dataset construction, ~ms) does not hide the kernel's time per step
         n_steps = max(scaling_steps, min(20_000, (2 * 10**6 if args.quick else 2 * 10**7)
                                          // n))
-        warm(scene, th_axis, om_axis, n_steps)
+        warm_kernel(scene, th_axis, om_axis, n_steps)
         seconds, _ = timed(lambda a=th_axis, b=om_axis, k=n_steps: run_sweep(scene, a, b, k),
                            repeats=1, min_seconds=1.0)
         rate = n * n_steps / seconds

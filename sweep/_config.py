@@ -37,6 +37,13 @@ BOUNDSCHECK = False
 CHUNK_SIZE = 1 << 16
 
 
+def jit_options() -> dict:
+    """numba options of sweep's compiled helpers (`sweep._vecmath`): `FASTMATH`, in the
+    form ``njit`` accepts (a set or a bool), and `BOUNDSCHECK`."""
+    fastmath = FASTMATH if isinstance(FASTMATH, bool) else set(FASTMATH)
+    return {"fastmath": fastmath, "boundscheck": BOUNDSCHECK}
+
+
 def cache_dir() -> Path:
     """Folder for generated kernel sources and numba's on-disk cache.
 

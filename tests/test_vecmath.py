@@ -21,9 +21,8 @@ from sweep import _config, _vecmath
 TOL = 1e-15
 
 
-# called as the kernels call it: from a loop with their fast-math flags (the sine is
-# compiled on its own without them, but if it were ever inlined at numba's level the
-# flags would reach it: `_vsin_strict` below covers the other case)
+# called as the kernels call it, from a loop with their fast-math flags (the sine is
+# compiled with them too: FMA contraction); `_vsin_strict` is a caller without them
 KERNEL_FLAGS = set(_config.FASTMATH)
 
 
