@@ -96,7 +96,7 @@ STROBE_SAMPLES = 16
 #: periods shrinks with the tolerance. At 1e-4, 2 of 48,000 starts of the 1200^2
 #: forced map stopped on an unstable period-2 orbit; at 1e-8, none, and a stable
 #: orbit (contracting geometrically) needs only a few more periods to get there
-#: (`benchmarks/forced_basins.py`: 32 s -> 46 s for the whole map).
+#: (`benchmarks/forced_basins.py`: about 32 s -> 45 s for the whole map).
 STROBE_TOL = 1e-8
 
 OBSERVABLES: dict[str, Observable] = {
