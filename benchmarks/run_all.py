@@ -14,11 +14,11 @@ Measured:
   (subset, extrapolated), a seed-style pure-Python RK4 (subset, extrapolated), a naive
   numba kernel (prange over trajectories, ``math.sin``), the C reference
   (``benchmarks/c_reference/pendulum.c``, built here with gcc when present: libm sin,
-  glibc's vector sin, the polynomial sin of ``sweep._vecmath``; results checked against
+  glibc's vector sin, the polynomial sin of ``sweep.kernels.vecmath``; results checked against
   sweep's), JAX when importable;
 * the kernel with the forcing sine per lane (as for a grid over forcing frequency),
   and the full scene under each set of fast-math flags (``sweep._config.FASTMATH``);
-* ``sweep._vecmath.sin`` against ``math.sin`` in a numba loop (fastmath flags without
+* ``sweep.kernels.vecmath.sin`` against ``math.sin`` in a numba loop (fastmath flags without
   ``reassoc``), and whether the loop vectorises;
 * compile time cold (fresh ``SWEEP_CACHE_DIR``, new process) and warm (next process),
   ``import sweep`` time, peak memory of a 2048 x 2048 final-state run (``VmHWM``;
@@ -62,7 +62,9 @@ sys.path.insert(0, str(HERE.parent))
 from forced_basins import machine
 
 import sweep
-from sweep import _config, _kernels, _vecmath
+from sweep import _config
+from sweep.kernels import generate as _kernels
+from sweep.kernels import vecmath as _vecmath
 
 G_OVER_L, DAMPING, AMPLITUDE, FREQUENCY, PHASE = 1.0, 0.5, 1.2, 2.0 / 3.0, 0.0
 DT = 0.01
@@ -556,7 +558,7 @@ def main(argv=None) -> int:
                     agree(label, got)
 
     # --- vecmath sin in a numba loop
-    print("sweep._vecmath.sin vs math.sin in a numba loop:", flush=True)
+    print("sweep.kernels.vecmath.sin vs math.sin in a numba loop:", flush=True)
     x = np.random.default_rng(0).uniform(-50.0, 50.0, vec_points)
     out = np.empty_like(x)
     vec = {}
@@ -701,7 +703,7 @@ def markdown(r) -> str:
         "specialised one, so that pair shows the run-to-run noise. The full scene is timed "
         "at the start and again at the end of the run; the better time is shown.",
         "- Max abs diff: final theta and omega against `sweep.run`'s, over the same "
-        "trajectories. sweep uses the polynomial sine of `sweep._vecmath` and lets LLVM "
+        "trajectories. sweep uses the polynomial sine of `sweep.kernels.vecmath` and lets LLVM "
         "fuse multiply-adds (FMA); the alternatives use libm's or glibc's vector sine "
         "(each within an ulp of sin) and fuse other products or none. This workload is "
         "chaotic (c = 0.5, A = 1.2, W = 2/3): over 2000 steps it amplifies those "
@@ -721,9 +723,9 @@ def markdown(r) -> str:
     lines += ["", "## Fast-math flags of the kernels", "",
               "The full scene with each set of numba fast-math flags (`reassoc` is never "
               "considered: it would reorder sums, drift from the NumPy oracle and break "
-              "the exact argument reduction of `sweep._vecmath.sin`). `contract` lets "
+              "the exact argument reduction of `sweep.kernels.vecmath.sin`). `contract` lets "
               "LLVM fuse a*b + c into one FMA, one rounding instead of two. The flags "
-              "apply to the kernel's own code; `sweep._vecmath.sin` is compiled once, at "
+              "apply to the kernel's own code; `sweep.kernels.vecmath.sin` is compiled once, at "
               "import, with the default flags, so every row keeps its fused sine.", "",
               "| flags | M traj-steps/s | max abs diff from the default | default |",
               "|---|---|---|---|"]

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 import sweep
-from sweep.response import frequency_response
+from sweep.maps.response import frequency_response
 
 
 def compute(points: int):

@@ -425,7 +425,7 @@ def _to_netcdf(all_results: dict[int, dict[str, xr.Dataset]], path: Path) -> Pat
     ds["case"].attrs = {"long_name": "case number in the seed notebook's table"}
     for name in ("theta0", "omega0"):
         ds[name].attrs = dict(zip(("units", "long_name"),
-                                  sweep.scene.PARAMETER_INFO[name]))
+                                  sweep.physics.PARAMETER_INFO[name]))
     ds.attrs = {
         "Conventions": "CF-1.10",
         "title": "the seed notebook's seven pendulum cases, linear and nonlinear",

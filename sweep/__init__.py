@@ -3,28 +3,31 @@
 Importing ``sweep`` compiles nothing and loads no matplotlib.
 """
 
-__version__ = "0.1.0"
-
+from ._version import __version__ as __version__
 from .engine import run as run
 from .grid import Grid as Grid
 from .grid import from_degrees as from_degrees
 from .io import load as load
 from .io import save as save
-from ._kernels import Status as Status
-from .scene import Damping as Damping
-from .scene import Forcing as Forcing
-from .scene import Scene as Scene
+from .kernels import Status as Status
+from .physics import Damping as Damping
+from .physics import Forcing as Forcing
+from .physics import Scene as Scene
 
-_LAZY_MODULES = ("plot", "io", "cli", "maps", "metrics", "methods", "accuracy")
+#: Submodules imported on first use, so that ``import sweep`` stays cheap (no
+#: matplotlib): ``sweep.plot``, ``sweep.maps``, ... ``sweep.metrics`` and
+#: ``sweep.response`` are the modules of the same name in `sweep.maps`.
+_LAZY_MODULES = {"plot": "plot", "io": "io", "cli": "cli", "maps": "maps",
+                 "metrics": "maps.metrics", "response": "maps.response",
+                 "methods": "methods", "accuracy": "accuracy"}
 
 
 def __getattr__(name):
-    """Import submodules such as `sweep.plot` on first use, so that ``import sweep``
-    stays cheap (no matplotlib)."""
+    """Import submodules such as `sweep.plot` on first use."""
     if name in _LAZY_MODULES:
         import importlib
 
-        return importlib.import_module(f".{name}", __name__)
+        return importlib.import_module(f".{_LAZY_MODULES[name]}", __name__)
     raise AttributeError(f"module 'sweep' has no attribute {name!r}")
 
 

@@ -1,7 +1,7 @@
 """The one place that sets JIT flags and execution defaults.
 
-`_kernels` reads these and nothing else; a test fails on a literal ``fastmath=`` in
-`_kernels.py`. The flags are part of every kernel's memo and disk-cache key.
+`sweep.kernels` reads these and nothing else; a test fails on a literal ``fastmath=`` in
+`sweep/kernels/`. The flags are part of every kernel's memo and disk-cache key.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import os
 from pathlib import Path
 
 #: numba ``fastmath`` flags. Never ``reassoc`` (it would let LLVM reorder sums, so
-#: results would drift from the NumPy oracle and break `sweep._vecmath`'s exact
+#: results would drift from the NumPy oracle and break `sweep.kernels.vecmath`'s exact
 #: argument reduction), nor ``nnan``/``ninf`` (non-finite states must be detected).
 #: ``contract`` lets LLVM fuse a*b + c into one FMA instruction (one rounding instead
 #: of two). Measured by ``benchmarks/run_all.py`` (its flag table): on the full scene
@@ -38,7 +38,7 @@ CHUNK_SIZE = 1 << 16
 
 
 def jit_options() -> dict:
-    """numba options of sweep's compiled helpers (`sweep._vecmath`): `FASTMATH`, in the
+    """numba options of sweep's compiled helpers (`sweep.kernels.vecmath`): `FASTMATH`, in the
     form ``njit`` accepts (a set or a bool), and `BOUNDSCHECK`."""
     fastmath = FASTMATH if isinstance(FASTMATH, bool) else set(FASTMATH)
     return {"fastmath": fastmath, "boundscheck": BOUNDSCHECK}

@@ -39,7 +39,7 @@ import numpy as np
 
 from ._validate import check_positive_int
 from .grid import Grid
-from .scene import PARAMETERS, Scene
+from .physics import PARAMETERS, Scene
 
 __all__ = [
     "jacobi_am",

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from ._version import __version__
 
 __all__ = ["DEMO", "build_parser", "main"]
 
@@ -171,7 +171,7 @@ def _run_quietly(scene, grid, **kwargs):
 
 def _summary(ds, grid, seconds: float) -> str:
     """``12 trajectories (theta0 3 x omega0 4) in 0.52 s, 0 non-finite``."""
-    from ._kernels import Status
+    from .kernels import Status
 
     shape = " x ".join(f"{name} {size}" for name, size in zip(grid.dims, grid.shape))
     failed = int(np.count_nonzero(ds.status.values != Status.OK))
@@ -194,7 +194,7 @@ def _command_run(args: argparse.Namespace) -> int:
     folder until the output file is saved; Ctrl-C then exits with status 130 and one
     line that says how to resume. The output file is only ever written whole, at the end.
     """
-    from . import checkpoint as _checkpoint
+    from .execution import checkpoint as _checkpoint
     from .io import check_output_path, save
     from .toml_spec import load_run
 
@@ -223,7 +223,7 @@ def _resume_hint(args: argparse.Namespace, folder, output: Path) -> str:
     """The end of the one-line interruption message: how to resume (or why one cannot)."""
     import shlex
 
-    from .checkpoint import _CHUNK
+    from .execution.checkpoint import _CHUNK
 
     if folder is None:
         return ("no output written; run with --checkpoint DIR (or --resume) to make a run "
@@ -254,7 +254,7 @@ def demo_inputs(size: int):
     run_kwargs : dict
     """
     from .grid import Grid
-    from .scene import Damping, Scene
+    from .physics import Damping, Scene
 
     if isinstance(size, bool) or not isinstance(size, int) or size < 2:
         raise ValueError(f"--size must be an integer >= 2 (grid points per axis), "

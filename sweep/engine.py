@@ -1,13 +1,12 @@
 """`run`: validate -> parameter table -> kernel -> chunks -> dataset.
 
-Orchestration only: the physics is in `scene`, the numbers in `_kernels`, the
+Orchestration only: the physics is in `sweep.physics`, the numbers in `sweep.kernels`, the
 dataset in `io`.
 """
 
 from __future__ import annotations
 
 import inspect
-import math
 import os
 import sys
 import time
@@ -19,15 +18,16 @@ import numpy as np
 from . import _config, io
 from . import methods as _methods
 from . import stability as _stability
-from ._kernels import (KernelSpec, Status, build, check_method_fits,
-                       check_observables_fit, n_columns)
+from ._timesteps import WHOLE_STEPS_RTOL, transient_steps, whole_steps
 from ._validate import check_positive_int, check_real
-from .distributed import allocate as _allocate
-from .distributed import integrate as _integrate
+from .execution.local import allocate as _allocate
+from .execution.local import integrate as _integrate
 from .grid import Grid
+from .kernels import (KernelSpec, Status, build, check_method_fits, check_observables_fit,
+                      n_columns)
 from .methods import METHODS
 from .observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
-from .scene import Scene
+from .physics import Scene
 
 __all__ = ["run", "warm_up", "RunSettings", "METHODS"]
 
@@ -39,11 +39,6 @@ DEFAULT_ATOL = 1e-9
 #: Smallest rtol accepted: below ~100 machine epsilons the local error estimate is
 #: round-off, and the controller would shrink the step for nothing (SciPy's floor too).
 MIN_RTOL = 100 * np.finfo(np.float64).eps
-
-# A time span must be a whole number of steps to within this relative slack:
-# (t_end - t0) / dt is computed in floating point, so 300 / 0.01 = 30000.000000000004.
-_WHOLE_STEPS_RTOL = 1e-9
-
 
 @dataclass(frozen=True)
 class RunSettings:
@@ -65,24 +60,6 @@ class RunSettings:
     def adaptive(self) -> bool:
         """True for an embedded pair (per-trajectory step-size control)."""
         return bool(self.integrator is not None and self.integrator.adaptive)
-
-
-def _steps(name: str, span: float, dt: float) -> int:
-    exact = span / dt
-    n = round(exact)
-    if abs(exact - n) > _WHOLE_STEPS_RTOL * max(1.0, exact):
-        suggestion = span / max(n, 1)
-        raise ValueError(
-            f"{name} = {span!r} is not a whole number of steps dt = {dt!r} "
-            f"({exact:.6g} steps); accepted: a dt that divides it, e.g. dt = {suggestion!r}"
-        )
-    return n
-
-
-def transient_steps(t_transient: float, dt: float) -> int:
-    """First step index n whose time ``t0 + n dt`` is >= ``t0 + t_transient`` (a
-    transient meant to end on a step counts as ending there, despite rounding)."""
-    return math.ceil(t_transient / dt - _WHOLE_STEPS_RTOL * max(1.0, t_transient / dt))
 
 
 def _available_memory() -> int:
@@ -149,7 +126,7 @@ def validate_settings(*, t_end, dt, t0, t_transient, save_every, method, rtol=No
                 f"method {integrator.name!r} takes fixed steps dt; accepted: {name}=None "
                 "with a fixed-step method, or an adaptive method"
             )
-    n_steps = _steps("t_end - t0", t_end - t0, dt)
+    n_steps = whole_steps("t_end - t0", t_end - t0, dt)
     # first step index whose time t0 + n dt is >= t0 + t_transient
     n_transient = transient_steps(t_transient, dt)
     if n_transient >= n_steps:
@@ -245,7 +222,7 @@ def _check_stroboscopic(names, scene: Scene, grid: Grid, settings) -> None:
                 raise ValueError(f"observable {name!r} needs forcing_frequency > 0, got "
                                  f"{float(frequency)!r}")
             steps = 2 * np.pi / (frequency * settings.dt)
-            if abs(steps - round(steps)) > _WHOLE_STEPS_RTOL * max(1.0, steps) * 1e3:
+            if abs(steps - round(steps)) > WHOLE_STEPS_RTOL * max(1.0, steps) * 1e3:
                 raise ValueError(
                     f"observable {name!r}: the forcing period 2 pi / {float(frequency)!r} is "
                     f"not a whole number of steps dt = {settings.dt!r} ({steps:.6g}); "
@@ -414,7 +391,7 @@ def run(
         [rad]); see `sweep.accuracy.estimate_error`.
     checkpoint : str or Path, optional
         A folder (created if missing) where each finished chunk is written atomically,
-        so that an interrupted run can be resumed (see `sweep.checkpoint`). Without
+        so that an interrupted run can be resumed (see `sweep.execution.checkpoint`). Without
         ``resume`` the folder must not hold a checkpoint already.
     resume : bool, default False
         Load the chunks already in ``checkpoint`` instead of computing them; the
@@ -468,7 +445,7 @@ def run(
         )
 
     if client is not None:
-        from . import distributed as _distributed
+        from .execution import dask as _distributed
 
         _distributed.check_client(client)
     store = _open_checkpoint(checkpoint, resume, scene=scene, grid=grid, settings=settings,
@@ -545,7 +522,7 @@ def warm_up(scene: Scene, grid: Grid, **kwargs) -> KernelSpec:
 
     Returns
     -------
-    sweep._kernels.KernelSpec
+    sweep.kernels.KernelSpec
         What was compiled.
     """
     bound = inspect.signature(run).bind(scene, grid, **kwargs)
@@ -559,7 +536,7 @@ def warm_up(scene: Scene, grid: Grid, **kwargs) -> KernelSpec:
 
 
 def _open_checkpoint(checkpoint, resume, **run):
-    """The run's `sweep.checkpoint.Checkpoint`, or None without ``checkpoint``."""
+    """The run's `sweep.execution.checkpoint.Checkpoint`, or None without ``checkpoint``."""
     if not isinstance(resume, (bool, np.bool_)):
         raise TypeError(f"resume must be True or False, got {resume!r}")
     if checkpoint is None:
@@ -571,7 +548,7 @@ def _open_checkpoint(checkpoint, resume, **run):
     if not isinstance(checkpoint, (str, os.PathLike)) or not str(checkpoint):
         raise TypeError(f"checkpoint must be None or a folder path (str or Path), got "
                         f"{checkpoint!r}")
-    from . import checkpoint as _checkpoint
+    from .execution import checkpoint as _checkpoint
 
     fp = _checkpoint.fingerprint(version=io._version(), **run)
     return _checkpoint.open_checkpoint(checkpoint, fp, resume=bool(resume))

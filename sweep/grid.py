@@ -1,7 +1,7 @@
 """Named 1-D axes whose Cartesian product is the set of trajectories of a run.
 
 A `Grid` maps to a flat parameter table (one row per trajectory, one column per
-entry of `sweep.scene.PARAMETERS`) chunk by chunk, so the table for a huge grid
+entry of `sweep.physics.PARAMETERS`) chunk by chunk, so the table for a huge grid
 never has to exist in memory at once; flat per-trajectory outputs are reshaped back
 to the grid's shape (C order: the last axis varies fastest).
 """
@@ -14,7 +14,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from ._validate import check_axis
-from .scene import PARAMETERS, Scene
+from .physics import PARAMETERS, Scene
 
 __all__ = ["Grid", "from_degrees"]
 
@@ -154,7 +154,7 @@ class Grid:
         Returns
         -------
         ndarray, shape (stop - start, len(PARAMETERS)), float64, C-contiguous
-            Columns in the order of `sweep.scene.PARAMETERS`.
+            Columns in the order of `sweep.physics.PARAMETERS`.
         """
         stop = self.size if stop is None else stop
         n = stop - start

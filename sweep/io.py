@@ -11,15 +11,15 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ._kernels import Status
+from .kernels import Status
 from .observables import OBSERVABLES
-from .scene import PARAMETER_INFO, Scene
+from .physics import PARAMETER_INFO, Scene
 
 __all__ = ["to_dataset", "save", "load", "scene_from", "run_arguments"]
 
 
 def _version() -> str:
-    from . import __version__
+    from ._version import __version__
 
     return __version__
 
@@ -32,9 +32,9 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     scene : Scene
     grid : Grid
     settings : sweep.engine.RunSettings
-    spec : sweep._kernels.KernelSpec
+    spec : sweep.kernels.KernelSpec
     out : ndarray, shape (grid.size, n_columns), float64
-        Observables in `sweep._kernels.columns` order.
+        Observables in `sweep.kernels.n_columns` order.
     status : ndarray, shape (grid.size,), int8
     saved : ndarray, shape (grid.size, 2, n_saved), float64, optional
         Sampled theta [rad] and omega [rad/s].

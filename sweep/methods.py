@@ -1,6 +1,6 @@
 """Integrators as data: Butcher tableaux, symplectic splitting coefficients, a registry.
 
-A method is a frozen, validated data object, not a loop: `sweep._kernels` generates the
+A method is a frozen, validated data object, not a loop: `sweep.kernels` generates the
 step source from the coefficients. Adding a method means adding data and a `METHODS`
 entry; ``sweep.run(..., method="rk38")`` and ``sweep.run(..., method=RK38)`` are the
 same run.

@@ -3,14 +3,14 @@
 An observable is data: the variables it writes (name, units, long name) and three
 snippets of kernel source -- ``init`` (once, with the initial state in ``th, om``),
 ``update`` (at every step whose time is >= ``t0 + t_transient``, state in ``th, om``)
-and ``final`` (once, writing ``out[i, COL + k]`` for its k-th variable). `_kernels`
+and ``final`` (once, writing ``out[i, COL + k]`` for its k-th variable). `sweep.kernels`
 pastes in only the snippets of the observables a run asks for, so a run that observes
 only the final state keeps no running maxima.
 
 Names available to the snippets: ``th, om`` (state, unwrapped angle), ``th0, om0``
 (initial state), ``L, g`` (length, gravity), ``w0sq = g/L``, ``W`` (forcing frequency),
 ``energy(th, om, w0sq)`` (the mechanical energy per unit ``m L^2`` of the scene's
-model), ``vsin``/``vcos`` (`sweep._vecmath`: vectorisable, use them rather than
+model), ``vsin``/``vcos`` (`sweep.kernels.vecmath`: vectorisable, use them rather than
 ``math.sin``/``math.cos``), ``k_state`` (step index of the state), ``dt``, ``t0`` and
 ``TWO_PI``. Snippets are per trajectory: ``out[i, ...]`` is this trajectory's row.
 

@@ -46,7 +46,7 @@ import numpy as np
 from .engine import validate_settings
 from .grid import Grid, from_degrees
 from .observables import resolve
-from .scene import PARAMETERS, Scene
+from .physics import PARAMETERS, Scene
 
 __all__ = ["ANGLE_AXES", "RUN_KEYS", "TABLES", "load_run", "parse_run"]
 

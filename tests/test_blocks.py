@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep import _kernels
-from sweep._kernels import KernelSpec, Status
+from sweep.kernels import generate as _kernels
+from sweep.kernels import KernelSpec, Status
 from sweep.methods import METHODS
 from sweep.observables import OBSERVABLES
 
@@ -27,7 +27,7 @@ def _table(n, *, damping=0.5, amplitude=1.2, frequency=2 / 3, phase=0.3):
     """n parameter rows (PARAMETERS order) with distinct starts; row 5 overflows
     (c = 1e4 is far outside RK4's stability region at this dt)."""
     rng = np.random.default_rng(7)
-    params = np.empty((n, len(sweep.scene.PARAMETERS)))
+    params = np.empty((n, len(sweep.physics.PARAMETERS)))
     params[:, 0] = rng.uniform(-np.pi, np.pi, n)
     params[:, 1] = rng.uniform(-2.0, 2.0, n)
     params[:, 2] = damping

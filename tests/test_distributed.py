@@ -96,7 +96,7 @@ def test_nonfinite_trajectories_are_flagged_as_locally(client):
 def _worker_kernel_state(spec):
     """On a worker: memo hits/misses of `build`, and numba's disk-cache statistics of
     the kernel for ``spec`` (compiled signatures count as misses)."""
-    from sweep._kernels import build
+    from sweep.kernels import build
 
     info = build.cache_info()
     stats = build(spec).stats
@@ -111,12 +111,12 @@ def test_kernel_is_not_recompiled_per_task(client):
     grid = sweep.Grid(theta0=np.linspace(-1.0, 1.0, 40), omega0=np.linspace(-1, 1, 30))
     kw = dict(t_end=10.0, dt=0.001, observe=("theta_max", "energy"), chunk_size=60)
     local = sweep.run(scene, grid, **kw)
-    before = client.run(sweep._kernels.build.cache_info)
+    before = client.run(sweep.kernels.build.cache_info)
     with distributed.get_task_stream(client) as stream:
         remote = sweep.run(scene, grid, client=client, **kw)
     _same(local, remote)
 
-    spec = sweep._kernels.KernelSpec(model="linear", damping=True, forcing=False,
+    spec = sweep.kernels.KernelSpec(model="linear", damping=True, forcing=False,
                                      observe=("theta_max", "energy"),
                                      block=sweep._config.SMALL_BLOCK)  # 1200 starts: small
     state = client.run(_worker_kernel_state, spec)

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep import _kernels
-from sweep._kernels import KernelSpec, Status
+from sweep.kernels import generate as _kernels
+from sweep.kernels import KernelSpec, Status
 
 ALL_OBSERVE = ("final", "winding", "theta_max", "amplitude", "tension", "energy")
 
@@ -72,7 +72,7 @@ def test_each_effect_set_gets_its_own_kernel_without_absent_terms():
 
 def test_compiled_kernels_have_the_scene_terms_only_and_vectorised_lanes(tmp_path):
     """The machine code, not just the source: no sine at all in the linear unforced
-    kernel; in the nonlinear one, sweep._vecmath's inlined polynomial sine (its
+    kernel; in the nonlinear one, sweep.kernels.vecmath's inlined polynomial sine (its
     argument-reduction constant 2/pi), no call to libm's sin, and SIMD vectors.
 
     numba cannot inspect code loaded from its disk cache, so this compiles afresh in a
@@ -80,7 +80,8 @@ def test_compiled_kernels_have_the_scene_terms_only_and_vectorised_lanes(tmp_pat
     """
     script = textwrap.dedent("""
         import re, struct, sweep
-        from sweep import _kernels, _vecmath
+        from sweep.kernels import generate as _kernels
+        from sweep.kernels import vecmath as _vecmath
         two_over_pi = "0x" + struct.pack(">d", _vecmath.TWO_OVER_PI).hex().upper()
         for model in ("linear", "nonlinear"):
             sweep.run(sweep.Scene(model=model), sweep.Grid(theta0=[0.1]), t_end=1.0, dt=0.1,
@@ -266,7 +267,7 @@ def test_winding_counts_net_full_turns():
 def test_fresh_process_loads_the_kernel_from_the_disk_cache(tmp_path):
     script = textwrap.dedent("""
         import sweep
-        from sweep import _kernels
+        from sweep.kernels import generate as _kernels
         sweep.run(sweep.Scene(effects=(sweep.Damping(0.1),)), sweep.Grid(theta0=[0.1]),
                   t_end=1.0, dt=0.1, observe=("final", "energy"))
         # the spec sweep.run built: a one-trajectory grid runs in small blocks

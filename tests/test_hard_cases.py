@@ -15,7 +15,7 @@ import pytest
 
 import sweep
 from sweep import accuracy, maps, stability
-from sweep._kernels import Status
+from sweep.kernels import Status
 
 special = pytest.importorskip("scipy.special")
 integrate = pytest.importorskip("scipy.integrate")

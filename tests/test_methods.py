@@ -16,7 +16,9 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep import _config, _kernels, _vecmath, engine, methods
+from sweep import _config, engine, methods
+from sweep.kernels import generate as _kernels
+from sweep.kernels import vecmath as _vecmath
 from sweep.accuracy import ellipk, exact, state_error
 from sweep.methods import METHODS, ButcherTableau, SplittingMethod
 

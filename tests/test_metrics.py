@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from sweep.metrics import (
+from sweep.maps.metrics import (
     BasinEntropy,
     basin_entropy,
     basin_fractions,

@@ -18,7 +18,7 @@ def test_import_compiles_nothing_and_loads_no_matplotlib():
 
 
 def test_jit_flags_live_only_in_config():
-    for path in ROOT.glob("*.py"):
+    for path in ROOT.rglob("*.py"):
         if path.name == "_config.py":
             continue
         text = path.read_text()

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep.response import frequency_response
+from sweep.maps.response import frequency_response
 
 # g = L = 1: omega_n = 1 rad/s. Light damping and forcing make a strongly bent resonance.
 C, A = 0.02, 0.02

@@ -22,7 +22,7 @@ import pytest
 import xarray as xr
 
 import sweep
-from sweep import checkpoint as ckpt
+from sweep.execution import checkpoint as ckpt
 from sweep import cli, engine
 from sweep.toml_spec import load_run
 

@@ -1,4 +1,4 @@
-"""The vectorisable sin of `sweep._vecmath` against NumPy's (glibc's) sin.
+"""The vectorisable sin of `sweep.kernels.vecmath` against NumPy's (glibc's) sin.
 
 Tolerance: 1e-15 absolute (about 4.5 ulp of 1), the issue's target. It is meant to
 hold with margin: the fdlibm polynomials are accurate to 2**-58 on [-pi/4, pi/4], their
@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 from numba import njit, prange
 
-from sweep import _config, _vecmath
+from sweep import _config
+from sweep.kernels import vecmath as _vecmath
 
 TOL = 1e-15
 

@@ -19,7 +19,7 @@ from hypothesis.extra import numpy as hnp
 
 import sweep
 from sweep import maps, metrics
-from sweep._kernels import Status
+from sweep.kernels import Status
 
 PROFILE = settings.get_profile("sweep-properties")
 SCENE = sweep.Scene(gravity=1.0, length=1.0)  # w = 1 rad/s

@@ -8,10 +8,11 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from . import engine, maps
-from ._validate import check_axis, check_choice, check_positive_int, check_real
-from .grid import Grid
-from .scene import Forcing, Scene
+from .. import engine
+from . import labels as maps
+from .._validate import check_axis, check_choice, check_positive_int, check_real
+from ..grid import Grid
+from ..physics import Forcing, Scene
 
 __all__ = ["frequency_response"]
 

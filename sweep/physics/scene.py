@@ -19,7 +19,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from ._validate import check_choice, check_real
+from .._validate import check_choice, check_real
 
 __all__ = ["Damping", "Forcing", "Scene", "MODELS", "PARAMETERS", "PARAMETER_INFO"]
 

@@ -67,7 +67,7 @@ def fingerprint(*, scene, grid, settings, spec, chunk_size: int, version: str) -
     scene : Scene
     grid : Grid
     settings : sweep.engine.RunSettings
-    spec : sweep._kernels.KernelSpec
+    spec : sweep.kernels.KernelSpec
     chunk_size : int
     version : str
         The sweep version.
@@ -77,7 +77,7 @@ def fingerprint(*, scene, grid, settings, spec, chunk_size: int, version: str) -
     dict
         Nested dicts of str, int, float, bool, None and lists only.
     """
-    from . import _config
+    from .. import _config
 
     integrator = settings.integrator
     fp = {
@@ -118,7 +118,7 @@ def _plain(value):
 
 
 def _is_registered(method) -> bool:
-    from .methods import METHODS
+    from ..methods import METHODS
 
     return METHODS.get(getattr(method, "name", None)) == method
 

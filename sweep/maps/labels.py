@@ -19,8 +19,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ._kernels import Status
-from .engine import transient_steps
+from ..kernels import Status
+from .._timesteps import transient_steps
 
 __all__ = ["motion", "well", "basins", "amplitude", "natural_frequency_squared",
            "UNRESOLVED"]

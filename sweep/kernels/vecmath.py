@@ -45,7 +45,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from . import _config
+from .. import _config
 
 #: The kernels' JIT flags (`sweep._config.FASTMATH`: FMA contraction), so the inlined
 #: sine fuses its multiply-adds as the kernel around it does.

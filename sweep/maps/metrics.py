@@ -271,7 +271,7 @@ def basin_fractions(labels: Any, ignore: int | Iterable[int] | None = None) -> d
     Examples
     --------
     >>> import numpy as np
-    >>> from sweep.metrics import basin_fractions
+    >>> from sweep.maps.metrics import basin_fractions
     >>> basin_fractions(np.array([[0, 0, 1, -1]]), ignore=-1)
     {0: 0.6666666666666666, 1: 0.3333333333333333}
     """
@@ -368,7 +368,7 @@ def basin_entropy(labels: Any, box_size: int = 5) -> BasinEntropy:
     Examples
     --------
     >>> import numpy as np
-    >>> from sweep.metrics import basin_entropy
+    >>> from sweep.maps.metrics import basin_entropy
     >>> checkerboard = np.indices((8, 8)).sum(axis=0) % 2
     >>> result = basin_entropy(checkerboard, box_size=4)
     >>> round(result.sb, 6), result.n_boxes, result.fractal_boundary
@@ -493,7 +493,7 @@ def uncertainty_exponent(
     Examples
     --------
     >>> import numpy as np
-    >>> from sweep.metrics import uncertainty_exponent
+    >>> from sweep.maps.metrics import uncertainty_exponent
     >>> x = np.linspace(0.0, 1.0, 256)
     >>> half_plane = np.broadcast_to(x[:, None] > 0.3, (256, 256))
     >>> round(uncertainty_exponent(half_plane).alpha, 12)
@@ -643,7 +643,7 @@ def box_counting_dimension(
     Examples
     --------
     >>> import numpy as np
-    >>> from sweep.metrics import box_counting_dimension
+    >>> from sweep.maps.metrics import box_counting_dimension
     >>> i = np.arange(256)
     >>> half_plane = np.broadcast_to(i[:, None] >= 64, (256, 256))
     >>> result = box_counting_dimension(half_plane)

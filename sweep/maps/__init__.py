@@ -1,0 +1,13 @@
+"""Maps of what each region of phase space does: pure functions ``Dataset -> DataArray``
+that read a run's stored features (they never re-run the integrator), basin metrics,
+and frequency responses by continuation.
+
+``sweep.maps.metrics`` and ``sweep.maps.response`` are also reachable as
+``sweep.metrics`` and ``sweep.response``.
+"""
+
+from .labels import (UNRESOLVED, amplitude, basins, identify_attractors, motion,
+                     natural_frequency_squared, well)
+
+__all__ = ["UNRESOLVED", "amplitude", "basins", "identify_attractors", "motion",
+           "natural_frequency_squared", "well"]
