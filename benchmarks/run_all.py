@@ -63,7 +63,7 @@ from forced_basins import machine
 
 import sweep
 from sweep import _config
-from sweep.kernels import generate as _kernels
+from sweep import kernels as _kernels
 from sweep.kernels import vecmath as _vecmath
 
 G_OVER_L, DAMPING, AMPLITUDE, FREQUENCY, PHASE = 1.0, 0.5, 1.2, 2.0 / 3.0, 0.0
@@ -458,7 +458,7 @@ def main(argv=None) -> int:
     sweep_full = thr[full_name]["traj_steps_per_s"]
 
     # the forcing sine per lane, as when the grid varies the forcing frequency or phase
-    spec = _kernels.KernelSpec("nonlinear", True, True, ("final",), shared_forcing=False)
+    spec = _kernels.KernelSpec("nonlinear", ("damping", "forcing"), ("final",), shared_forcing=False)
     run_kernel(spec, scene_of(), [0.1], [0.0], 1)
     seconds, got = timed(lambda: run_kernel(spec, scene_of(), theta0, omega0, steps))
     per_lane = "sweep: nonlinear, damping, forcing [forcing sine per lane, as when W varies]"

@@ -39,7 +39,7 @@ import numpy as np
 
 from ._validate import check_positive_int
 from .grid import Grid
-from .physics import PARAMETERS, Scene
+from .physics import Scene, parameter_names
 
 __all__ = [
     "jacobi_am",
@@ -174,10 +174,18 @@ def ellipf(phi, m: float, m1: float | None = None) -> np.ndarray:
 
 # =========================================================================== exact
 def has_exact(scene: Scene) -> bool:
-    """Whether `exact` knows the motion of ``scene`` (linear model; or nonlinear with
-    neither damping nor forcing, or both zero)."""
+    """Whether `exact` knows the motion of ``scene``: the linear model with damping and
+    forcing only (closed form), or the nonlinear model whose damping and forcing are
+    absent or zero (elliptic functions); never with any other effect."""
+    names = {effect.declaration.name for effect in scene.effects}
+    if not names <= _CLOSED_FORM_EFFECTS:
+        return False
     p = scene.parameters()
     return scene.model == "linear" or (p["damping"] == 0.0 and p["forcing_amplitude"] == 0.0)
+
+
+#: The effects the closed forms of `exact` include.
+_CLOSED_FORM_EFFECTS = frozenset({"damping", "forcing"})
 
 
 def _pendulum_exact(theta0, omega0, tau, w0):
@@ -286,8 +294,9 @@ def exact(scene: Scene, theta0, omega0, t, *, t0: float = 0.0):
         raise TypeError(f"scene must be a sweep.Scene, got {scene!r}")
     if not has_exact(scene):
         raise ValueError("no exact solution is known for a nonlinear scene with damping or "
-                         "forcing; accepted: a linear scene, a conservative nonlinear one, "
-                         "or sweep.accuracy.reference(..., kind='dopri5')")
+                         "forcing; accepted: a linear scene, a conservative nonlinear one "
+                         "(either with no effect but damping and forcing), or "
+                         "sweep.accuracy.reference(..., kind='dopri5')")
     theta0, omega0 = np.broadcast_arrays(np.atleast_1d(np.asarray(theta0, dtype=float)),
                                          np.atleast_1d(np.asarray(omega0, dtype=float)))
     tau = np.atleast_1d(np.asarray(t, dtype=np.float64)) - t0
@@ -319,7 +328,8 @@ def _sample_grid(sample) -> Grid:
 def _starts(scene: Scene, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
     """Flat theta0, omega0 of every trajectory of ``grid``, in the order of run's table."""
     table = grid.table(scene)
-    return table[:, PARAMETERS.index("theta0")], table[:, PARAMETERS.index("omega0")]
+    names = parameter_names()
+    return table[:, names.index("theta0")], table[:, names.index("omega0")]
 
 
 def reference(scene: Scene, sample, *, t_end: float, t0: float = 0.0, kind: str = "auto"):

@@ -24,10 +24,10 @@ from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
 from .grid import Grid
 from .kernels import (KernelSpec, Status, build, check_method_fits, check_observables_fit,
-                      n_columns)
+                      declarations, n_columns)
 from .methods import METHODS
 from .observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
-from .physics import Scene
+from .physics import EFFECTS, Scene
 
 __all__ = ["run", "warm_up", "RunSettings", "METHODS"]
 
@@ -230,20 +230,42 @@ def _check_stroboscopic(names, scene: Scene, grid: Grid, settings) -> None:
                     f"{2 * np.pi / (frequency * max(round(steps), 1))!r}")
 
 
-def _check_stable_step(scene: Scene, grid: Grid, settings) -> None:
+def _extremes(values: dict[str, np.ndarray]) -> list[dict[str, float]]:
+    """Every corner of the box spanned by the min and max of each parameter."""
+    corners = [{}]
+    for name, array in values.items():
+        ends = sorted({float(array.min()), float(array.max())})
+        corners = [dict(corner, **{name: end}) for corner in corners for end in ends]
+    return corners
+
+
+def _check_stable_step(scene: Scene, grid: Grid, settings, effects) -> None:
     """Refuse a fixed step beyond the method's linear stability limit (see
-    `sweep.stability`): the extremes of damping and g/L over the grid are checked."""
+    `sweep.stability`). The linearisation at the bottom is ``theta'' + C theta' + K
+    theta``, ``K = g/L`` plus each effect's declared ``linear_stiffness`` and ``C`` the
+    sum of their ``linear_damping``; both are checked at every corner of the grid's
+    parameter ranges (exact for the declared terms, which are monotone in each
+    parameter)."""
     p = scene.parameters()
+    names = ["gravity", "length"] + [a for effect in effects for a in effect.axes]
+    values = {name: np.asarray(grid.axes.get(name, [p[name]]), dtype=np.float64)
+              for name in names}
+    dampings, stiffnesses = set(), set()
+    for corner in _extremes(values):
+        c, k = 0.0, corner["gravity"] / corner["length"]
+        for effect in effects:
+            dc, dk = effect.linearisation({q.symbol: corner[q.axis] for q in effect.parameters})
+            c, k = c + dc, k + dk
+        dampings.add(c)
+        stiffnesses.add(k)
+    _stability.check(settings.integrator, settings.dt, sorted({min(dampings), max(dampings)}),
+                     sorted({min(stiffnesses), max(stiffnesses)}))
 
-    def extremes(name):
-        values = np.asarray(grid.axes.get(name, [p[name]]), dtype=np.float64)
-        return float(values.min()), float(values.max())
 
-    c_lo, c_hi = extremes("damping")
-    g_lo, g_hi = extremes("gravity")
-    l_lo, l_hi = extremes("length")
-    _stability.check(settings.integrator, settings.dt, sorted({c_lo, c_hi}),
-                     sorted({g_lo / l_hi, g_hi / l_lo}))
+def _drive_axes(effect) -> tuple[str, str]:
+    """Grid axes of a drive's frequency and phase."""
+    axis = {p.symbol: p.axis for p in effect.parameters}
+    return axis[effect.drive.frequency], axis[effect.drive.phase]
 
 
 def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, method,
@@ -270,32 +292,32 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         chunk_size = _config.CHUNK_SIZE
     check_positive_int("chunk_size", chunk_size)
 
-    effects = grid.effects(scene)
     integrator = settings.integrator
-    check_method_fits(integrator, damping="damping" in effects, forcing="forcing" in effects)
+    effects = declarations(grid.effects(scene))
+    check_method_fits(integrator, effects)
     check_observables_fit(integrator, names)
     _check_stroboscopic(names, scene, grid, settings)
     _check_stop_early(names, scene, grid, stop_early, save_every)
     if not isinstance(check_stability, (bool, np.bool_)):
         raise TypeError(f"check_stability must be True or False, got {check_stability!r}")
     if check_stability:
-        _check_stable_step(scene, grid, settings)
-    # a symplectic method's kernel has no damping or forcing terms even when not
-    # specialising: the general kernel of a conservative-only method is the conservative one
-    general = not specialize and not integrator.conservative_only
+        _check_stable_step(scene, grid, settings, effects)
+    if not specialize:  # every registered effect the method can integrate, fed zeros
+        effects = tuple(cls.declaration for cls in EFFECTS.values()
+                        if cls.declaration.conservative or not integrator.conservative_only)
     spec = KernelSpec(
         model=scene.model,
-        damping=("damping" in effects) or general,
-        forcing=("forcing" in effects) or general,
+        effects=effects,
         observe=names,
         save=save_every is not None,
         stop_early=bool(stop_early),
         method=integrator,
         block=_config.SMALL_BLOCK if stop_early or grid.size < 16 * _config.BLOCK
         else _config.BLOCK,
-        # one forcing sine per step for a whole block when no trajectory differs in it
+        # one sine per drive and step for a whole block when no trajectory differs in it
         shared_forcing=not any(grid.axes.get(name, np.zeros(1)).size > 1
-                               for name in ("forcing_frequency", "forcing_phase")),
+                               for effect in effects if effect.drive is not None
+                               for name in _drive_axes(effect)),
     )
     return settings, spec, int(chunk_size)
 

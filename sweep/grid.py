@@ -1,7 +1,7 @@
 """Named 1-D axes whose Cartesian product is the set of trajectories of a run.
 
 A `Grid` maps to a flat parameter table (one row per trajectory, one column per
-entry of `sweep.physics.PARAMETERS`) chunk by chunk, so the table for a huge grid
+parameter, `sweep.physics.parameter_names`) chunk by chunk, so the table for a huge grid
 never has to exist in memory at once; flat per-trajectory outputs are reshaped back
 to the grid's shape (C order: the last axis varies fastest).
 """
@@ -14,17 +14,9 @@ from collections.abc import Iterator
 import numpy as np
 
 from ._validate import check_axis
-from .physics import PARAMETERS, Scene
+from .physics import EFFECTS, Scene, parameter_names, parameters
 
 __all__ = ["Grid", "from_degrees"]
-
-# axis -> (bound, strict, what is accepted)
-_LOWER_BOUNDS = {
-    "length": (0.0, True, "finite numbers > 0 (m)"),
-    "gravity": (0.0, True, "finite numbers > 0 (m/s^2)"),
-    "damping": (0.0, False, "finite numbers >= 0 (1/s)"),
-    "forcing_frequency": (0.0, False, "finite numbers >= 0 (rad/s)"),
-}
 
 
 def from_degrees(values) -> np.ndarray:
@@ -52,9 +44,10 @@ class Grid:
     Parameters
     ----------
     **axes : array_like, each 1-D
-        Any of ``theta0`` [rad], ``omega0`` [rad/s], ``damping`` [1/s],
+        Any parameter name (`sweep.physics.parameter_names`): ``theta0`` [rad],
+        ``omega0`` [rad/s], ``length`` [m], ``gravity`` [m/s^2], ``damping`` [1/s],
         ``forcing_amplitude`` [rad/s^2], ``forcing_frequency`` [rad/s],
-        ``forcing_phase`` [rad], ``length`` [m], ``gravity`` [m/s^2]. The keyword order
+        ``forcing_phase`` [rad], and those of any registered effect. The keyword order
         is the dimension order of the resulting dataset. An axis overrides the scene's
         value of that parameter; ``theta0`` and ``omega0`` default to 0 when absent.
         A scalar is taken as a one-point axis.
@@ -68,27 +61,25 @@ class Grid:
     """
 
     def __init__(self, **axes) -> None:
+        declared = {p.axis: p for p in parameters()}
         if not axes:
             raise ValueError(
-                "Grid needs at least one axis; accepted axis names: " + ", ".join(PARAMETERS)
+                "Grid needs at least one axis; accepted axis names: " + ", ".join(declared)
             )
         checked = {}
         for name, values in axes.items():
-            if name not in PARAMETERS:
+            if name not in declared:
                 raise ValueError(
-                    f"unknown grid axis {name!r}; accepted axis names: {', '.join(PARAMETERS)}"
+                    f"unknown grid axis {name!r}; accepted axis names: {', '.join(declared)}"
                 )
-            checked[name] = check_axis(name, values)
-            if name in _LOWER_BOUNDS:
-                bound, strict, accepted = _LOWER_BOUNDS[name]
-                array = checked[name]
-                bad = array <= bound if strict else array < bound
-                if bad.any():
-                    raise ValueError(
-                        f"grid axis {name!r} has value {float(array[bad][0])!r} at index "
-                        f"{int(np.flatnonzero(bad)[0])}; accepted: {accepted}"
-                    )
-            checked[name].flags.writeable = False
+            array = checked[name] = check_axis(name, values)
+            bad = declared[name].is_outside(array)
+            if bad.any():
+                raise ValueError(
+                    f"grid axis {name!r} has value {float(array[bad][0])!r} at index "
+                    f"{int(np.flatnonzero(bad)[0])}; accepted: {declared[name].accepted(True)}"
+                )
+            array.flags.writeable = False
         self._axes = checked
 
     @property
@@ -118,27 +109,34 @@ class Grid:
     def check_against(self, scene: Scene) -> None:
         """Refuse axes that the scene cannot honour.
 
-        A forcing axis needs a `Forcing` in the scene (to supply the other forcing
-        parameters); a ``damping`` axis switches damping on even if the scene has none.
+        An axis of an effect the scene lacks switches that effect on when the grid
+        gives every parameter of it without a default (a ``damping`` axis switches
+        damping on); otherwise the scene must supply the effect's other parameters.
 
         Raises
         ------
         ValueError
         """
-        forcing_axes = [n for n in self.dims if n.startswith("forcing_")]
-        if forcing_axes and scene.forcing is None:
-            raise ValueError(
-                f"grid axis {forcing_axes[0]!r} needs a forcing in the scene to supply the "
-                "other forcing parameters; accepted: add sweep.Forcing(amplitude, frequency, "
-                "phase) to Scene.effects"
-            )
+        for name, effect_type in EFFECTS.items():
+            declared = effect_type.declaration.parameters
+            given = [p.axis for p in declared if p.axis in self._axes]
+            if not given or scene.effect(name) is not None:
+                continue
+            missing = [p.axis for p in declared if p.axis not in given and p.default is None]
+            if missing:
+                raise ValueError(
+                    f"grid axis {given[0]!r} needs a {name} in the scene to supply the "
+                    f"other {name} parameters; accepted: add {effect_type.signature()} to "
+                    "Scene.effects"
+                )
 
     def effects(self, scene: Scene) -> frozenset[str]:
-        """Names of the effects the run must simulate: the scene's plus ``damping``
-        when the grid has a damping axis."""
-        names = {type(e).__name__.lower() for e in scene.effects}
-        if "damping" in self.dims:
-            names.add("damping")
+        """Names of the effects the run must simulate: the scene's, plus those whose
+        parameters the grid alone gives (see `check_against`)."""
+        names = {e.declaration.name for e in scene.effects}
+        for name, effect_type in EFFECTS.items():
+            if any(p.axis in self._axes for p in effect_type.declaration.parameters):
+                names.add(name)
         return frozenset(names)
 
     def table(self, scene: Scene, start: int = 0, stop: int | None = None) -> np.ndarray:
@@ -153,20 +151,21 @@ class Grid:
 
         Returns
         -------
-        ndarray, shape (stop - start, len(PARAMETERS)), float64, C-contiguous
-            Columns in the order of `sweep.physics.PARAMETERS`.
+        ndarray, shape (stop - start, n_parameters), float64, C-contiguous
+            Columns in the order of `sweep.physics.parameter_names`.
         """
         stop = self.size if stop is None else stop
         n = stop - start
-        table = np.empty((n, len(PARAMETERS)), dtype=np.float64)
+        names = parameter_names()
+        table = np.empty((n, len(names)), dtype=np.float64)
         fixed = {"theta0": 0.0, "omega0": 0.0, **scene.parameters()}
-        for column, name in enumerate(PARAMETERS):
+        for column, name in enumerate(names):
             table[:, column] = fixed[name]
         if n == 0:
             return table
         index = np.unravel_index(np.arange(start, stop, dtype=np.int64), self.shape)
         for axis_index, (name, values) in zip(index, self._axes.items()):
-            table[:, PARAMETERS.index(name)] = values[axis_index]
+            table[:, names.index(name)] = values[axis_index]
         return table
 
     def chunks(self, chunk_size: int) -> Iterator[tuple[int, int]]:

@@ -13,7 +13,7 @@ import xarray as xr
 
 from .kernels import Status
 from .observables import OBSERVABLES
-from .physics import PARAMETER_INFO, Scene
+from .physics import EFFECTS, Scene, parameter_info
 
 __all__ = ["to_dataset", "save", "load", "scene_from", "run_arguments"]
 
@@ -44,9 +44,9 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     xarray.Dataset
     """
     dims = grid.dims
+    info = parameter_info()
     coords = {
-        name: xr.Variable(name, values, {"units": PARAMETER_INFO[name][0],
-                                         "long_name": PARAMETER_INFO[name][1]})
+        name: xr.Variable(name, values, {"units": info[name][0], "long_name": info[name][1]})
         for name, values in grid.axes.items()
     }
     data_vars = {}
@@ -89,13 +89,10 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
                                           grid.unflatten(saved[:, k, :]),
                                           {"units": units, "long_name": long_name})
 
-    simulated = [e for e in ("damping", "forcing") if getattr(spec, e)]
-    fixed = {k: v for k, v in scene.parameters().items() if k not in dims}
-    if not spec.damping:
-        fixed.pop("damping")
-    if not spec.forcing:
-        for key in ("forcing_amplitude", "forcing_frequency", "forcing_phase"):
-            fixed.pop(key)
+    simulated = [effect.name for effect in spec.effects]
+    present = {axis for effect in spec.effects for axis in effect.axes}
+    fixed = {k: v for k, v in scene.parameters().items()
+             if k not in dims and (k in ("length", "gravity") or k in present)}
     attrs = {
         "Conventions": "CF-1.10",
         "title": "pendulum parameter sweep",
@@ -103,7 +100,7 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
         "history": f"{datetime.datetime.now(datetime.UTC).isoformat(timespec='seconds')}"
                    f" created by sweep {_version()}",
         "sweep_version": _version(),
-        "equation": "theta'' = A sin(W t + phase) - c theta' - (g/L) f(theta)",
+        "equation": equation(),
         "model": scene.model,
         "effects": " ".join(simulated) if simulated else "none",
         **{name: float(value) for name, value in fixed.items()},
@@ -120,6 +117,12 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     if settings.save_every is not None:
         attrs["save_every"] = settings.save_every
     return xr.Dataset(data_vars, coords, attrs)
+
+
+def equation() -> str:
+    """The equation of motion with the term of every registered effect, as text."""
+    terms = " ".join(cls.declaration.equation for cls in EFFECTS.values())
+    return f"theta'' = - (g/L) f(theta) {terms}".rstrip()
 
 
 def scene_from(ds: xr.Dataset) -> Scene:

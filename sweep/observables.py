@@ -12,7 +12,8 @@ Names available to the snippets: ``th, om`` (state, unwrapped angle), ``th0, om0
 ``energy(th, om, w0sq)`` (the mechanical energy per unit ``m L^2`` of the scene's
 model), ``vsin``/``vcos`` (`sweep.kernels.vecmath`: vectorisable, use them rather than
 ``math.sin``/``math.cos``), ``k_state`` (step index of the state), ``dt``, ``t0`` and
-``TWO_PI``. Snippets are per trajectory: ``out[i, ...]`` is this trajectory's row.
+``TWO_PI``; the text ``TENSION_TERMS`` becomes the rod-tension terms the scene's effects
+declare (nothing for damping and forcing). Snippets are per trajectory: ``out[i, ...]`` is this trajectory's row.
 
 Every variable that lives from one snippet to the next (set in ``init``, read in
 ``update``, ``settled`` or ``final``) is declared in ``state`` with its dtype: the
@@ -271,7 +272,7 @@ OBSERVABLES: dict[str, Observable] = {
             ),
             init="acc_T_min = math.inf\nacc_T_max = -math.inf",
             update=(
-                "tension = L * om * om + g * vcos(th)\n"
+                "tension = L * om * om + g * vcos(th)TENSION_TERMS\n"
                 "acc_T_min = min(acc_T_min, tension)\n"
                 "acc_T_max = max(acc_T_max, tension)"
             ),

@@ -4,8 +4,8 @@ A run file has three tables::
 
     [scene]                      # Scene.from_dict: gravity, length, model
     gravity = 9.81               # m/s^2
-    [scene.damping]              # optional effect
-    coefficient = 0.5            # 1/s
+    [scene.damping]              # optional effect: [scene.<effect name>] with the
+    coefficient = 0.5            # 1/s    effect's constructor arguments as keys
     [scene.forcing]              # optional effect
     amplitude = 1.2              # rad/s^2
     frequency = 0.6667           # rad/s
@@ -28,7 +28,8 @@ A run file has three tables::
     chunk_size = 1000            # trajectories per chunk (progress and checkpoints)
 
 ``units = "deg"`` is accepted for the angle-like axes ``theta0`` (deg),
-``omega0`` (deg/s) and ``forcing_phase`` (deg); values are converted to radians
+``omega0`` (deg/s), ``forcing_phase`` (deg) and any effect parameter declared as an
+angle; values are converted to radians
 with `sweep.from_degrees`. Every error is a ValueError (or TypeError for a wrong
 type) whose message names the file, the table and the key.
 """
@@ -46,9 +47,9 @@ import numpy as np
 from .engine import validate_settings
 from .grid import Grid, from_degrees
 from .observables import resolve
-from .physics import PARAMETERS, Scene
+from .physics import Scene, parameter_names, parameters
 
-__all__ = ["ANGLE_AXES", "RUN_KEYS", "TABLES", "load_run", "parse_run"]
+__all__ = ["RUN_KEYS", "angle_axes", "TABLES", "load_run", "parse_run"]
 
 #: Top-level tables of a run file.
 TABLES = ("scene", "grid", "run")
@@ -60,16 +61,20 @@ RUN_KEYS = ("t_end", "dt", "t0", "t_transient", "observe", "save_every", "method
 #: Keys of ``[run]`` that must be present.
 REQUIRED_RUN_KEYS = ("t_end", "dt")
 
-#: Grid axes that accept ``units = "deg"`` (theta0 and forcing_phase in deg,
-#: omega0 in deg/s).
-ANGLE_AXES = ("theta0", "omega0", "forcing_phase")
+#: Accepted ``units`` of an angular velocity axis; the value says whether it means
+#: degrees (per second).
+_RATE_UNITS = {"rad/s": False, "rad": False, "deg/s": True, "deg": True}
 
-#: Accepted ``units`` per angle axis; the value says whether it means degrees.
-_UNITS = {
-    "theta0": {"rad": False, "deg": True},
-    "omega0": {"rad/s": False, "rad": False, "deg/s": True, "deg": True},
-    "forcing_phase": {"rad": False, "deg": True},
-}
+
+def angle_axes() -> tuple[str, ...]:
+    """Grid axes that accept ``units = "deg"``: the parameters declared as angles
+    (theta0, omega0 in deg/s, forcing_phase, and any registered effect's)."""
+    return tuple(p.axis for p in parameters() if p.angle)
+
+
+def _units(name: str) -> dict[str, bool]:
+    """Accepted ``units`` of an angle axis; the value says whether it means degrees."""
+    return _RATE_UNITS if name == "omega0" else {"rad": False, "deg": True}
 
 _RANGE_KEYS = ("start", "stop", "num")
 
@@ -186,10 +191,11 @@ def _scene(source: str, table: dict) -> Scene:
 
 def _grid(source: str, table: dict) -> Grid:
     """``[grid]`` -> Grid, axes in file order."""
-    _check_keys(source, "[grid]", table, PARAMETERS)
+    names = parameter_names()
+    _check_keys(source, "[grid]", table, names)
     if not table:
         raise ValueError(f"{source}: [grid] has no axes; accepted axis names: "
-                         f"{', '.join(PARAMETERS)}")
+                         f"{', '.join(names)}")
     axes = {name: _axis(source, name, value) for name, value in table.items()}
     with _context(source, "grid"):
         return Grid(**axes)
@@ -220,7 +226,7 @@ def _numbers(source: str, name: str, values: list) -> list:
 
 def _axis_table(source: str, name: str, table: dict) -> np.ndarray:
     """``{start, stop, num[, units]}`` or ``{values[, units]}`` -> axis values."""
-    accepted = _RANGE_KEYS + ("values",) + (("units",) if name in ANGLE_AXES else ())
+    accepted = _RANGE_KEYS + ("values",) + (("units",) if name in angle_axes() else ())
     _check_keys(source, f"[grid.{name}]", table, accepted)
     if "values" in table:
         extra = [key for key in _RANGE_KEYS if key in table]
@@ -255,7 +261,7 @@ def _number(source: str, key: str, value: Any) -> float:
 
 
 def _is_degrees(source: str, name: str, units: Any) -> bool:
-    accepted = _UNITS[name]
+    accepted = _units(name)
     if units not in accepted:
         raise ValueError(f"{source}: [grid.{name}] units must be one of "
                          f"{', '.join(map(repr, accepted))}, got {units!r}")

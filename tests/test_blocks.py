@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep.kernels import generate as _kernels
+from sweep import kernels as _kernels
 from sweep.kernels import KernelSpec, Status
 from sweep.methods import METHODS
 from sweep.observables import OBSERVABLES
@@ -24,20 +24,21 @@ ALL_OBSERVE = ("final", "winding", "theta_max", "amplitude", "omega_mean", "tens
 
 
 def _table(n, *, damping=0.5, amplitude=1.2, frequency=2 / 3, phase=0.3):
-    """n parameter rows (PARAMETERS order) with distinct starts; row 5 overflows
-    (c = 1e4 is far outside RK4's stability region at this dt)."""
+    """n parameter rows (`sweep.physics.parameter_names` order) with distinct starts;
+    row 5 overflows (c = 1e4 is far outside RK4's stability region at this dt)."""
     rng = np.random.default_rng(7)
-    params = np.empty((n, len(sweep.physics.PARAMETERS)))
-    params[:, 0] = rng.uniform(-np.pi, np.pi, n)
-    params[:, 1] = rng.uniform(-2.0, 2.0, n)
-    params[:, 2] = damping
-    params[:, 3] = amplitude
-    params[:, 4] = frequency
-    params[:, 5] = phase
-    params[:, 6] = 1.0
-    params[:, 7] = 1.0
+    column = {name: k for k, name in enumerate(sweep.physics.parameter_names())}
+    params = np.empty((n, len(column)))
+    params[:, column["theta0"]] = rng.uniform(-np.pi, np.pi, n)
+    params[:, column["omega0"]] = rng.uniform(-2.0, 2.0, n)
+    params[:, column["damping"]] = damping
+    params[:, column["forcing_amplitude"]] = amplitude
+    params[:, column["forcing_frequency"]] = frequency
+    params[:, column["forcing_phase"]] = phase
+    params[:, column["length"]] = 1.0
+    params[:, column["gravity"]] = 1.0
     if n > 5:
-        params[5, 2] = 1e4
+        params[5, column["damping"]] = 1e4
     return params
 
 
@@ -66,7 +67,7 @@ def _assert_same(a, b):
 @pytest.mark.parametrize("shared", [False, True])
 def test_forced_run_with_every_observable_and_saving_is_the_same_for_any_blocking(shared):
     params = _table(77)  # not a multiple of any block size: the last block is padded
-    specs = [KernelSpec("nonlinear", True, True, ALL_OBSERVE, save=True, block=block,
+    specs = [KernelSpec("nonlinear", ("damping", "forcing"), ALL_OBSERVE, save=True, block=block,
                         shared_forcing=shared) for block in (8, 64, 256)]
     reference = _call(specs[0], params, save_every=7)
     out, status, saved = reference
@@ -77,18 +78,19 @@ def test_forced_run_with_every_observable_and_saving_is_the_same_for_any_blockin
         _assert_same(_call(spec, params, save_every=7), reference)
     _assert_same(_one_by_one(specs[1], params, save_every=7), reference)
     # the shared sine is the per-lane sine, evaluated once: the same bits
-    per_lane = KernelSpec("nonlinear", True, True, ALL_OBSERVE, save=True,
+    per_lane = KernelSpec("nonlinear", ("damping", "forcing"), ALL_OBSERVE, save=True,
                           shared_forcing=not shared)
     _assert_same(_call(per_lane, params, save_every=7), reference)
 
 
 def test_frequencies_that_differ_per_trajectory_are_each_honoured():
     params = _table(40)
-    params[:, 4] = np.linspace(0.5, 1.5, 40)  # forcing_frequency differs per lane
-    spec = KernelSpec("nonlinear", True, True, ("final", "amplitude"))
+    params[:, sweep.physics.parameter_names().index("forcing_frequency")] = \
+        np.linspace(0.5, 1.5, 40)  # forcing_frequency differs per lane
+    spec = KernelSpec("nonlinear", ("damping", "forcing"), ("final", "amplitude"))
     _assert_same(_call(spec, params), _one_by_one(spec, params))
     # and one frequency per call, with the shared sine, is the same again
-    shared = KernelSpec("nonlinear", True, True, ("final", "amplitude"), shared_forcing=True)
+    shared = KernelSpec("nonlinear", ("damping", "forcing"), ("final", "amplitude"), shared_forcing=True)
     _assert_same(_one_by_one(shared, params), _call(spec, params))
 
 
@@ -98,7 +100,7 @@ def test_early_stop_is_the_same_for_any_blocking(observe, forcing):
     params[5, 2] = 0.2
     references = None
     for block in (8, 64):
-        spec = KernelSpec("nonlinear", True, forcing, observe, stop_early=True, block=block,
+        spec = KernelSpec("nonlinear", ("damping",) + ("forcing",) * forcing, observe, stop_early=True, block=block,
                           shared_forcing=forcing)
         got = _call(spec, params, n_transient=0)
         if references is None:
@@ -116,14 +118,14 @@ def test_every_fixed_step_method_is_the_same_for_any_blocking(method):
     params = _table(30, damping=0.0 if conservative else 0.5)
     if conservative:
         params[5, 2] = 0.0
-    spec = [KernelSpec("nonlinear", not conservative, not conservative, ("final", "energy"),
+    spec = [KernelSpec("nonlinear", () if conservative else ("damping", "forcing"), ("final", "energy"),
                        method=method, block=block) for block in (8, 128)]
     _assert_same(_call(spec[0], params), _call(spec[1], params))
 
 
 def test_thread_count_does_not_matter_within_a_call():
     params = _table(300)
-    spec = KernelSpec("nonlinear", True, True, ALL_OBSERVE, block=8)
+    spec = KernelSpec("nonlinear", ("damping", "forcing"), ALL_OBSERVE, block=8)
     before = numba.get_num_threads()
     try:
         numba.set_num_threads(1)
@@ -139,7 +141,7 @@ def test_lane_code_never_writes_a_row_of_out_directly():
     """Padding lanes repeat the last trajectory's row index; only the final copy of
     real lanes may touch ``out`` (snippets write the block's row buffer)."""
     for name, obs in OBSERVABLES.items():
-        spec = KernelSpec("nonlinear", True, bool(obs.requires_forcing), (name,),
+        spec = KernelSpec("nonlinear", ("damping",) + ("forcing",) * obs.requires_forcing, (name,),
                           stop_early=bool(obs.settled))
         text = _kernels.source(spec)
         assert re.findall(r"\bout\[", text) == ["out["], name
@@ -158,4 +160,4 @@ def test_every_observable_declares_the_state_it_keeps():
 
 def test_block_must_be_a_multiple_of_eight():
     with pytest.raises(ValueError, match=r"block must be a positive multiple of 8, got 12"):
-        KernelSpec("linear", False, False, ("final",), block=12)
+        KernelSpec("linear", (), ("final",), block=12)

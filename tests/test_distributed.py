@@ -116,7 +116,7 @@ def test_kernel_is_not_recompiled_per_task(client):
         remote = sweep.run(scene, grid, client=client, **kw)
     _same(local, remote)
 
-    spec = sweep.kernels.KernelSpec(model="linear", damping=True, forcing=False,
+    spec = sweep.kernels.KernelSpec(model="linear", effects=("damping",),
                                      observe=("theta_max", "energy"),
                                      block=sweep._config.SMALL_BLOCK)  # 1200 starts: small
     state = client.run(_worker_kernel_state, spec)

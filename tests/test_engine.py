@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep.kernels import generate as _kernels
+from sweep import kernels as _kernels
 from sweep.kernels import KernelSpec, Status
 
 ALL_OBSERVE = ("final", "winding", "theta_max", "amplitude", "tension", "energy")
@@ -57,15 +57,16 @@ def test_specialised_kernel_equals_general_kernel_fed_zeros(model, damping, forc
 
 
 def test_each_effect_set_gets_its_own_kernel_without_absent_terms():
-    specs = [KernelSpec(m, d, f, ("final",)) for m, d, f in COMBINATIONS]
+    specs = [KernelSpec(m, ("damping",) * d + ("forcing",) * f, ("final",))
+             for m, d, f in COMBINATIONS]
     kernels = [_kernels.build(s) for s in specs]
     assert len({id(k) for k in kernels}) == len(specs)  # one compiled kernel per effect set
     assert _kernels.build(specs[0]) is kernels[0]  # memoised
     for spec in specs:
         text = _kernels.source(spec)
         assert ("vsin(th)" in text) == (spec.model == "nonlinear")
-        assert ("vsin(W" in text) == spec.forcing
-        assert ("c * om" in text) == spec.damping
+        assert ("vsin(W" in text) == ("forcing" in spec.names)
+        assert ("c * om" in text) == ("damping" in spec.names)
         # only the requested observables are accumulated
         assert "acc_" not in text and "tension" not in text
 
@@ -80,14 +81,14 @@ def test_compiled_kernels_have_the_scene_terms_only_and_vectorised_lanes(tmp_pat
     """
     script = textwrap.dedent("""
         import re, struct, sweep
-        from sweep.kernels import generate as _kernels
+        from sweep import kernels as _kernels
         from sweep.kernels import vecmath as _vecmath
         two_over_pi = "0x" + struct.pack(">d", _vecmath.TWO_OVER_PI).hex().upper()
         for model in ("linear", "nonlinear"):
             sweep.run(sweep.Scene(model=model), sweep.Grid(theta0=[0.1]), t_end=1.0, dt=0.1,
                       observe=("final",))
             # the spec sweep.run compiled (a one-trajectory grid runs in small blocks)
-            kernel = _kernels.build(_kernels.KernelSpec(model, False, False, ("final",),
+            kernel = _kernels.build(_kernels.KernelSpec(model, (), ("final",),
                                                         block=sweep._config.SMALL_BLOCK))
             ir = "".join(kernel.inspect_llvm().values())
             assert ir, "not compiled in this process"
@@ -115,7 +116,7 @@ def test_grid_damping_axis_switches_damping_on():
 def test_unknown_method_lists_choices():
     with pytest.raises(ValueError,
                        match=r"method must be one of 'euler', 'heun', 'rk4', .*, got 'euler2'"):
-        _kernels.source(KernelSpec("linear", False, False, ("final",), method="euler2"))
+        _kernels.source(KernelSpec("linear", (), ("final",), method="euler2"))
 
 
 # --------------------------------------------------------------------- invariance
@@ -267,11 +268,11 @@ def test_winding_counts_net_full_turns():
 def test_fresh_process_loads_the_kernel_from_the_disk_cache(tmp_path):
     script = textwrap.dedent("""
         import sweep
-        from sweep.kernels import generate as _kernels
+        from sweep import kernels as _kernels
         sweep.run(sweep.Scene(effects=(sweep.Damping(0.1),)), sweep.Grid(theta0=[0.1]),
                   t_end=1.0, dt=0.1, observe=("final", "energy"))
         # the spec sweep.run built: a one-trajectory grid runs in small blocks
-        kernel = _kernels.build(_kernels.KernelSpec("nonlinear", True, False,
+        kernel = _kernels.build(_kernels.KernelSpec("nonlinear", ("damping",),
                                                     ("final", "energy"),
                                                     block=sweep._config.SMALL_BLOCK))
         print(sum(kernel.stats.cache_hits.values()), sum(kernel.stats.cache_misses.values()))

@@ -46,7 +46,7 @@ CASES = [
     # grid
     ("no axes", lambda: sweep.Grid(), ValueError, r"Grid needs at least one axis; accepted"),
     ("unknown axis", lambda: sweep.Grid(gama=[1.0]), ValueError,
-     r"unknown grid axis 'gama'; accepted axis names: theta0, omega0, damping"),
+     r"unknown grid axis 'gama'; accepted axis names: theta0, omega0, length, gravity, damping"),
     ("empty axis", lambda: sweep.Grid(theta0=[]), ValueError,
      r"grid axis 'theta0' is empty; accepted: at least one value"),
     ("nan in axis", lambda: sweep.Grid(omega0=[0.0, np.nan]), ValueError,

@@ -17,7 +17,7 @@ import pytest
 
 import sweep
 from sweep import _config, engine, methods
-from sweep.kernels import generate as _kernels
+from sweep import kernels as _kernels
 from sweep.kernels import vecmath as _vecmath
 from sweep.accuracy import ellipk, exact, state_error
 from sweep.methods import METHODS, ButcherTableau, SplittingMethod
@@ -190,7 +190,8 @@ def test_generated_kernels_contain_only_the_scene_terms(method):
                                                      (False, True)):
         if conservative and (damping or forcing):
             continue
-        spec = _kernels.KernelSpec(model, damping, forcing, ("final",), method=method)
+        spec = _kernels.KernelSpec(model, ("damping",) * damping + ("forcing",) * forcing, ("final",),
+                                     method=method)
         text = _kernels.source(spec)
         assert ("vsin(th)" in text) == (model == "nonlinear")
         assert ("vsin(W" in text) == forcing
@@ -199,8 +200,8 @@ def test_generated_kernels_contain_only_the_scene_terms(method):
 
 
 def test_a_method_by_name_or_by_object_is_the_same_kernel_and_run():
-    spec_name = _kernels.KernelSpec("nonlinear", False, False, ("final",), method="rk38")
-    spec_object = _kernels.KernelSpec("nonlinear", False, False, ("final",),
+    spec_name = _kernels.KernelSpec("nonlinear", (), ("final",), method="rk38")
+    spec_object = _kernels.KernelSpec("nonlinear", (), ("final",),
                                       method=methods.RK38)
     assert spec_name == spec_object and _kernels.build(spec_name) is _kernels.build(spec_object)
     grid = sweep.Grid(theta0=[0.5, 1.5])
@@ -277,7 +278,7 @@ def test_methods_that_do_not_fit_are_refused_before_compute(label, kwargs, messa
 
 
 def test_kernel_spec_refuses_symplectic_with_effects():
-    spec = _kernels.KernelSpec("nonlinear", True, False, ("final",), method="verlet")
+    spec = _kernels.KernelSpec("nonlinear", ("damping",), ("final",), method="verlet")
     with pytest.raises(ValueError, match=r"method 'verlet' is symplectic .* kernel spec has "
                                          r"damping"):
         _kernels.source(spec)
@@ -483,7 +484,7 @@ def test_dopri5_overflow_is_flagged_not_raised():
 
 def test_observables_on_the_step_grid_are_refused_with_an_adaptive_method(no_compute):
     grid_bound = [name for name, obs in sweep.observables.OBSERVABLES.items()
-                  if _kernels._STEP_GRID_NAMES.search(obs.init + obs.update + obs.final)]
+                  if _kernels.spec.STEP_GRID_NAMES.search(obs.init + obs.update + obs.final)]
     if not grid_bound:
         pytest.skip("no observable samples the fixed step grid")
     name = grid_bound[0]

@@ -1,12 +1,21 @@
-"""Compiled kernels: generated source per (model, effects, observables, method), the
-vectorised math they call, and the cache that compiles each at most once per machine.
+"""Compiled kernels: source generated from the effects' declarations, the method's data
+and the observables' snippets, the vectorised math it calls, and the cache that
+compiles each kernel at most once per machine.
+
+Modules, each one concern: `spec` (what a kernel is built for, status codes, fit
+checks), `terms` (the physics as source, from `sweep.physics`), `steppers` (one step of
+a method, from `sweep.methods`), `snippets` (observables), `lanes` (per-lane code of a
+block), `fixed` and `adaptive` (the two kernel bodies), `source` (the module text),
+`cache` (build, memo, disk cache), `vecmath` (vectorisable sin/cos).
 
 Reads `sweep.physics`, `sweep.methods` and `sweep.observables`; nothing here imports
 the engine, the execution back ends or the maps.
 """
 
-from .generate import (KernelSpec, Status, build, check_method_fits, check_observables_fit,
-                       method_of, n_columns, source)
+from .cache import build
+from .source import source
+from .spec import (KernelSpec, Status, check_method_fits, check_observables_fit, declarations,
+                   method_of, n_columns)
 
 __all__ = ["KernelSpec", "Status", "build", "check_method_fits", "check_observables_fit",
-           "method_of", "n_columns", "source"]
+           "declarations", "method_of", "n_columns", "source"]

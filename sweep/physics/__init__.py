@@ -1,5 +1,24 @@
-"""The physics of a sweep: the pendulum, its parameters and the effects acting on it."""
+"""The physics of a sweep: the pendulum, its parameters and the effects acting on it.
 
-from .scene import MODELS, PARAMETER_INFO, PARAMETERS, Damping, Forcing, Scene
+``PARAMETERS`` and ``PARAMETER_INFO`` are computed on access (an effect registered
+later adds its parameters); code inside sweep calls `parameter_names` and
+`parameter_info`.
+"""
 
-__all__ = ["Damping", "Forcing", "MODELS", "PARAMETERS", "PARAMETER_INFO", "Scene"]
+from .effect import (EFFECTS, Drive, Effect, EffectDeclaration, Parameter, register,
+                     unregister)
+from .effects import Damping, Forcing
+from .scene import (BASE_PARAMETERS, MODELS, Scene, parameter_info, parameter_names,
+                    parameter_table, parameters)
+
+__all__ = ["BASE_PARAMETERS", "Damping", "Drive", "EFFECTS", "Effect", "EffectDeclaration",
+           "Forcing", "MODELS", "PARAMETERS", "PARAMETER_INFO", "Parameter", "Scene",
+           "parameter_info", "parameter_names", "parameter_table", "parameters", "register", "unregister"]
+
+
+def __getattr__(name):
+    if name == "PARAMETERS":
+        return parameter_names()
+    if name == "PARAMETER_INFO":
+        return parameter_info()
+    raise AttributeError(f"module 'sweep.physics' has no attribute {name!r}")

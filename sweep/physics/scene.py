@@ -1,13 +1,13 @@
-"""The physics of a sweep: a pendulum and the effects acting on it.
+"""The scene: a pendulum, its model and the effects acting on it.
 
 The equation of motion is
 
-    theta'' = A sin(W t + phase) - c theta' - (g / L) f(theta)
+    theta'' = - (g / L) f(theta) + (the terms of the effects present)
 
 with ``f = sin`` for the ``"nonlinear"`` model and ``f(theta) = theta`` for the
-``"linear"`` (small-angle) model. Gravity is always present; damping (``c``) and
-forcing (``A``, ``W``, ``phase``) are *effects*: a scene simulates only the effects
-it lists, and the compiled kernel contains no term for an absent effect.
+``"linear"`` (small-angle) model. Gravity is always present; damping, forcing and any
+other registered effect (`sweep.physics.effects`) are simulated only when the scene
+lists them: the compiled kernel contains no term for an absent effect.
 
 Everything here is frozen, validated, hashable dataclasses, so a scene can key the
 kernel memo; nothing here compiles or computes.
@@ -20,88 +20,73 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .._validate import check_choice, check_real
+from .effect import EFFECTS, Effect, Parameter
+from .effects import Damping, Forcing
 
-__all__ = ["Damping", "Forcing", "Scene", "MODELS", "PARAMETERS", "PARAMETER_INFO"]
+__all__ = ["BASE_PARAMETERS", "Damping", "Forcing", "MODELS", "Scene", "parameter_info",
+           "parameter_names", "parameter_table", "parameters"]
 
 #: Valid values of ``Scene.model``.
 MODELS = ("nonlinear", "linear")
 
-#: Every per-trajectory parameter, in the column order of the kernel's table.
-PARAMETERS = (
-    "theta0",
-    "omega0",
-    "damping",
-    "forcing_amplitude",
-    "forcing_frequency",
-    "forcing_phase",
-    "length",
-    "gravity",
+#: The parameters every trajectory has, whatever its effects: the initial state and
+#: the pendulum (their columns come first in the parameter table).
+BASE_PARAMETERS = (
+    Parameter("theta0", "theta0", "th0", "rad", "rad", "initial angle from the downward "
+              "vertical", default=0.0, angle=True),
+    Parameter("omega0", "omega0", "om0", "rad s-1", "rad/s", "initial angular velocity",
+              default=0.0, angle=True),
+    Parameter("length", "length", "L", "m", "m", "pendulum length L", minimum=0.0,
+              strict=True),
+    Parameter("gravity", "gravity", "g", "m s-2", "m/s^2", "gravitational acceleration g",
+              minimum=0.0, strict=True),
 )
 
-#: Units (UDUNITS strings) and long names of every parameter.
-PARAMETER_INFO = {
-    "theta0": ("rad", "initial angle from the downward vertical"),
-    "omega0": ("rad s-1", "initial angular velocity"),
-    "damping": ("s-1", "viscous damping coefficient c = C/m"),
-    "forcing_amplitude": ("rad s-2", "forcing amplitude A (angular acceleration)"),
-    "forcing_frequency": ("rad s-1", "forcing angular frequency W"),
-    "forcing_phase": ("rad", "forcing phase (A sin(W t + phase))"),
-    "length": ("m", "pendulum length L"),
-    "gravity": ("m s-2", "gravitational acceleration g"),
-}
+
+def parameters() -> tuple[Parameter, ...]:
+    """Every per-trajectory parameter, in the column order of the kernel's table: the
+    base parameters, then each registered effect's, in registration order."""
+    return BASE_PARAMETERS + tuple(p for cls in EFFECTS.values()
+                                   for p in cls.declaration.parameters)
 
 
-@dataclass(frozen=True)
-class Damping:
-    """Linear viscous damping, the term ``-c theta'``.
-
-    Parameters
-    ----------
-    coefficient : float
-        ``c = C/m`` in 1/s (the seed's ``ksi``); finite and >= 0.
-    """
-
-    coefficient: float
-
-    def __post_init__(self) -> None:
-        object.__setattr__(
-            self,
-            "coefficient",
-            check_real("Damping.coefficient", self.coefficient, minimum=0.0,
-                       accepted="a finite number >= 0 (1/s)"),
-        )
+def parameter_names() -> tuple[str, ...]:
+    """Names (grid axes, table columns) of `parameters`, in column order."""
+    return tuple(p.axis for p in parameters())
 
 
-@dataclass(frozen=True)
-class Forcing:
-    """Harmonic forcing, the term ``A sin(W t + phase)``.
-
-    Parameters
-    ----------
-    amplitude : float
-        ``A`` in rad/s^2 (force per unit ``m L``); finite.
-    frequency : float
-        ``W`` in rad/s; finite and >= 0.
-    phase : float, default 0
-        In rad; ``phase = pi/2`` gives ``A cos(W t)``, the convention of most literature.
-    """
-
-    amplitude: float
-    frequency: float
-    phase: float = 0.0
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "amplitude", check_real("Forcing.amplitude", self.amplitude))
-        object.__setattr__(
-            self,
-            "frequency",
-            check_real("Forcing.frequency", self.frequency, minimum=0.0,
-                       accepted="a finite number >= 0 (rad/s)"),
-        )
-        object.__setattr__(self, "phase", check_real("Forcing.phase", self.phase))
+def parameter_info() -> dict[str, tuple[str, str]]:
+    """``{name: (units, long_name)}`` of every parameter (UDUNITS units)."""
+    return {p.axis: (p.units, p.long_name) for p in parameters()}
 
 
-_EFFECT_TYPES = (Damping, Forcing)
+def parameter_table() -> str:
+    """The README's table of the scene's effects and parameters, as Markdown, written
+    from the declarations (a test checks that the README holds it)."""
+    rows = ["| effect | term in theta'' | conservative | argument | grid axis | units | "
+            "meaning |", "|---|---|---|---|---|---|---|"]
+    state, pendulum = BASE_PARAMETERS[:2], BASE_PARAMETERS[2:]
+    groups = [("initial state", "", "", [(p, "(grid only)") for p in state]),
+              ("`Scene` (always)", "- (g/L) f(theta)", "yes",
+               [(p, f"`{p.field}`") for p in pendulum])]
+    groups += [(f"`{cls.__name__}`", cls.declaration.equation,
+                "yes" if cls.declaration.conservative else "no",
+                [(p, f"`{p.field}`") for p in cls.declaration.parameters])
+               for cls in EFFECTS.values()]
+    for effect, term, conservative, params in groups:
+        for k, (p, argument) in enumerate(params):
+            head = (effect, term, conservative) if k == 0 else ("", "", "")
+            rows.append(f"| {' | '.join(head)} | {argument} | `{p.axis}` | {p.unit_text} | "
+                        f"{p.long_name} |")
+    return "\n".join(rows) + "\n"
+
+
+def _effect_types() -> tuple[type[Effect], ...]:
+    return tuple(EFFECTS.values())
+
+
+def _accepted_effects() -> str:
+    return ", ".join(cls.signature() for cls in _effect_types())
 
 
 @dataclass(frozen=True)
@@ -117,8 +102,9 @@ class Scene:
         also enter the rod tension ``T/m = L theta'^2 + g cos(theta)``.
     model : {"nonlinear", "linear"}
         ``"linear"`` replaces ``sin(theta)`` by ``theta`` (small-angle model).
-    effects : tuple of Damping and Forcing, default ()
-        At most one of each. Only the effects listed are simulated.
+    effects : tuple of effects, default ()
+        `Damping`, `Forcing` (any registered effect), at most one of each. Only the
+        effects listed are simulated.
 
     Examples
     --------
@@ -142,33 +128,32 @@ class Scene:
                                                       strict=True, accepted=positive + " (m)"))
         check_choice("model", self.model, MODELS)
         effects = self.effects
-        if isinstance(effects, _EFFECT_TYPES):
+        if isinstance(effects, Effect):
             effects = (effects,)
         if not isinstance(effects, (tuple, list)):
-            raise TypeError(
-                f"effects must be a tuple of sweep.Damping / sweep.Forcing, got {effects!r}"
-            )
+            raise TypeError(f"effects must be a tuple of effects ({_accepted_effects()}), "
+                            f"got {effects!r}")
+        order = _effect_types()
         seen = set()
         for effect in effects:
-            if not isinstance(effect, _EFFECT_TYPES):
-                raise TypeError(
-                    f"effects: {effect!r} is not an effect; accepted: sweep.Damping(c), "
-                    "sweep.Forcing(amplitude, frequency, phase)"
-                )
+            if not isinstance(effect, order):
+                raise TypeError(f"effects: {effect!r} is not an effect; accepted: "
+                                f"{_accepted_effects()}")
             if type(effect) in seen:
                 raise ValueError(
                     f"effects: {type(effect).__name__} given twice; accepted: at most one of each"
                 )
             seen.add(type(effect))
         # canonical order, so that equal scenes compare and hash equal
-        effects = tuple(sorted(effects, key=lambda e: _EFFECT_TYPES.index(type(e))))
+        effects = tuple(sorted(effects, key=lambda e: order.index(type(e))))
         object.__setattr__(self, "effects", effects)
 
     # -- which effects are present ------------------------------------------------
-    def effect(self, kind: type) -> Any:
-        """Return the effect of type ``kind`` in this scene, or None."""
+    def effect(self, kind: type | str) -> Any:
+        """The effect of type (or declared name) ``kind`` in this scene, or None."""
         for effect in self.effects:
-            if isinstance(effect, kind):
+            if (effect.declaration.name == kind if isinstance(kind, str)
+                    else isinstance(effect, kind)):
                 return effect
         return None
 
@@ -195,28 +180,22 @@ class Scene:
         Returns
         -------
         dict
-            Keys are `PARAMETERS` minus ``theta0``/``omega0``.
+            Keys are `parameter_names` minus ``theta0``/``omega0``.
         """
-        damping, forcing = self.damping, self.forcing
-        return {
-            "damping": damping.coefficient if damping else 0.0,
-            "forcing_amplitude": forcing.amplitude if forcing else 0.0,
-            "forcing_frequency": forcing.frequency if forcing else 0.0,
-            "forcing_phase": forcing.phase if forcing else 0.0,
-            "length": self.length,
-            "gravity": self.gravity,
-        }
+        values = {"length": self.length, "gravity": self.gravity}
+        for cls in _effect_types():
+            values.update({p.axis: 0.0 for p in cls.declaration.parameters})
+        for effect in self.effects:
+            values.update(effect.values())
+        return values
 
     def to_dict(self) -> dict[str, Any]:
         """A plain, JSON- and TOML-friendly description (see `Scene.from_dict`)."""
         out: dict[str, Any] = {"gravity": self.gravity, "length": self.length,
                                "model": self.model}
-        if self.damping:
-            out["damping"] = {"coefficient": self.damping.coefficient}
-        if self.forcing:
-            f = self.forcing
-            out["forcing"] = {"amplitude": f.amplitude, "frequency": f.frequency,
-                              "phase": f.phase}
+        for effect in self.effects:
+            out[effect.declaration.name] = {p.field: getattr(effect, p.field)
+                                            for p in effect.declaration.parameters}
         return out
 
     @classmethod
@@ -230,7 +209,7 @@ class Scene:
         """
         if not isinstance(spec, dict):
             raise ValueError(f"scene: expected a table of settings, got {spec!r}")
-        accepted = ("gravity", "length", "model", "damping", "forcing")
+        accepted = ("gravity", "length", "model") + tuple(EFFECTS)
         unknown = sorted(set(spec) - set(accepted))
         if unknown:
             raise ValueError(
@@ -238,13 +217,10 @@ class Scene:
                 f"accepted: {', '.join(accepted)}"
             )
         effects = []
-        if "damping" in spec:
-            d = spec["damping"]
-            effects.append(Damping(**_table("scene.damping", d, ("coefficient",))))
-        if "forcing" in spec:
-            f = spec["forcing"]
-            effects.append(Forcing(**_table("scene.forcing", f,
-                                            ("amplitude", "frequency", "phase"))))
+        for name, effect_type in EFFECTS.items():
+            if name in spec:
+                fields = tuple(p.field for p in effect_type.declaration.parameters)
+                effects.append(effect_type(**_table(f"scene.{name}", spec[name], fields)))
         kwargs = {k: spec[k] for k in ("gravity", "length", "model") if k in spec}
         return cls(effects=tuple(effects), **kwargs)
 

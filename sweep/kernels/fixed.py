@@ -1,0 +1,227 @@
+"""The fixed-step kernel: trajectories in blocks of SIMD lanes (time at step n is
+``t0 + n dt``).
+
+Trajectories go in blocks of ``spec.block`` SIMD lanes (one ``prange`` iteration per
+block); the time loop is outside and the lane loop inside, so the lane loop is
+straight-line arithmetic that LLVM vectorises (``vsin`` is branch-free). A partial last
+block is padded with copies of the last trajectory, so every lane runs the same code
+whatever the number of trajectories, blocks, chunks or threads: the results do not
+depend on how the work is cut. Per-lane state lives in small arrays ``lane_<name>``;
+observables write a per-block row buffer ``obuf``.
+
+Non-finite states are detected once, at the end (or when a trajectory stops early): a
+NaN never becomes finite again in this arithmetic (an infinite angle or velocity turns
+into NaN within a step), so the status is the same as with a test after every step,
+and samples saved after the failure are set to NaN.
+"""
+
+from __future__ import annotations
+
+import textwrap
+from dataclasses import dataclass, field
+
+from ..observables import OBSERVABLES
+from .lanes import IDENTIFIER, indent, lane_loop, lane_snippet
+from .snippets import snippets, stop_source
+from .spec import KernelSpec, Status, n_columns
+from .steppers import STEPPERS
+from .terms import column_of, drive_sine
+
+__all__ = ["fixed_kernel"]
+
+NL = "\n"
+
+
+@dataclass
+class _Drives:
+    """The drives' sines, as block lines (shared by the block) or lane lines."""
+
+    init: list[str] = field(default_factory=list)   # before the first step
+    step: list[str] = field(default_factory=list)   # at the start of every step
+    carry: list[str] = field(default_factory=list)  # at the end of every step
+    values: list[str] = field(default_factory=list)  # lane lines: value = amplitude * sine
+    names: list[str] = field(default_factory=list)  # sine variables
+
+
+def _drives(parts: dict) -> _Drives:
+    """The sines ``s<value> = sin(W t + phi)`` of every drive node, and the lane lines
+    that form the values ``<value> = A * s<value>``.
+
+    Either way (block or lane) the step loop reads them as plain values and forms the
+    product itself, so LLVM fuses the same products into FMAs and both forms give the
+    same bits (a test checks it).
+    """
+    drives = _Drives()
+    for key, triples in (("init", parts["drive_init"]), ("step", parts["drive_step"])):
+        getattr(drives, key).extend(f"s{name} = {drive_sine(effect, at)}"
+                                    for effect, name, at in triples)
+    drives.carry = [f"s{dst} = s{src}" for dst, src in parts["drive_carry"]]
+    for effect, name, _ in parts["drive_init"] + parts["drive_step"]:
+        drives.values.append(f"{name} = {effect.drive.amplitude} * s{name}")
+        drives.names.append(f"s{name}")
+    return drives
+
+
+def _parameters(spec: KernelSpec) -> tuple[list[str], list[str]]:
+    """Kernel symbols read per lane and per block.
+
+    Every parameter is read per lane (no slower, and a product such as A * sin(...) is
+    then never hoisted out of the lane loop, which would change where LLVM contracts
+    it into an FMA, and the last bits of the result), except each drive's frequency
+    and phase when the drive sines are shared by the block.
+    """
+    per_lane, shared = ["L", "g", "w0sq"], []
+    for effect in spec.effects:
+        block_level = (effect.drive.frequency, effect.drive.phase) \
+            if spec.shared_forcing and effect.drive is not None else ()
+        for symbol in effect.symbols:
+            (shared if symbol in block_level else per_lane).append(symbol)
+    return per_lane, shared
+
+
+def _load(spec: KernelSpec, symbol: str, row: str) -> str:
+    return "w0sq = g / L" if symbol == "w0sq" else \
+        f"{symbol} = params[{row}, {column_of(spec, symbol)}]"
+
+
+def _first_lines(spec: KernelSpec, parts: dict, per_lane: list[str], lane_sines: list[str],
+                 update: str) -> list[str]:
+    """Once per lane: parameters, initial state, observables' init, first save."""
+    first = ["i = min(base + j, n - 1)  # padding lanes repeat the last trajectory",
+             _load(spec, "th0", "i"), _load(spec, "om0", "i")] + \
+        [_load(spec, p, "i") for p in per_lane] + \
+        ["th = th0", "om = om0", lane_snippet(snippets(spec, "init"))]
+    if update:
+        first += ["if n_transient <= 0:", indent(update, 1)]
+    if spec.save:
+        first += ["if base + j < n:", "    saved[base + j, 0, 0] = th",
+                  "    saved[base + j, 1, 0] = om"]
+    first += parts["before"] + lane_sines
+    if spec.stop_early:
+        first += ["done = False", "th_stop = th", "om_stop = om"]
+    return first
+
+
+def _observe_parts(spec: KernelSpec, update: str) -> tuple[str, str, str]:
+    """Observables' update (steady window) and the early-stop test, per lane: the block
+    template, the lane-loop head and the lane-loop body."""
+    if not update:
+        return "", "", ""
+    body, head = update, ""
+    if spec.stop_early:
+        head = "    if lane_done[j]:\n        continue\n"
+        body += NL + lane_snippet(stop_source(
+            spec, action="done = True\nth_stop = th\nom_stop = om\nn_done += 1"))
+    block = "if step + 1 >= n_transient:\n{loop}"
+    if spec.stop_early:
+        block += "\n    if n_done == BLOCK:\n        break"
+    return block, head, body
+
+
+_SAVE_BLOCK = textwrap.dedent("""\
+    if (step + 1) % save_every == 0:
+        k_save = (step + 1) // save_every
+        for j in range(n_real):
+            saved[base + j, 0, k_save] = lane_th[j]
+            saved[base + j, 1, k_save] = lane_om[j]""")
+
+_FAIL_SAVED = textwrap.dedent("""\
+    for k_save in range(saved.shape[2]):
+        for q in range(2):
+            if not math.isfinite(saved[i, q, k_save]):
+                saved[i, q, k_save] = math.nan""")
+
+
+def _finish(spec: KernelSpec) -> str:
+    """Per real lane: status, observables' final values, copy to ``out``."""
+    width = n_columns(spec)
+    final = lane_snippet(snippets(spec, "final"))
+    stop_state = "if done:\n    th = th_stop\n    om = om_stop\n" if spec.stop_early else ""
+    return f"""i = base + j
+{stop_state}if math.isfinite(th) and math.isfinite(om):
+    status[i] = {int(Status.OK)}
+{indent(final, 1) or "    pass"}
+else:
+    status[i] = {int(Status.NONFINITE)}
+    for col in range({width}):
+        obuf[j, col] = math.nan
+{indent(_FAIL_SAVED if spec.save else "", 1)}
+for col in range({width}):
+    out[i, col] = obuf[j, col]"""
+
+
+def _lane_dtypes(spec: KernelSpec, parts: dict, per_lane: list[str],
+                 lane_sines: list[str]) -> dict[str, str]:
+    """Every lane variable (name -> dtype): state, per-lane parameters, carried values,
+    per-lane drive sines, observable state, early-stop bookkeeping."""
+    lane = {"th": "float64", "om": "float64", "th0": "float64", "om0": "float64"}
+    lane.update({p: "float64" for p in per_lane})
+    lane.update({name: "float64" for name in parts["carried"]})
+    for name in spec.observe:
+        lane.update(dict(OBSERVABLES[name].state))
+    if spec.stop_early:
+        lane.update({"done": "bool_", "th_stop": "float64", "om_stop": "float64"})
+    lane.update({name: "float64" for name in lane_sines})
+    return lane
+
+
+def fixed_kernel(spec: KernelSpec, method) -> str:
+    """Kernel body of a fixed-step method (see the module docstring)."""
+    parts = STEPPERS[method.kind](spec, method)
+    per_lane, shared = _parameters(spec)
+    drives = _drives(parts)
+    shared_sine = spec.shared_forcing
+    block_init, block_step, block_after = (drives.init, drives.step, drives.carry) \
+        if shared_sine else ([], [], [])
+    update = lane_snippet(snippets(spec, "update"))
+    first = _first_lines(spec, parts, per_lane, [] if shared_sine else drives.init, update)
+    step_body = drives.values + parts["step"]
+    step_stores = ["th", "om"] + parts["carried"]
+    observe_block, observe_head, observe_body = _observe_parts(spec, update)
+    finish = _finish(spec)
+    lane = _lane_dtypes(spec, parts, per_lane, [] if shared_sine else drives.names)
+    # lane arrays only for what the loops after the first one read
+    later = set(IDENTIFIER.findall(NL.join(step_body + drives.step + drives.carry +
+                                           [observe_head, observe_body, finish])))
+    lane = {name: dtype for name, dtype in lane.items() if name in later}
+    init_loop = lane_loop(NL.join(first), lane, level=2, load=False)
+    step_loop = lane_loop(NL.join(step_body), lane, level=3,
+                          stores=[name for name in lane if name in step_stores])
+    if not shared_sine and drives.step:
+        step_loop = lane_loop(NL.join(drives.step), lane, level=3) + NL + step_loop
+    if not shared_sine and drives.carry:
+        step_loop += NL + lane_loop(NL.join(drives.carry), lane, level=3)
+    if observe_block:
+        observe_block = observe_block.format(loop=lane_loop(observe_body, lane, level=1,
+                                                            head=observe_head))
+    finish_loop = lane_loop(finish, lane, level=2, stores=[], count="n_real")
+    allocate = [f"lane_{name} = np.empty(BLOCK, dtype=np.{dtype})"
+                for name, dtype in lane.items()]
+    return f'''
+BLOCK = {spec.block}
+
+
+@njit(parallel=True, **JIT)
+def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
+    TWO_PI = 2.0 * math.pi
+    n = params.shape[0]
+{indent(NL.join(parts["preamble"]), 1)}
+    for b in prange((n + BLOCK - 1) // BLOCK):
+        base = b * BLOCK
+        n_real = min(BLOCK, n - base)
+{indent(NL.join(_load(spec, p, "base") for p in shared), 2)}
+{indent(NL.join(allocate), 2)}
+        obuf = np.empty((BLOCK, {n_columns(spec)}))
+        k_state = 0
+        n_done = 0
+{init_loop}
+{indent(NL.join(block_init), 2)}
+        for step in range(n_steps):
+{indent(NL.join(block_step), 3)}
+{step_loop}
+{indent(NL.join(block_after), 3)}
+            k_state = step + 1
+{indent(observe_block, 3)}
+{indent(_SAVE_BLOCK if spec.save else "", 3)}
+{finish_loop}
+'''

@@ -1,0 +1,38 @@
+"""Lanes of a block: per-trajectory code inside the fixed-step kernel's blocks of SIMD
+lanes, with per-lane state in small arrays ``lane_<name>``."""
+
+from __future__ import annotations
+
+import re
+import textwrap
+
+__all__ = ["ASSIGNED", "IDENTIFIER", "indent", "lane_loop", "lane_snippet"]
+
+IDENTIFIER = re.compile(r"\b[A-Za-z_]\w*\b")
+ASSIGNED = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:[-+*/]?=)(?!=)", re.MULTILINE)
+
+
+def lane_snippet(code: str) -> str:
+    """A per-trajectory snippet inside a block: ``out[i, ...]`` becomes the block's
+    row buffer ``obuf[j, ...]`` (padding lanes then write nowhere shared)."""
+    return code.replace("out[i,", "obuf[j,")
+
+
+def lane_loop(body: str, lane: dict[str, str], *, level: int, head: str = "",
+              stores: list[str] | None = None, count: str = "BLOCK",
+              load: bool = True) -> str:
+    """``for j in range(count):`` around ``body``: loads each lane variable the body
+    reads from its array ``lane_<name>[j]`` first (unless ``load`` is False) and
+    stores back those it assigns (or ``stores``)."""
+    used = set(IDENTIFIER.findall(body)) if load else set()
+    loads = [f"{name} = lane_{name}[j]" for name in lane if name in used]
+    if stores is None:
+        stores = [name for name in lane if name in set(ASSIGNED.findall(body))]
+    lines = loads + [body] + [f"lane_{name}[j] = {name}" for name in stores]
+    return indent(f"for j in range({count}):\n{head}" + indent("\n".join(lines), 1),
+                  level)
+
+
+def indent(code: str, level: int) -> str:
+    """``code`` indented by ``level`` levels of four spaces ("" stays "")."""
+    return textwrap.indent(code, "    " * level) if code else ""

@@ -1,0 +1,47 @@
+"""The observables' snippets pasted into a kernel, and the early-stop test."""
+
+from __future__ import annotations
+
+from ..observables import OBSERVABLES
+from .lanes import indent
+from .spec import KernelSpec
+from .terms import tension_terms
+
+__all__ = ["snippets", "stop_source"]
+
+
+def snippets(spec: KernelSpec, part: str) -> str:
+    """Concatenate one part (init/update/final) of every observed observable, with
+    ``COL`` replaced by the observable's first column and ``TENSION_TERMS`` by the
+    effects' rod-tension terms."""
+    lines, col = [], 0
+    extra = tension_terms(spec)
+    for name in spec.observe:
+        obs = OBSERVABLES[name]
+        code = getattr(obs, part)
+        if code:
+            code = code.replace("COL", str(col)).replace("TENSION_TERMS", extra)
+            lines.append(f"# {name}\n" + code)
+        col += obs.n_columns
+    return "\n".join(lines)
+
+
+def stop_source(spec: KernelSpec, action: str = "break") -> str:
+    """Early stop (spec.stop_early): each observable's ``settled`` snippet sets its own
+    flag; ``action`` runs when all flags are set."""
+    if not spec.stop_early:
+        return ""
+    lines, flags, col = [], [], 0
+    for name in spec.observe:
+        obs = OBSERVABLES[name]
+        if not obs.settled:
+            raise ValueError(f"observable {name!r} has no settled test, so a trajectory "
+                             "cannot stop early; accepted with stop_early: "
+                             + ", ".join(n for n, o in OBSERVABLES.items() if o.settled))
+        flag = f"settled_{len(flags)}"
+        flags.append(flag)
+        lines.append(f"# {name} settled?\n"
+                     + obs.settled.replace("COL", str(col)).replace("SETTLED", flag))
+        col += obs.n_columns
+    lines.append(f"if {' and '.join(flags)}:\n" + indent(action, 1))
+    return "\n".join(lines)

@@ -1,0 +1,203 @@
+"""What a kernel is built for (`KernelSpec`), what it reports per trajectory (`Status`),
+and the checks that a method and observables fit a scene."""
+
+from __future__ import annotations
+
+import enum
+import re
+from dataclasses import dataclass
+
+from .. import _config
+from .. import methods as _methods
+from ..observables import OBSERVABLES
+from ..physics import EFFECTS, EffectDeclaration
+
+__all__ = ["KernelSpec", "Status", "check_method_fits", "check_observables_fit",
+           "declarations", "method_of", "n_columns"]
+
+
+class Status(enum.IntEnum):
+    """Per-trajectory outcome stored in the dataset's ``status`` variable."""
+
+    OK = 0
+    NONFINITE = 1
+
+    @property
+    def message(self) -> str:
+        """What the code means, for users."""
+        return _STATUS_MESSAGES[self]
+
+
+_STATUS_MESSAGES = {
+    Status.OK: "integrated to t_end",
+    Status.NONFINITE: "state became non-finite (overflow or NaN), or an adaptive step "
+                      "underflowed; integration stopped",
+}
+
+
+def declarations(effects) -> tuple[EffectDeclaration, ...]:
+    """Effect declarations in canonical order from names, effect classes or
+    instances, or declarations (registered ones in registration order, then the rest).
+
+    Raises
+    ------
+    ValueError
+        On an unknown effect name.
+    """
+    found = []
+    for effect in effects:
+        if isinstance(effect, str):
+            if effect not in EFFECTS:
+                raise ValueError(f"unknown effect {effect!r}; accepted: "
+                                 f"{', '.join(map(repr, EFFECTS))}")
+            effect = EFFECTS[effect].declaration
+        elif not isinstance(effect, EffectDeclaration):
+            effect = effect.declaration
+        if effect not in found:
+            found.append(effect)
+    order = [cls.declaration for cls in EFFECTS.values()]
+    return tuple(sorted(found, key=lambda d: order.index(d) if d in order else len(order)))
+
+
+@dataclass(frozen=True)
+class KernelSpec:
+    """Everything that changes the compiled code (and nothing that does not).
+
+    Attributes
+    ----------
+    model : {"nonlinear", "linear"}
+    effects : tuple of EffectDeclaration
+        The effects whose terms exist, in canonical order; given as names (``"damping"``),
+        effect classes or declarations.
+    observe : tuple of str
+        Observable names in canonical (`OBSERVABLES`) order.
+    save : bool
+        Whether sampled trajectories are written.
+    method : str or sweep.methods.ButcherTableau or sweep.methods.SplittingMethod
+        Integrator: a `sweep.methods.METHODS` name or a method object. A registry
+        object is stored as its name, so ``method=RK4`` and ``method="rk4"`` share one
+        kernel; an unknown name is refused by `sweep.kernels.source`.
+    stop_early : bool
+        Stop each trajectory as soon as every observed observable says its answer is
+        settled (only observables with a ``settled`` snippet; see `sweep.observables`).
+    shared_forcing : bool
+        True when the frequency and phase of every drive (an effect's harmonic signal,
+        such as the forcing's ``sin(W t + phase)``) are the same for every trajectory
+        of a call: the fixed-step kernel then evaluates each drive's sine once per step
+        for a whole block instead of once per lane (the same arithmetic, so the same
+        results; a test checks it). False (the default) is right for any parameter
+        table; `sweep.run` sets it when its grid has no drive frequency or phase axis.
+    block : int
+        Trajectories per block of the fixed-step kernel (SIMD lanes; a multiple of 8).
+        Results do not depend on it (a test checks it); `_config.BLOCK` by default.
+    """
+
+    model: str
+    effects: tuple
+    observe: tuple[str, ...]
+    save: bool = False
+    method: object = "rk4"
+    stop_early: bool = False
+    shared_forcing: bool = False
+    block: int = None
+
+    def __post_init__(self) -> None:
+        method = self.method
+        if not isinstance(method, str) and \
+                _methods.METHODS.get(getattr(method, "name", None)) == method:
+            object.__setattr__(self, "method", method.name)
+        object.__setattr__(self, "effects", declarations(self.effects))
+        object.__setattr__(self, "shared_forcing", bool(self.shared_forcing and self.drives))
+        block = _config.BLOCK if self.block is None else self.block
+        if not isinstance(block, int) or block < 8 or block % 8:
+            raise ValueError(f"block must be a positive multiple of 8, got {block!r}")
+        object.__setattr__(self, "block", block)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Names of its effects, in canonical order."""
+        return tuple(effect.name for effect in self.effects)
+
+    @property
+    def drives(self) -> tuple[EffectDeclaration, ...]:
+        """Its effects that have a harmonic drive."""
+        return tuple(effect for effect in self.effects if effect.drive is not None)
+
+    def describe(self) -> str:
+        """A one-line description for the generated module's docstring."""
+        return (f"model={self.model!r}, effects={self.names!r}, observe={self.observe!r}, "
+                f"save={self.save!r}, method={self.method!r}, stop_early={self.stop_early!r}, "
+                f"shared_forcing={self.shared_forcing!r}, block={self.block!r}")
+
+
+def n_columns(spec: KernelSpec) -> int:
+    """Width of ``out``: every column of every observed observable, in observe order
+    (an observable with samples > 1 fills ``samples`` columns per variable)."""
+    return sum(OBSERVABLES[name].n_columns for name in spec.observe)
+
+
+def method_of(spec: KernelSpec):
+    """The method object of ``spec`` (registry name resolved)."""
+    if isinstance(spec.method, str):
+        if spec.method not in _methods.METHODS:
+            raise ValueError(f"method must be one of "
+                             f"{', '.join(map(repr, _methods.METHODS))}, got {spec.method!r}")
+        return _methods.METHODS[spec.method]
+    return _methods.resolve(spec.method)
+
+
+# Names of the fixed-step kernel that an observable snippet may rely on (the step grid);
+# an adaptive kernel has no such grid, so observables using them are refused there.
+STEP_GRID_NAMES = re.compile(r"\b(dt|step|k_state|n_steps|n_transient|save_every)\b")
+
+
+def check_observables_fit(method, observe) -> None:
+    """Refuse observables that sample the fixed step grid under an adaptive method.
+
+    Raises
+    ------
+    ValueError
+        Naming the observable, the method and what is accepted.
+    """
+    if not method.adaptive:
+        return
+    for name in observe:
+        obs = OBSERVABLES[name]
+        if any(STEP_GRID_NAMES.search(getattr(obs, part)) for part in
+               ("init", "update", "final")):
+            fixed = ", ".join(repr(n) for n, m in _methods.METHODS.items() if not m.adaptive)
+            raise ValueError(
+                f"observable {name!r} is defined on the fixed step grid (t0 + n dt), which "
+                f"the adaptive method {method.name!r} does not have; accepted: a fixed-step "
+                f"method ({fixed}), or observe without {name!r}"
+            )
+
+
+def check_method_fits(method, effects, *, where: str = "the scene") -> None:
+    """Refuse a method that does not fit the scene's effects (a symplectic method with a
+    non-conservative effect such as damping or forcing), naming the method, the effects
+    and what is accepted.
+
+    Parameters
+    ----------
+    method : method object
+    effects : iterable of effect names, classes or declarations
+
+    Raises
+    ------
+    ValueError
+    """
+    if not method.conservative_only:
+        return
+    offending = [effect.name for effect in declarations(effects) if not effect.conservative]
+    if offending:
+        dissipative = [name for name, cls in EFFECTS.items()
+                       if not cls.declaration.conservative]
+        others = ", ".join(repr(n) for n, m in _methods.METHODS.items()
+                           if not m.conservative_only)
+        raise ValueError(
+            f"method {method.name!r} is symplectic and integrates only conservative scenes "
+            f"(no {', no '.join(dissipative)}), but {where} has {' and '.join(offending)}; "
+            f"accepted: a scene (and grid) without {' and '.join(dissipative)}, or one of "
+            f"{others}"
+        )

@@ -1,0 +1,150 @@
+"""One step of a method, from its data: an explicit Runge-Kutta step from its Butcher
+tableau, a kick-drift sequence from a splitting method's coefficients.
+
+RK4 included: the generated code performs exactly the operations of the classical
+hand-written step, ``th + (dt/6) * (k1 + 2 k2 + 2 k3 + k4)`` etc., so there is no
+separate fast path.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from math import lcm
+
+from .spec import KernelSpec, check_method_fits
+from .terms import accel_call, drive_nodes, float_literal
+
+__all__ = ["STEPPERS", "at_node", "combination", "explicit_stepper", "rk_stages",
+           "symplectic_stepper"]
+
+
+def at_node(drives: dict, c) -> dict[str, str]:
+    """``{effect name: variable}`` of every drive's value at node ``c``."""
+    return {name: nodes[c] for name, nodes in drives.items() if c in nodes}
+
+
+# Rows whose exact (Fraction) coefficients share a denominator up to this size are
+# written as (dt / D) * (n1 k1 + n2 k2 + ...), with small integers n: for RK4 that is
+# exactly the classical hand-written step, operation for operation.
+_MAX_COMMON_DENOMINATOR = 1000
+
+
+def combination(coeffs, names, scale: str, constants: dict[str, str] | None):
+    """Source of ``scale * sum(coeffs[j] * names[j])`` over the non-zero coefficients,
+    or None when they are all zero.
+
+    With ``constants`` (a dict filled with preamble lines), exact rows with a small
+    common denominator D become ``dt_D * (n1 * x1 + ...)`` with ``dt_D = dt / D``
+    computed once per kernel call; otherwise ``scale * (c1 * x1 + ...)`` with the
+    coefficients as float literals.
+    """
+    terms = [(x, name) for x, name in zip(coeffs, names) if x != 0]
+    if not terms:
+        return None
+    exact = all(isinstance(x, Fraction) for x, _ in terms)
+    if constants is not None and exact:
+        denominator = lcm(*(x.denominator for x, _ in terms))
+        if denominator <= _MAX_COMMON_DENOMINATOR:
+            if denominator == 1:
+                factor = scale
+            else:
+                factor = f"{scale}_{denominator}"
+                constants[factor] = f"{factor} = {scale} / {float(denominator)!r}"
+            parts = []
+            for x, name in terms:
+                n = int(x * denominator)
+                sign = "-" if n < 0 else "+"
+                body = name if abs(n) == 1 else f"{float(abs(n))!r} * {name}"
+                parts.append((sign, body))
+            text = ("-" if parts[0][0] == "-" else "") + parts[0][1]
+            for sign, body in parts[1:]:
+                text += f" {sign} {body}"
+            return f"{factor} * {text}" if len(parts) == 1 else f"{factor} * ({text})"
+    text = ""
+    for x, name in terms:
+        body = f"{float_literal(abs(x))} * {name}"
+        text += (("-" if x < 0 else "") + body) if not text else \
+            (f" - {body}" if x < 0 else f" + {body}")
+    return f"{scale} * ({text})"
+
+
+def rk_stages(spec: KernelSpec, tableau, scale: str, constants, drives: dict) -> list[str]:
+    """Stage lines k_it, k_io (k_it = omega at stage i, since theta' = omega)."""
+    lines = []
+    for i in range(tableau.stages):
+        row = tableau.a[i][:i]
+        kt = [f"k{j + 1}t" for j in range(i)]
+        ko = [f"k{j + 1}o" for j in range(i)]
+        dth = combination(row, kt, scale, constants)
+        dom = combination(row, ko, scale, constants)
+        lines.append(f"k{i + 1}t = " + (f"om + {dom}" if dom else "om"))
+        lines.append(f"k{i + 1}o = " + accel_call(
+            spec, f"th + {dth}" if dth else "th", f"k{i + 1}t", at_node(drives, tableau.c[i])))
+    return lines
+
+
+def explicit_stepper(spec: KernelSpec, tableau) -> dict[str, list]:
+    """One fixed step of an explicit Runge-Kutta method, from its tableau.
+
+    Returns the parts `sweep.kernels.fixed` assembles: ``preamble`` (constants, once
+    per call), ``drive_init`` and ``drive_step`` ((effect, variable, time) triples
+    evaluated before the first step and at the start of every step), ``drive_carry``
+    ((destination, source) pairs copied at the end of every step), ``before`` (lane
+    lines before the first step), ``step`` (lane lines of one step) and ``carried``
+    (lane variables that live from one step to the next besides th, om).
+    """
+    constants: dict[str, str] = {}
+    c = tableau.c
+    drives, nodes = drive_nodes(spec, c, time="", step="step", scale="dt",
+                                constants=constants)
+    init, pairs = [], []
+    if 0 in c and 1 in c:  # a drive's value at t_{n+1} is the next step's value at t_n
+        for effect in spec.drives:
+            first = drives[effect.name][Fraction(0)]
+            nodes = [node for node in nodes if node[1] != first]  # from the last step
+            init.append((effect, first, "t0"))
+            pairs.append((first, drives[effect.name][Fraction(1)]))
+    step = rk_stages(spec, tableau, "dt", constants, drives)
+    kt = [f"k{j + 1}t" for j in range(tableau.stages)]
+    ko = [f"k{j + 1}o" for j in range(tableau.stages)]
+    step.append(f"th = th + {combination(tableau.b, kt, 'dt', constants)}")
+    step.append(f"om = om + {combination(tableau.b, ko, 'dt', constants)}")
+    return {"preamble": list(constants.values()), "drive_init": init,
+            "drive_step": nodes, "drive_carry": pairs, "before": [], "step": step,
+            "carried": []}
+
+
+def symplectic_stepper(spec: KernelSpec, method) -> dict[str, list[str]]:
+    """One kick-drift step; the force is re-evaluated only after a drift moved theta."""
+    check_method_fits(method, spec.effects, where="the kernel spec")  # a guard
+    constants, step, stale = {}, [], False
+    force = f"acc = {accel_call(spec, 'th', 'om', {})}"
+
+    def scaled(kind, x):
+        if x == 1:
+            return "dt"
+        line = f"dt * {float_literal(x)}"
+        for name, known in constants.items():
+            if known.endswith(f" = {line}"):
+                return name
+        name = f"{kind}{len(constants)}"
+        constants[name] = f"{name} = {line}"
+        return name
+
+    for kick, drift in zip(method.kick, method.drift):
+        if kick != 0:
+            if stale:
+                step.append(force)
+                stale = False
+            step.append(f"om = om + {scaled('kick', kick)} * acc")
+        if drift != 0:
+            step.append(f"th = th + {scaled('drift', drift)} * om")
+            stale = True
+    if stale:
+        step.append(force)
+    return {"preamble": list(constants.values()), "drive_init": [], "drive_step": [],
+            "drive_carry": [], "before": [force], "step": step, "carried": ["acc"]}
+
+
+#: How each kind of fixed-step method becomes kernel source (keyed by ``method.kind``).
+STEPPERS = {"explicit": explicit_stepper, "symplectic": symplectic_stepper}

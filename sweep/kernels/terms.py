@@ -1,0 +1,136 @@
+"""The physics as kernel source, read from the effect declarations: the acceleration
+with only the scene's terms, the energy, the drives' values at stage times, and the
+loads of parameters from the table."""
+
+from __future__ import annotations
+
+from ..physics import BASE_PARAMETERS, EffectDeclaration, parameter_names
+from .lanes import IDENTIFIER
+from .spec import KernelSpec
+
+__all__ = ["accel_call", "accel_source", "column_of", "drive_line", "drive_nodes",
+           "drive_sine", "energy_source", "float_literal", "load_lines", "symbols",
+           "tension_terms"]
+
+def float_literal(x) -> str:
+    """``repr(float(x))``: an exact literal of a coefficient."""
+    return repr(float(x))
+
+
+def symbols(spec: KernelSpec) -> dict[str, str]:
+    """``{kernel symbol: parameter name}`` of the base parameters and the spec's effects."""
+    found = {p.symbol: p.axis for p in BASE_PARAMETERS}
+    for effect in spec.effects:
+        found.update({p.symbol: p.axis for p in effect.parameters})
+    return found
+
+
+def column_of(spec: KernelSpec, symbol: str) -> int:
+    """Column of the parameter table holding kernel variable ``symbol``."""
+    return parameter_names().index(symbols(spec)[symbol])
+
+
+def _accel_args(effect: EffectDeclaration) -> list[str]:
+    """The names its term reads: its symbols (declaration order), then its drive value."""
+    used = set(IDENTIFIER.findall(effect.term))
+    args = [s for s in effect.symbols if s in used]
+    if effect.drive is not None and effect.drive.value in used:
+        args.append(effect.drive.value)
+    return args
+
+
+def accel_source(spec: KernelSpec) -> str:
+    """``accel(th, om, w0sq, ...)``: theta'' with only the scene's terms, gravity first,
+    then each effect's term in canonical order."""
+    args = ["th", "om", "w0sq"] + [a for effect in spec.effects for a in _accel_args(effect)]
+    terms = ["-w0sq * " + ("vsin(th)" if spec.model == "nonlinear" else "th")]
+    terms += [effect.term for effect in spec.effects]
+    return (
+        "@njit(**JIT)\n"
+        f"def accel({', '.join(args)}):\n"
+        f"    return {' '.join(terms)}\n"
+    )
+
+
+def accel_call(spec: KernelSpec, th: str, om: str, values: dict[str, str]) -> str:
+    """``accel(...)`` on state ``th, om``; ``values`` maps a drive effect's name to the
+    variable holding its drive value at this stage."""
+    args = [th, om, "w0sq"]
+    for effect in spec.effects:
+        for arg in _accel_args(effect):
+            args.append(values.get(effect.name) if effect.drive is not None
+                        and arg == effect.drive.value else arg)
+    return f"accel({', '.join(args)})"
+
+
+def energy_source(spec: KernelSpec) -> str:
+    """``energy(th, om, w0sq)``: kinetic plus gravitational energy per unit ``m L^2``."""
+    potential = "w0sq * (1.0 - vcos(th))" if spec.model == "nonlinear" else \
+        "0.5 * w0sq * th * th"
+    return (
+        "@njit(**JIT)\n"
+        "def energy(th, om, w0sq):\n"
+        f"    return 0.5 * om * om + {potential}\n"
+    )
+
+
+def tension_terms(spec: KernelSpec) -> str:
+    """The effects' additions to the rod tension ``T/m`` (``TENSION_TERMS``)."""
+    return "".join(f" {effect.tension}" for effect in spec.effects if effect.tension)
+
+
+def drive_nodes(spec: KernelSpec, c, *, time: str, step: str | None, scale: str,
+                constants: dict[str, str] | None):
+    """Each drive's variable per distinct node c_i, and the time it is evaluated at.
+
+    Fixed step (``step`` given): time of node c is ``t0 + step * dt + c * dt`` (c = 0:
+    ``t0 + step * dt``; c = 1: ``t0 + (step + 1) * dt``), never accumulated. Adaptive
+    (``step`` None): ``time + c * h``.
+
+    Returns
+    -------
+    names : dict
+        ``{effect name: {c: variable}}``; the variable holds the drive's value
+        ``amplitude * sin(frequency * time + phase)`` (see `drive_line`).
+    nodes : list of (EffectDeclaration, variable, time expression)
+    """
+    names, nodes = {}, []
+    for effect in spec.drives:
+        own = names[effect.name] = {}
+        for x in sorted(set(c)):
+            name = own[x] = f"{effect.drive.value}{len(own)}"
+            if step is None:
+                at = time if x == 0 else (f"{time} + {scale}" if x == 1 else
+                                          f"{time} + {float_literal(x)} * {scale}")
+            elif x == 0:
+                at = f"t0 + {step} * dt"
+            elif x == 1:
+                at = f"t0 + ({step} + 1) * dt"
+            else:
+                line = f"dt * {float_literal(x)}"
+                const = next((k for k, v in constants.items() if v.endswith(f"= {line}")),
+                             f"cdt{len(constants)}")
+                constants[const] = f"{const} = {line}"
+                at = f"t0 + {step} * dt + {const}"
+            nodes.append((effect, name, at))
+    return names, nodes
+
+
+def drive_sine(effect: EffectDeclaration, at: str) -> str:
+    """``sin(frequency * (at) + phase)`` of an effect's drive, as source."""
+    drive = effect.drive
+    return f"vsin({drive.frequency} * ({at}) + {drive.phase})"
+
+
+def drive_line(effect: EffectDeclaration, name: str, at: str) -> str:
+    """``name = amplitude * sin(frequency * (at) + phase)``: the drive at time ``at``."""
+    return f"{name} = {effect.drive.amplitude} * {drive_sine(effect, at)}"
+
+
+def load_lines(spec: KernelSpec, row: str = "i") -> list[str]:
+    """Per-trajectory loads: initial state, pendulum, the effects' parameters."""
+    load = [f"{p.symbol} = params[{row}, {column_of(spec, p.symbol)}]"
+            for p in BASE_PARAMETERS] + ["w0sq = g / L"]
+    for effect in spec.effects:
+        load += [f"{s} = params[{row}, {column_of(spec, s)}]" for s in effect.symbols]
+    return load

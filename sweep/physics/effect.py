@@ -1,0 +1,270 @@
+"""What an effect is: one declaration that every layer reads.
+
+An effect (damping, forcing, ...) is a frozen dataclass deriving from `Effect` whose
+class attribute ``declaration`` says, once, everything the rest of sweep needs:
+
+- its parameters (`Parameter`): constructor field, grid axis and parameter-table
+  column, kernel symbol, units, long name, lower bound, default, whether TOML accepts
+  degrees for it;
+- its term in the acceleration ``theta''``, as kernel source in the state ``th, om``
+  and its symbols (``"- c * om"``), and, for a time-dependent term, the harmonic
+  `Drive` whose value ``amplitude * sin(frequency * t + phase)`` the kernel evaluates
+  at every stage time (once per block when no trajectory differs in frequency and
+  phase);
+- what it adds to the linearisation at the bottom (``theta'' + C theta' + K theta``:
+  ``linear_damping`` adds to C, ``linear_stiffness`` to K; the stability guard reads
+  them) and to the rod tension per unit mass (``tension``);
+- whether it is conservative (symplectic methods accept only conservative effects).
+
+`register` adds an effect to `EFFECTS`; the kernel generator (`sweep.kernels`), the
+grid, the dataset attributes, the TOML reader and the stability guard then take it
+without any other change. Declarations are plain data (strings, numbers, tuples), so
+they hash, compare and pickle: a kernel spec carries the declarations it was built
+from, and a Dask worker needs no registry.
+
+For developers: a new effect is a subclass plus `register`::
+
+    @register
+    @dataclass(frozen=True)
+    class TorsionSpring(Effect):
+        stiffness: float
+        declaration: ClassVar[EffectDeclaration] = EffectDeclaration(
+            name="spring", term="- kappa * th", equation="- kappa theta",
+            parameters=(Parameter("spring_stiffness", "stiffness", "kappa", "s-2", "1/s^2",
+                                  "torsion spring stiffness", minimum=0.0),),
+            conservative=True, linear_stiffness="kappa")
+"""
+
+from __future__ import annotations
+
+import keyword
+import math
+from dataclasses import dataclass, fields
+from typing import Any, ClassVar
+
+from .._validate import check_real
+
+__all__ = ["Drive", "Effect", "EffectDeclaration", "EFFECTS", "Parameter", "RESERVED_SYMBOLS",
+           "register", "unregister"]
+
+#: Kernel names an effect's symbols must not take (state, base parameters, loop and
+#: kernel variables).
+RESERVED_SYMBOLS = frozenset({
+    "th", "om", "th0", "om0", "L", "g", "w0sq", "t", "t0", "dt", "h", "i", "j", "b", "n",
+    "step", "base", "params", "out", "status", "saved", "stats", "math", "np", "vsin",
+    "vcos", "accel", "energy", "kernel", "prange", "njit", "JIT", "BLOCK", "TWO_PI",
+    "acc", "tension", "done",
+})
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One parameter of an effect.
+
+    Attributes
+    ----------
+    axis : str
+        Grid axis name and parameter-table column (``"forcing_amplitude"``); unique
+        across effects.
+    field : str
+        Constructor argument and attribute of the effect (``"amplitude"``).
+    symbol : str
+        Kernel variable holding it (``"A"``).
+    units : str
+        UDUNITS string for the dataset (``"rad s-2"``).
+    unit_text : str
+        Units as written in messages (``"rad/s^2"``).
+    long_name : str
+        CF long name of the coordinate or attribute.
+    minimum : float, optional
+        Lower bound (inclusive unless ``strict``).
+    strict : bool
+    default : float, optional
+        Value when the constructor is not given it; a parameter with a default need
+        not be a grid axis for the grid alone to switch its effect on.
+    angle : bool
+        A TOML grid axis may give it in degrees (``units = "deg"``).
+    """
+
+    axis: str
+    field: str
+    symbol: str
+    units: str
+    unit_text: str
+    long_name: str
+    minimum: float | None = None
+    strict: bool = False
+    default: float | None = None
+    angle: bool = False
+
+    def accepted(self, plural: bool = False) -> str:
+        """What values are accepted, for messages: ``"a finite number >= 0 (1/s)"``."""
+        text = "finite numbers" if plural else "a finite number"
+        if self.minimum is not None:
+            text += f" {'>' if self.strict else '>='} {self.minimum:g} ({self.unit_text})"
+        return text
+
+    def is_outside(self, value) -> Any:
+        """True (elementwise) where ``value`` violates the lower bound."""
+        if self.minimum is None:
+            return value != value  # never, with the caller's shape
+        return value <= self.minimum if self.strict else value < self.minimum
+
+
+@dataclass(frozen=True)
+class Drive:
+    """A harmonic signal ``amplitude * sin(frequency * t + phase)`` of an effect.
+
+    Attributes
+    ----------
+    value : str
+        Kernel variable stem of the signal's value at a stage time (``"f"``); the
+        effect's ``term`` uses it.
+    amplitude, frequency, phase : str
+        Symbols of the effect's parameters (or, for ``amplitude``, an expression in
+        them) that make the signal.
+    """
+
+    value: str
+    amplitude: str
+    frequency: str
+    phase: str
+
+
+@dataclass(frozen=True)
+class EffectDeclaration:
+    """Everything sweep needs to know about an effect (see the module docstring).
+
+    Attributes
+    ----------
+    name : str
+        Lower-case key: the ``[scene.<name>]`` TOML table, the dataset's ``effects``
+        attribute, the kernel spec.
+    parameters : tuple of Parameter
+    term : str
+        Source of its term in ``theta''``, starting with its sign (``"- c * om"``); may
+        read ``th``, ``om``, its symbols and its drive value.
+    equation : str
+        The term as printed in the dataset's ``equation`` attribute (``"- c theta'"``).
+    conservative : bool
+        True if it derives from a potential (energy is conserved without others).
+    drive : Drive, optional
+    linear_damping, linear_stiffness : str
+        Expressions in its symbols added to ``C`` and ``K`` of the linearisation
+        ``theta'' + C theta' + K theta = ...`` at the bottom ("" for none).
+    tension : str
+        Source added to the rod tension per unit mass ``T/m`` ("" for none).
+    """
+
+    name: str
+    parameters: tuple[Parameter, ...]
+    term: str
+    equation: str
+    conservative: bool
+    drive: Drive | None = None
+    linear_damping: str = ""
+    linear_stiffness: str = ""
+    tension: str = ""
+
+    @property
+    def symbols(self) -> tuple[str, ...]:
+        """Kernel symbols of its parameters, in declaration order."""
+        return tuple(p.symbol for p in self.parameters)
+
+    @property
+    def axes(self) -> tuple[str, ...]:
+        """Grid axes (parameter-table columns) of its parameters."""
+        return tuple(p.axis for p in self.parameters)
+
+    def linearisation(self, values: dict[str, float]) -> tuple[float, float]:
+        """``(C, K)`` it adds to the linearisation, for parameter values by symbol."""
+        def value(expression: str) -> float:
+            if not expression:
+                return 0.0
+            return float(eval(expression, {"__builtins__": {}, "math": math}, dict(values)))
+
+        return value(self.linear_damping), value(self.linear_stiffness)
+
+
+class Effect:
+    """Base class of the effects: a frozen dataclass with a ``declaration``.
+
+    Every field is validated from its `Parameter` (a finite real number above the
+    declared bound); the subclass declares the fields in the order of its parameters.
+    """
+
+    declaration: ClassVar[EffectDeclaration]
+
+    def __post_init__(self) -> None:
+        owner = type(self).__name__
+        for p in self.declaration.parameters:
+            object.__setattr__(self, p.field, check_real(
+                f"{owner}.{p.field}", getattr(self, p.field), minimum=p.minimum,
+                strict=p.strict, accepted=p.accepted()))
+
+    def values(self) -> dict[str, float]:
+        """Its parameter values by grid axis name."""
+        return {p.axis: getattr(self, p.field) for p in self.declaration.parameters}
+
+    @classmethod
+    def signature(cls) -> str:
+        """``sweep.Forcing(amplitude, frequency, phase)``, for messages."""
+        return f"sweep.{cls.__name__}({', '.join(f.name for f in fields(cls))})"
+
+
+#: Registered effects by name, in canonical order (the order of their terms in the
+#: acceleration, of their columns in the parameter table, of ``Scene.effects``).
+EFFECTS: dict[str, type[Effect]] = {}
+
+
+def _check_declaration(cls: type) -> EffectDeclaration:
+    declaration = getattr(cls, "declaration", None)
+    if not isinstance(declaration, EffectDeclaration):
+        raise TypeError(f"{cls.__name__} needs a class attribute 'declaration' "
+                        "(an EffectDeclaration)")
+    if declaration.name in EFFECTS and EFFECTS[declaration.name] is not cls:
+        raise ValueError(f"an effect named {declaration.name!r} is already registered "
+                         f"({EFFECTS[declaration.name].__name__})")
+    field_names = [f.name for f in fields(cls)]
+    if field_names != [p.field for p in declaration.parameters]:
+        raise ValueError(f"{cls.__name__}: fields {field_names} must be its parameters' "
+                         f"fields {[p.field for p in declaration.parameters]}, in order")
+    taken_axes = {p.axis for other in EFFECTS.values() if other is not cls
+                  for p in other.declaration.parameters}
+    taken_symbols = {s for other in EFFECTS.values() if other is not cls
+                     for s in other.declaration.symbols}
+    if declaration.drive is not None:
+        taken_values = {other.declaration.drive.value for other in EFFECTS.values()
+                        if other is not cls and other.declaration.drive is not None}
+        value = declaration.drive.value
+        if (not value.isidentifier() or value in RESERVED_SYMBOLS or value in taken_values
+                or value in declaration.symbols):
+            raise ValueError(f"{cls.__name__}: drive value {value!r} is reserved, taken or "
+                             "not an identifier")
+    for p in declaration.parameters:
+        if p.axis in taken_axes or p.axis in ("theta0", "omega0", "length", "gravity"):
+            raise ValueError(f"{cls.__name__}: grid axis {p.axis!r} is taken")
+        if (not p.symbol.isidentifier() or keyword.iskeyword(p.symbol)
+                or p.symbol in RESERVED_SYMBOLS or p.symbol in taken_symbols):
+            raise ValueError(f"{cls.__name__}: kernel symbol {p.symbol!r} is reserved, "
+                             "taken or not an identifier")
+    return declaration
+
+
+def register(cls: type[Effect]) -> type[Effect]:
+    """Add an effect class to `EFFECTS` (a class decorator); returns the class.
+
+    Raises
+    ------
+    TypeError, ValueError
+        On a missing or inconsistent declaration, or a name, axis or symbol that is
+        taken.
+    """
+    declaration = _check_declaration(cls)
+    EFFECTS[declaration.name] = cls
+    return cls
+
+
+def unregister(name: str) -> None:
+    """Remove the effect ``name`` from `EFFECTS` (for tests that declare their own)."""
+    EFFECTS.pop(name, None)
