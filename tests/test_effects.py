@@ -27,10 +27,10 @@ OLD_COLUMNS = ("theta0", "omega0", "damping", "forcing_amplitude", "forcing_freq
 def _load_before(name: str):
     """The stored kernel ``name``, compiled without numba's disk cache (nothing is
     written beside the stored files)."""
-    text = (HERE / f"{name}.py").read_text().replace("'cache': True", "'cache': False")
+    text = (HERE / f"{name}.txt").read_text().replace("'cache': True", "'cache': False")
     module = types.ModuleType(f"sweep_kernel_before_{name}")
     sys.modules[module.__name__] = module
-    exec(compile(text, str(HERE / f"{name}.py"), "exec"), module.__dict__)
+    exec(compile(text, str(HERE / f"{name}.txt"), "exec"), module.__dict__)
     return module.kernel
 
 
