@@ -12,6 +12,9 @@ from .io import save as save
 from .kernels import Status as Status
 from .physics import Damping as Damping
 from .physics import Forcing as Forcing
+from .physics import PivotDrive as PivotDrive
+from .physics import QuadraticDrag as QuadraticDrag
+from .physics import Torque as Torque
 from .physics import Scene as Scene
 
 #: Submodules imported on first use, so that ``import sweep`` stays cheap (no
@@ -35,8 +38,11 @@ __all__ = [
     "Damping",
     "Forcing",
     "Grid",
+    "PivotDrive",
+    "QuadraticDrag",
     "Scene",
     "Status",
+    "Torque",
     "__version__",
     "from_degrees",
     "load",

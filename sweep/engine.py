@@ -7,6 +7,7 @@ dataset in `io`.
 from __future__ import annotations
 
 import inspect
+import math
 import os
 import sys
 import time
@@ -186,11 +187,17 @@ def _progress_printer(enabled: bool, total: int):
 
 def _check_stop_early(names, scene: Scene, grid: Grid, stop_early, save_every) -> None:
     """Observables that need an unforced scene, and what early stopping allows."""
+    others = sorted(grid.effects(scene) - {"damping"})
     for name in names:
         if OBSERVABLES[name].unforced_only and scene.forcing is not None:
             raise ValueError(f"observable {name!r} is for unforced scenes (a forced pendulum "
                              "can leave a well); accepted: a Scene without Forcing, or "
                              "observe 'strobe' for forced basins")
+        if OBSERVABLES[name].unforced_only and others:
+            raise ValueError(f"observable {name!r} needs a pendulum with at most damping (its "
+                             f"well criterion is the pendulum's energy), but the run has "
+                             f"{' and '.join(others)}; accepted: a Scene with no effect but "
+                             "Damping, or observe 'omega_mean'/'final' instead")
     if not isinstance(stop_early, (bool, np.bool_)):
         raise TypeError(f"stop_early must be True or False, got {stop_early!r}")
     if not stop_early:
@@ -239,22 +246,38 @@ def _extremes(values: dict[str, np.ndarray]) -> list[dict[str, float]]:
     return corners
 
 
+def _speed_bound(scene: Scene, grid: Grid, p: dict) -> float:
+    """A bound on ``|theta'|`` from the starts' energy [rad/s]: exact for a pendulum
+    without driving (torque, forcing and a moving pivot can exceed it)."""
+    def largest(name, default):
+        return float(np.max(np.abs(grid.axes.get(name, [default]))))
+
+    w2 = largest("gravity", p["gravity"]) / float(np.min(grid.axes.get("length",
+                                                                       [p["length"]])))
+    omega0, theta0 = largest("omega0", 0.0), largest("theta0", 0.0)
+    potential = 4.0 * w2 if scene.model == "nonlinear" else w2 * theta0 ** 2
+    return math.sqrt(omega0 ** 2 + potential)
+
+
 def _check_stable_step(scene: Scene, grid: Grid, settings, effects) -> None:
     """Refuse a fixed step beyond the method's linear stability limit (see
     `sweep.stability`). The linearisation at the bottom is ``theta'' + C theta' + K
-    theta``, ``K = g/L`` plus each effect's declared ``linear_stiffness`` and ``C`` the
-    sum of their ``linear_damping``; both are checked at every corner of the grid's
-    parameter ranges (exact for the declared terms, which are monotone in each
-    parameter)."""
+    theta``, ``K = g/L`` plus each effect's declared ``linear_stiffness`` (its largest
+    value) and ``C`` the sum of their ``linear_damping``; both are checked at every
+    corner of the grid's parameter ranges (exact for the declared terms, which are
+    monotone in each parameter). ``omega_max`` in a declaration is `_speed_bound`."""
     p = scene.parameters()
     names = ["gravity", "length"] + [a for effect in effects for a in effect.axes]
     values = {name: np.asarray(grid.axes.get(name, [p[name]]), dtype=np.float64)
               for name in names}
+    omega_max = _speed_bound(scene, grid, p)
     dampings, stiffnesses = set(), set()
     for corner in _extremes(values):
         c, k = 0.0, corner["gravity"] / corner["length"]
         for effect in effects:
-            dc, dk = effect.linearisation({q.symbol: corner[q.axis] for q in effect.parameters})
+            known = {q.symbol: corner[q.axis] for q in effect.parameters}
+            dc, dk = effect.linearisation(dict(known, L=corner["length"], g=corner["gravity"],
+                                               omega_max=omega_max))
             c, k = c + dc, k + dk
         dampings.add(c)
         stiffnesses.add(k)

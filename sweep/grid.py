@@ -109,21 +109,19 @@ class Grid:
     def check_against(self, scene: Scene) -> None:
         """Refuse axes that the scene cannot honour.
 
-        An axis of an effect the scene lacks switches that effect on when the grid
-        gives every parameter of it without a default (a ``damping`` axis switches
-        damping on); otherwise the scene must supply the effect's other parameters.
+        An axis of an effect the scene lacks switches that effect on when its
+        declaration says so (``switched_on_by_grid``: a ``damping`` axis switches damping
+        on); otherwise the scene must have the effect (it supplies the effect's other
+        parameters: a forcing axis needs a `Forcing`, a torque axis a `Torque`).
 
         Raises
         ------
         ValueError
         """
         for name, effect_type in EFFECTS.items():
-            declared = effect_type.declaration.parameters
-            given = [p.axis for p in declared if p.axis in self._axes]
-            if not given or scene.effect(name) is not None:
-                continue
-            missing = [p.axis for p in declared if p.axis not in given and p.default is None]
-            if missing:
+            declaration = effect_type.declaration
+            given = [axis for axis in declaration.axes if axis in self._axes]
+            if given and scene.effect(name) is None and not declaration.switched_on_by_grid:
                 raise ValueError(
                     f"grid axis {given[0]!r} needs a {name} in the scene to supply the "
                     f"other {name} parameters; accepted: add {effect_type.signature()} to "
@@ -131,11 +129,11 @@ class Grid:
                 )
 
     def effects(self, scene: Scene) -> frozenset[str]:
-        """Names of the effects the run must simulate: the scene's, plus those whose
-        parameters the grid alone gives (see `check_against`)."""
+        """Names of the effects the run must simulate: the scene's, plus those a grid
+        axis switches on (see `check_against`)."""
         names = {e.declaration.name for e in scene.effects}
         for name, effect_type in EFFECTS.items():
-            if any(p.axis in self._axes for p in effect_type.declaration.parameters):
+            if any(axis in self._axes for axis in effect_type.declaration.axes):
                 names.add(name)
         return frozenset(names)
 

@@ -293,6 +293,21 @@ OBSERVABLES: dict[str, Observable] = {
             uses_energy=True,
             state=(("acc_E0", "float64"),),
         ),
+        Observable(
+            name="top_distance",
+            variables=(
+                ("top_distance_max", "rad",
+                 "max distance of theta from the upright position (pi mod 2 pi) over "
+                 "t >= t0 + t_transient"),
+            ),
+            init="acc_top = 0.0",
+            # theta - pi reduced to [-pi, pi): np.floor keeps it branch-free (vectorised)
+            update=("acc_top = max(acc_top, abs(th - math.pi - TWO_PI * "
+                    "np.floor((th - math.pi) / TWO_PI + 0.5)))"),
+            final="out[i, COL] = acc_top",
+            steady=True,
+            state=(("acc_top", "float64"),),
+        ),
     )
 }
 

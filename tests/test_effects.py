@@ -55,7 +55,9 @@ def _values(n: int, seed: int) -> dict[str, np.ndarray]:
 
 
 def _table(values: dict, columns) -> np.ndarray:
-    return np.ascontiguousarray(np.column_stack([values[c] for c in columns]))
+    """Parameter rows in ``columns`` order; effects the kernels lack get zeros."""
+    n = len(values["theta0"])
+    return np.ascontiguousarray(np.column_stack([values.get(c, np.zeros(n)) for c in columns]))
 
 
 def _outputs(kernel, spec, table, method):
@@ -100,6 +102,7 @@ SPRING = EffectDeclaration(
     equation="- kappa theta",
     conservative=True,
     linear_stiffness="kappa",
+    switched_on_by_grid=True,
 )
 
 

@@ -52,7 +52,7 @@ def adaptive_kernel(spec: KernelSpec, tableau) -> str:
         attempt = f_lines + rk_stages(spec, tableau, "h", None, drives) + new_state
     err = [f"et = {combination(tableau.error_weights, kt, 'h', None)}",
            f"eo = {combination(tableau.error_weights, ko, 'h', None)}"]
-    update = snippets(spec, "update")
+    update = snippets(spec, "update", time="t")
     exponent = -1.0 / (tableau.embedded_order + 1)
     nl = chr(10)
     return f'''
@@ -65,9 +65,9 @@ def kernel(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats):
 {indent(nl.join(load_lines(spec)), 2)}
         th = th0
         om = om0
-{indent(snippets(spec, "init"), 2)}
-{indent(("if t_transient <= 0.0:" + nl + indent(update, 1)) if update else "", 2)}
         t = t0
+{indent(snippets(spec, "init", time="t"), 2)}
+{indent(("if t_transient <= 0.0:" + nl + indent(update, 1)) if update else "", 2)}
         h = dt
 {indent(nl.join(f_first + first), 2)}
         accepted = 0

@@ -10,12 +10,13 @@ from .terms import tension_terms
 __all__ = ["snippets", "stop_source"]
 
 
-def snippets(spec: KernelSpec, part: str) -> str:
+def snippets(spec: KernelSpec, part: str, time: str = "(t0 + k_state * dt)") -> str:
     """Concatenate one part (init/update/final) of every observed observable, with
     ``COL`` replaced by the observable's first column and ``TENSION_TERMS`` by the
-    effects' rod-tension terms."""
+    effects' rod-tension terms (``time``: the kernel's expression for the time of the
+    state, for terms that depend on it)."""
     lines, col = [], 0
-    extra = tension_terms(spec)
+    extra = tension_terms(spec, time)
     for name in spec.observe:
         obs = OBSERVABLES[name]
         code = getattr(obs, part)

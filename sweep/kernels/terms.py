@@ -43,8 +43,9 @@ def accel_source(spec: KernelSpec) -> str:
     """``accel(th, om, w0sq, ...)``: theta'' with only the scene's terms, gravity first,
     then each effect's term in canonical order."""
     args = ["th", "om", "w0sq"] + [a for effect in spec.effects for a in _accel_args(effect)]
-    terms = ["-w0sq * " + ("vsin(th)" if spec.model == "nonlinear" else "th")]
-    terms += [effect.term for effect in spec.effects]
+    f_theta = "vsin(th)" if spec.model == "nonlinear" else "th"
+    terms = ["-w0sq * " + f_theta] + [effect.term.replace("FTH", f_theta)
+                                      for effect in spec.effects]
     return (
         "@njit(**JIT)\n"
         f"def accel({', '.join(args)}):\n"
@@ -74,9 +75,11 @@ def energy_source(spec: KernelSpec) -> str:
     )
 
 
-def tension_terms(spec: KernelSpec) -> str:
-    """The effects' additions to the rod tension ``T/m`` (``TENSION_TERMS``)."""
-    return "".join(f" {effect.tension}" for effect in spec.effects if effect.tension)
+def tension_terms(spec: KernelSpec, time: str) -> str:
+    """The effects' additions to the rod tension ``T/m`` (``TENSION_TERMS``), with
+    ``TIME`` the kernel's expression for the time of the state."""
+    return "".join(f" {effect.tension}".replace("TIME", time)
+                   for effect in spec.effects if effect.tension)
 
 
 def drive_nodes(spec: KernelSpec, c, *, time: str, step: str | None, scale: str,
@@ -117,9 +120,9 @@ def drive_nodes(spec: KernelSpec, c, *, time: str, step: str | None, scale: str,
 
 
 def drive_sine(effect: EffectDeclaration, at: str) -> str:
-    """``sin(frequency * (at) + phase)`` of an effect's drive, as source."""
+    """``sin(frequency * (at) + phase)`` (or ``cos``) of an effect's drive, as source."""
     drive = effect.drive
-    return f"vsin({drive.frequency} * ({at}) + {drive.phase})"
+    return f"v{drive.function}({drive.frequency} * ({at}) + {drive.phase})"
 
 
 def drive_line(effect: EffectDeclaration, name: str, at: str) -> str:

@@ -6,8 +6,8 @@ and frequency responses by continuation.
 ``sweep.metrics`` and ``sweep.response``.
 """
 
-from .labels import (UNRESOLVED, amplitude, basins, identify_attractors, motion,
+from .labels import (UNRESOLVED, amplitude, basins, identify_attractors, inverted, motion,
                      natural_frequency_squared, well)
 
-__all__ = ["UNRESOLVED", "amplitude", "basins", "identify_attractors", "motion",
+__all__ = ["UNRESOLVED", "amplitude", "basins", "identify_attractors", "inverted", "motion",
            "natural_frequency_squared", "well"]

@@ -21,8 +21,9 @@ import xarray as xr
 
 from ..kernels import Status
 from .._timesteps import transient_steps
+from .._validate import check_real
 
-__all__ = ["motion", "well", "basins", "amplitude", "natural_frequency_squared",
+__all__ = ["motion", "well", "basins", "amplitude", "inverted", "natural_frequency_squared",
            "UNRESOLVED"]
 
 #: Label of a trajectory that no map can classify (failed, not settled, ...).
@@ -77,7 +78,9 @@ def motion(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
     Parameters
     ----------
     ds : xarray.Dataset
-        From `sweep.run` with ``observe`` containing ``"omega_mean"`` or ``"winding"``.
+        From `sweep.run` with ``observe`` containing ``"omega_mean"``, ``"winding"`` or
+        ``"final"`` (in that order of preference: the net turns from ``theta0`` to
+        ``theta_final`` are the winding).
     min_turns : float, default 1
         Net full turns that count as rotation.
 
@@ -98,10 +101,14 @@ def motion(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
     if "omega_mean" in ds:
         turns = ds["omega_mean"] * _steady_window(ds) / (2 * np.pi)
         source = "omega_mean over the steady window"
-    else:
-        _require(ds, ("winding",), "omega_mean", "motion")
+    elif "winding" in ds:
         turns = ds["winding"]
         source = "winding over the whole run"
+    else:
+        _require(ds, ("theta_final",), "omega_mean", "motion")
+        theta0 = ds["theta0"] if "theta0" in ds.coords else 0.0
+        turns = np.trunc((ds["theta_final"] - theta0) / (2 * np.pi))
+        source = "net turns from theta0 to theta_final over the whole run"
     code = xr.where(np.abs(turns) >= min_turns, np.sign(turns), 0)
     code = xr.where(_ok(ds), code, _MOTION_FILL).astype(np.int8)
     code.attrs = {
@@ -111,6 +118,36 @@ def motion(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
         "min_turns": float(min_turns),
     }
     return code.rename("motion")
+
+
+def inverted(ds: xr.Dataset, *, tolerance: float = 0.5) -> xr.DataArray:
+    """Whether the pendulum stays near the top (``theta = pi`` mod ``2 pi``) after the
+    transient: Kapitza's pendulum, stabilised upside down by a fast pivot drive.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        From `sweep.run` with ``observe`` containing ``"top_distance"``.
+    tolerance : float, default 0.5
+        Largest distance from the upright position [rad] over ``t >= t0 +
+        t_transient`` that counts as staying up; finite and in (0, pi).
+
+    Returns
+    -------
+    xarray.DataArray, bool, grid dims
+        True where every steady-window angle is within ``tolerance`` of the top; False
+        elsewhere, and for trajectories that failed (``status`` not ok).
+    """
+    tolerance = check_real("tolerance", tolerance, minimum=0.0, strict=True,
+                           accepted="a finite number in (0, pi) (rad)")
+    if tolerance >= np.pi:
+        raise ValueError(f"tolerance must be a finite number in (0, pi) (rad), got "
+                         f"{tolerance!r}")
+    _require(ds, ("top_distance_max",), "top_distance", "inverted")
+    up = (ds["top_distance_max"] < tolerance) & _ok(ds)
+    up.attrs = {"long_name": "stays within tolerance of the upright position after "
+                             "the transient", "tolerance": tolerance, "units": "1"}
+    return up.rename("inverted")
 
 
 def _captured(ds: xr.Dataset) -> xr.DataArray:

@@ -32,7 +32,7 @@ For developers: a new effect is a subclass plus `register`::
             name="spring", term="- kappa * th", equation="- kappa theta",
             parameters=(Parameter("spring_stiffness", "stiffness", "kappa", "s-2", "1/s^2",
                                   "torsion spring stiffness", minimum=0.0),),
-            conservative=True, linear_stiffness="kappa")
+            conservative=True, linear_stiffness="kappa", switched_on_by_grid=True)
 """
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ RESERVED_SYMBOLS = frozenset({
     "th", "om", "th0", "om0", "L", "g", "w0sq", "t", "t0", "dt", "h", "i", "j", "b", "n",
     "step", "base", "params", "out", "status", "saved", "stats", "math", "np", "vsin",
     "vcos", "accel", "energy", "kernel", "prange", "njit", "JIT", "BLOCK", "TWO_PI",
-    "acc", "tension", "done",
+    "acc", "tension", "done", "FTH", "TIME", "omega_max", "k", "p0", "f0",
 })
 
 
@@ -121,14 +121,17 @@ class Drive:
         Kernel variable stem of the signal's value at a stage time (``"f"``); the
         effect's ``term`` uses it.
     amplitude, frequency, phase : str
-        Symbols of the effect's parameters (or, for ``amplitude``, an expression in
-        them) that make the signal.
+        Symbols of the effect's parameters that make the signal (``amplitude`` may be
+        an expression in them and in ``L``, ``g``).
+    function : {"sin", "cos"}
+        The harmonic function (``cos`` for a signal written ``a cos(nu t + psi)``).
     """
 
     value: str
     amplitude: str
     frequency: str
     phase: str
+    function: str = "sin"
 
 
 @dataclass(frozen=True)
@@ -143,17 +146,24 @@ class EffectDeclaration:
     parameters : tuple of Parameter
     term : str
         Source of its term in ``theta''``, starting with its sign (``"- c * om"``); may
-        read ``th``, ``om``, its symbols and its drive value.
+        read ``th``, ``om``, ``L``, ``g``, its symbols, its drive value and ``FTH``, the
+        model's ``f(theta)`` (``vsin(th)`` or ``th``).
     equation : str
         The term as printed in the dataset's ``equation`` attribute (``"- c theta'"``).
     conservative : bool
         True if it derives from a potential (energy is conserved without others).
     drive : Drive, optional
     linear_damping, linear_stiffness : str
-        Expressions in its symbols added to ``C`` and ``K`` of the linearisation
-        ``theta'' + C theta' + K theta = ...`` at the bottom ("" for none).
+        Expressions in its symbols (and ``L``, ``g``, ``omega_max``: a bound on
+        ``|theta'|`` from the starts' energy) added to ``C`` and the largest ``K`` of
+        the linearisation ``theta'' + C theta' + K theta = ...`` at the bottom ("" for
+        none); the stability guard reads them.
     tension : str
-        Source added to the rod tension per unit mass ``T/m`` ("" for none).
+        Source added to the rod tension per unit mass ``T/m`` ("" for none); may read
+        ``th``, ``om``, ``L``, ``g``, its symbols and ``TIME`` (the time of the state).
+    switched_on_by_grid : bool
+        Whether a grid axis of its parameters switches it on in a scene without it
+        (damping); otherwise such an axis needs the effect in the scene.
     """
 
     name: str
@@ -165,6 +175,7 @@ class EffectDeclaration:
     linear_damping: str = ""
     linear_stiffness: str = ""
     tension: str = ""
+    switched_on_by_grid: bool = False
 
     @property
     def symbols(self) -> tuple[str, ...]:
@@ -177,7 +188,8 @@ class EffectDeclaration:
         return tuple(p.axis for p in self.parameters)
 
     def linearisation(self, values: dict[str, float]) -> tuple[float, float]:
-        """``(C, K)`` it adds to the linearisation, for parameter values by symbol."""
+        """``(C, K)`` it adds to the linearisation, for values by symbol (its own, and
+        ``L``, ``g``, ``omega_max``)."""
         def value(expression: str) -> float:
             if not expression:
                 return 0.0
@@ -233,6 +245,9 @@ def _check_declaration(cls: type) -> EffectDeclaration:
                   for p in other.declaration.parameters}
     taken_symbols = {s for other in EFFECTS.values() if other is not cls
                      for s in other.declaration.symbols}
+    if declaration.drive is not None and declaration.drive.function not in ("sin", "cos"):
+        raise ValueError(f"{cls.__name__}: drive function must be 'sin' or 'cos', got "
+                         f"{declaration.drive.function!r}")
     if declaration.drive is not None:
         taken_values = {other.declaration.drive.value for other in EFFECTS.values()
                         if other is not cls and other.declaration.drive is not None}

@@ -1,7 +1,10 @@
 """The effects a scene can call for, each declared once (see `sweep.physics.effect`).
 
 The equation of motion is ``theta'' = - (g/L) f(theta)`` plus the terms of the effects
-present, in the order they are registered here.
+present, in the order they are registered here::
+
+    theta'' = - (g/L) f(theta) - c theta' + A sin(W t + phase) + tau - k theta'|theta'|
+              + (a nu^2 / L) cos(nu t + psi) f(theta)
 """
 
 from __future__ import annotations
@@ -11,7 +14,7 @@ from typing import ClassVar
 
 from .effect import Drive, Effect, EffectDeclaration, Parameter, register
 
-__all__ = ["Damping", "Forcing"]
+__all__ = ["Damping", "Forcing", "PivotDrive", "QuadraticDrag", "Torque"]
 
 
 @register
@@ -35,6 +38,7 @@ class Damping(Effect):
         equation="- c theta'",
         conservative=False,
         linear_damping="c",
+        switched_on_by_grid=True,
     )
 
 
@@ -71,4 +75,105 @@ class Forcing(Effect):
         equation="+ A sin(W t + phase)",
         conservative=False,
         drive=Drive(value="f", amplitude="A", frequency="W", phase="phi"),
+    )
+
+
+@register
+@dataclass(frozen=True)
+class Torque(Effect):
+    """A constant applied torque per unit ``m L^2``, the term ``+ tau``.
+
+    The tilted-washboard pendulum: the same equation as the RCSJ model of a Josephson
+    junction (angle = phase, torque = bias current, mean angular velocity = DC voltage).
+    With damping it has locked states (rest at ``sin(theta) = tau L/g``, only for
+    ``|tau| <= g/L``) and running states (rotation), which coexist between the
+    retrapping torque (``4 c sqrt(g/L) / pi`` for small damping) and ``g/L``.
+
+    Parameters
+    ----------
+    value : float
+        ``tau`` in rad/s^2; finite (either sign).
+    """
+
+    value: float
+
+    declaration: ClassVar[EffectDeclaration] = EffectDeclaration(
+        name="torque",
+        parameters=(Parameter("torque", "value", "tau", "rad s-2", "rad/s^2",
+                              "constant applied torque per unit m L^2"),),
+        term="+ tau",
+        equation="+ tau",
+        conservative=True,  # the potential -tau theta: energy is conserved without damping
+    )
+
+
+@register
+@dataclass(frozen=True)
+class QuadraticDrag(Effect):
+    """Air drag, the term ``- k theta' |theta'|``.
+
+    Parameters
+    ----------
+    coefficient : float
+        ``k`` in 1/rad; finite and >= 0.
+    """
+
+    coefficient: float
+
+    declaration: ClassVar[EffectDeclaration] = EffectDeclaration(
+        name="drag",
+        parameters=(Parameter("drag", "coefficient", "kd", "rad-1", "1/rad",
+                              "quadratic drag coefficient k", minimum=0.0),),
+        term="- kd * om * abs(om)",
+        equation="- k theta' |theta'|",
+        conservative=False,
+        # d/d(theta') of -k theta'|theta'| is -2 k |theta'|: stiff for fast motion
+        linear_damping="2.0 * kd * omega_max",
+    )
+
+
+@register
+@dataclass(frozen=True)
+class PivotDrive(Effect):
+    """The pivot moves vertically as ``y = a cos(nu t + psi)`` (upward positive).
+
+    In the pendulum's frame gravity becomes ``g + y''``, so ``theta'' = -(g/L - (a nu^2 /
+    L) cos(nu t + psi)) f(theta)``: with the nonlinear model Kapitza's pendulum (the
+    inverted position is stable for a fast enough drive, ``a nu > sqrt(2 g L)`` at
+    leading order), with the linear model the damped Mathieu equation (parametric
+    resonance tongues at ``nu = 2 sqrt(g/L) / n``).
+
+    Parameters
+    ----------
+    amplitude : float
+        ``a`` in m; finite and >= 0.
+    frequency : float
+        ``nu`` in rad/s; finite and >= 0.
+    phase : float, default 0
+        ``psi`` in rad.
+    """
+
+    amplitude: float
+    frequency: float
+    phase: float = 0.0
+
+    declaration: ClassVar[EffectDeclaration] = EffectDeclaration(
+        name="pivot",
+        parameters=(
+            Parameter("pivot_amplitude", "amplitude", "a", "m", "m",
+                      "pivot drive amplitude a (pivot height a cos(nu t + psi))", minimum=0.0),
+            Parameter("pivot_frequency", "frequency", "nu", "rad s-1", "rad/s",
+                      "pivot drive angular frequency nu", minimum=0.0),
+            Parameter("pivot_phase", "phase", "psi", "rad", "rad",
+                      "pivot drive phase psi", default=0.0, angle=True),
+        ),
+        term="+ p * FTH",
+        equation="+ (a nu^2 / L) cos(nu t + psi) f(theta)",
+        conservative=False,  # energy is pumped in and out by the moving pivot
+        drive=Drive(value="p", amplitude="a * nu * nu / L", frequency="nu", phase="psi",
+                    function="cos"),
+        # the stiffness g/L - (a nu^2/L) cos(...) reaches g/L + a nu^2/L
+        linear_stiffness="a * nu * nu / L",
+        # the pivot's acceleration y'' = -a nu^2 cos(nu t + psi) adds to gravity
+        tension="- a * nu * nu * vcos(nu * TIME + psi) * vcos(th)",
     )
