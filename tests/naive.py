@@ -5,7 +5,8 @@ trajectory at a time, the textbook classical Runge-Kutta scheme on the first-ord
 system y = (theta, omega):
 
     theta' = omega
-    omega' = A sin(W t + phase) - c omega - (g/L) f(theta),  f = sin or identity
+    omega' = A sin(W t + phase) - c omega - (g/L) f(theta) + tau - k omega |omega|
+             + (a nu^2 / L) cos(nu t + psi) f(theta),          f = sin or identity
 
 with the step from t_n = t0 + n dt (computed from n, never accumulated) evaluating
 the right-hand side at t_n, t_n + dt/2, t_n + dt/2 and t_n + dt. Every state
@@ -22,7 +23,7 @@ import math
 
 import numpy as np
 
-__all__ = ["energy", "integrate", "rhs", "rk4_step", "tension"]
+__all__ = ["energy", "integrate", "rhs", "rk4_step", "tension", "top_distance"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -31,13 +32,18 @@ def rhs(t, theta, omega, p):
     """Right-hand side (theta', omega') of the pendulum at time ``t``.
 
     ``p`` is a dict with keys model, gravity, length, damping, forcing_amplitude,
-    forcing_frequency, forcing_phase.
+    forcing_frequency, forcing_phase, torque, drag, pivot_amplitude, pivot_frequency,
+    pivot_phase.
     """
     w0sq = p["gravity"] / p["length"]
     restoring = math.sin(theta) if p["model"] == "nonlinear" else theta
     forcing = p["forcing_amplitude"] * math.sin(p["forcing_frequency"] * t
                                                 + p["forcing_phase"])
-    return omega, forcing - p["damping"] * omega - w0sq * restoring
+    # the pivot's height a cos(nu t + psi) adds its acceleration to gravity
+    pivot = p["pivot_amplitude"] * p["pivot_frequency"] ** 2 / p["length"] * \
+        math.cos(p["pivot_frequency"] * t + p["pivot_phase"])
+    return omega, (forcing - p["damping"] * omega - w0sq * restoring + p["torque"]
+                   - p["drag"] * omega * abs(omega) + pivot * restoring)
 
 
 def rk4_step(t, theta, omega, dt, p):
@@ -61,28 +67,39 @@ def energy(theta, omega, p):
     return omega ** 2 / 2 + w0sq * potential
 
 
-def tension(theta, omega, p):
-    """Rod tension per unit mass, L omega^2 + g cos(theta) (both models)."""
-    return p["length"] * omega ** 2 + p["gravity"] * np.cos(theta)
+def tension(theta, omega, p, t=0.0):
+    """Rod tension per unit mass, L omega^2 + (g + y'') cos(theta) (both models), with
+    the pivot's acceleration y'' = -a nu^2 cos(nu t + psi)."""
+    pivot = -p["pivot_amplitude"] * p["pivot_frequency"] ** 2 * \
+        np.cos(p["pivot_frequency"] * t + p["pivot_phase"])
+    return p["length"] * omega ** 2 + (p["gravity"] + pivot) * np.cos(theta)
+
+
+def top_distance(theta):
+    """Distance of theta from the upright position pi (mod 2 pi), in [0, pi]."""
+    return np.abs(np.mod(theta, TWO_PI) - math.pi)
 
 
 def integrate(theta0, omega0, *, t_end, dt, t0=0.0, t_transient=0.0, save_every=None,
               model="nonlinear", gravity=9.81, length=1.0, damping=0.0,
-              forcing_amplitude=0.0, forcing_frequency=0.0, forcing_phase=0.0):
+              forcing_amplitude=0.0, forcing_frequency=0.0, forcing_phase=0.0, torque=0.0,
+              drag=0.0, pivot_amplitude=0.0, pivot_frequency=0.0, pivot_phase=0.0):
     """Integrate one trajectory with RK4 and compute every observable.
 
     Returns
     -------
     dict
         ``theta_final, omega_final, winding, theta_max, amplitude, omega_mean, tension_min,
-        tension_max, energy_initial, energy_final`` (floats), ``time_all, theta_all,
+        tension_max, energy_initial, energy_final, top_distance_max`` (floats), ``time_all, theta_all,
         omega_all`` (every state, arrays of length n_steps + 1) and, when
         ``save_every`` is given, ``time, theta, omega`` at steps 0, k, 2k, ...
     """
     p = {"model": model, "gravity": float(gravity), "length": float(length),
          "damping": float(damping), "forcing_amplitude": float(forcing_amplitude),
          "forcing_frequency": float(forcing_frequency),
-         "forcing_phase": float(forcing_phase)}
+         "forcing_phase": float(forcing_phase), "torque": float(torque), "drag": float(drag),
+         "pivot_amplitude": float(pivot_amplitude), "pivot_frequency": float(pivot_frequency),
+         "pivot_phase": float(pivot_phase)}
     n_steps = round((t_end - t0) / dt)
     assert abs((t_end - t0) / dt - n_steps) < 1e-9 * max(1.0, n_steps), \
         "t_end - t0 must be a whole number of steps"
@@ -103,7 +120,7 @@ def integrate(theta0, omega0, *, t_end, dt, t0=0.0, t_transient=0.0, save_every=
     # the distance dt between two steps.
     steady = times >= t0 + t_transient - 1e-9 * dt
     th_s, om_s = thetas[steady], omegas[steady]
-    tensions = tension(th_s, om_s, p)
+    tensions = tension(th_s, om_s, p, times[steady])
 
     out = {
         "theta_final": theta,
@@ -116,6 +133,7 @@ def integrate(theta0, omega0, *, t_end, dt, t0=0.0, t_transient=0.0, save_every=
         "tension_max": float(np.max(tensions)),
         "energy_initial": float(energy(float(theta0), float(omega0), p)),
         "energy_final": float(energy(theta, omega, p)),
+        "top_distance_max": float(np.max(top_distance(th_s))),
         "time_all": times,
         "theta_all": thetas,
         "omega_all": omegas,
