@@ -285,6 +285,16 @@ def _check_stable_step(scene: Scene, grid: Grid, settings, effects) -> None:
                      sorted({min(stiffnesses), max(stiffnesses)}))
 
 
+def _block(n: int, stop_early: bool) -> int:
+    """Trajectories per block for a run of ``n`` (see `sweep._config`): one each for a
+    handful, small blocks for small grids and early stop, else `_config.BLOCK`."""
+    if n < _config.NARROW_BELOW:
+        return 1
+    if stop_early or n < 16 * _config.BLOCK:
+        return _config.SMALL_BLOCK
+    return _config.BLOCK
+
+
 def _drive_axes(effect) -> tuple[str, str]:
     """Grid axes of a drive's frequency and phase."""
     axis = {p.symbol: p.axis for p in effect.parameters}
@@ -335,8 +345,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         save=save_every is not None,
         stop_early=bool(stop_early),
         method=integrator,
-        block=_config.SMALL_BLOCK if stop_early or grid.size < 16 * _config.BLOCK
-        else _config.BLOCK,
+        block=_block(grid.size, stop_early),
         # one sine per drive and step for a whole block when no trajectory differs in it
         shared_forcing=not any(grid.axes.get(name, np.zeros(1)).size > 1
                                for effect in effects if effect.drive is not None

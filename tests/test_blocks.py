@@ -68,7 +68,7 @@ def _assert_same(a, b):
 def test_forced_run_with_every_observable_and_saving_is_the_same_for_any_blocking(shared):
     params = _table(77)  # not a multiple of any block size: the last block is padded
     specs = [KernelSpec("nonlinear", ("damping", "forcing"), ALL_OBSERVE, save=True, block=block,
-                        shared_forcing=shared) for block in (8, 64, 256)]
+                        shared_forcing=shared) for block in (1, 8, 64, 256)]
     reference = _call(specs[0], params, save_every=7)
     out, status, saved = reference
     assert (status[np.arange(77) != 5] == Status.OK).all() and status[5] == Status.NONFINITE
@@ -99,8 +99,9 @@ def test_early_stop_is_the_same_for_any_blocking(observe, forcing):
     params = _table(50, amplitude=1.66 if forcing else 0.0, frequency=1.0, damping=0.2)
     params[5, 2] = 0.2
     references = None
-    for block in (8, 64):
-        spec = KernelSpec("nonlinear", ("damping",) + ("forcing",) * forcing, observe, stop_early=True, block=block,
+    for block in (1, 8, 64):
+        spec = KernelSpec("nonlinear", ("damping",) + ("forcing",) * forcing, observe,
+                          stop_early=True, block=block,
                           shared_forcing=forcing)
         got = _call(spec, params, n_transient=0)
         if references is None:
@@ -119,7 +120,7 @@ def test_every_fixed_step_method_is_the_same_for_any_blocking(method):
     if conservative:
         params[5, 2] = 0.0
     spec = [KernelSpec("nonlinear", () if conservative else ("damping", "forcing"), ("final", "energy"),
-                       method=method, block=block) for block in (8, 128)]
+                       method=method, block=block) for block in (1, 8, 128)]
     _assert_same(_call(spec[0], params), _call(spec[1], params))
 
 
@@ -159,5 +160,5 @@ def test_every_observable_declares_the_state_it_keeps():
 
 
 def test_block_must_be_a_multiple_of_eight():
-    with pytest.raises(ValueError, match=r"block must be a positive multiple of 8, got 12"):
+    with pytest.raises(ValueError, match=r"block must be 1 or a positive multiple of 8, got 12"):
         KernelSpec("linear", (), ("final",), block=12)

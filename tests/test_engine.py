@@ -44,7 +44,7 @@ def test_specialised_kernel_equals_general_kernel_fed_zeros(model, damping, forc
     kwargs = dict(t_end=5.0, dt=0.01, t_transient=1.0, observe=ALL_OBSERVE)
     special = sweep.run(scene, small_grid, **kwargs)
     general = sweep.run(scene, small_grid, specialize=False, **kwargs)
-    assert general.attrs["effects"] == "damping forcing"
+    assert general.attrs["effects"] == " ".join(sweep.physics.EFFECTS)  # every term, fed zeros
     for name in special.data_vars:
         # Adding the general path's absent terms (- 0.0 * omega, + 0.0 * sin(...)) is
         # exact in IEEE arithmetic, but the kernels let LLVM contract a*b + c into one
@@ -85,9 +85,9 @@ def test_compiled_kernels_have_the_scene_terms_only_and_vectorised_lanes(tmp_pat
         from sweep.kernels import vecmath as _vecmath
         two_over_pi = "0x" + struct.pack(">d", _vecmath.TWO_OVER_PI).hex().upper()
         for model in ("linear", "nonlinear"):
-            sweep.run(sweep.Scene(model=model), sweep.Grid(theta0=[0.1]), t_end=1.0, dt=0.1,
-                      observe=("final",))
-            # the spec sweep.run compiled (a one-trajectory grid runs in small blocks)
+            sweep.run(sweep.Scene(model=model), sweep.Grid(theta0=[0.1 * k for k in range(1, 11)]),
+                      t_end=1.0, dt=0.1, observe=("final",))
+            # the spec sweep.run compiled (a ten-trajectory grid runs in small blocks)
             kernel = _kernels.build(_kernels.KernelSpec(model, (), ("final",),
                                                         block=sweep._config.SMALL_BLOCK))
             ir = "".join(kernel.inspect_llvm().values())
@@ -271,10 +271,9 @@ def test_fresh_process_loads_the_kernel_from_the_disk_cache(tmp_path):
         from sweep import kernels as _kernels
         sweep.run(sweep.Scene(effects=(sweep.Damping(0.1),)), sweep.Grid(theta0=[0.1]),
                   t_end=1.0, dt=0.1, observe=("final", "energy"))
-        # the spec sweep.run built: a one-trajectory grid runs in small blocks
+        # the spec sweep.run built: a one-trajectory grid runs one trajectory per block
         kernel = _kernels.build(_kernels.KernelSpec("nonlinear", ("damping",),
-                                                    ("final", "energy"),
-                                                    block=sweep._config.SMALL_BLOCK))
+                                                    ("final", "energy"), block=1))
         print(sum(kernel.stats.cache_hits.values()), sum(kernel.stats.cache_misses.values()))
     """)
     env = dict(os.environ, SWEEP_CACHE_DIR=str(tmp_path))

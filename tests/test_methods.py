@@ -238,8 +238,9 @@ REFUSALS = [
     ("verlet with damping", dict(scene=sweep.Scene(effects=(sweep.Damping(0.1),)),
                                  method="verlet"),
      r"method 'verlet' is symplectic and integrates only conservative scenes \(no damping, "
-     r"no forcing\), but the scene has damping; accepted: a scene \(and grid\) without "
-     r"damping and forcing, or one of 'euler', 'heun', 'rk4', 'rk38', 'dopri5'"),
+     r"no forcing, no drag, no pivot\), but the scene has damping; accepted: a scene \(and "
+     r"grid\) without damping, forcing, drag and pivot, or one of 'euler', 'heun', 'rk4', "
+     r"'rk38', 'dopri5'"),
     ("yoshida4 with forcing", dict(scene=sweep.Scene(effects=(sweep.Forcing(1.0, 1.0),)),
                                    method="yoshida4"),
      r"method 'yoshida4' is symplectic .* but the scene has forcing; accepted"),

@@ -88,8 +88,9 @@ class KernelSpec:
         results; a test checks it). False (the default) is right for any parameter
         table; `sweep.run` sets it when its grid has no drive frequency or phase axis.
     block : int
-        Trajectories per block of the fixed-step kernel (SIMD lanes; a multiple of 8).
-        Results do not depend on it (a test checks it); `_config.BLOCK` by default.
+        Trajectories per block of the fixed-step kernel (SIMD lanes; a multiple of 8, or
+        1 for a few trajectories, each alone). Results do not depend on it (a test checks
+        it); `_config.BLOCK` by default.
     """
 
     model: str
@@ -109,8 +110,8 @@ class KernelSpec:
         object.__setattr__(self, "effects", declarations(self.effects))
         object.__setattr__(self, "shared_forcing", bool(self.shared_forcing and self.drives))
         block = _config.BLOCK if self.block is None else self.block
-        if not isinstance(block, int) or block < 8 or block % 8:
-            raise ValueError(f"block must be a positive multiple of 8, got {block!r}")
+        if not isinstance(block, int) or not (block == 1 or (block >= 8 and block % 8 == 0)):
+            raise ValueError(f"block must be 1 or a positive multiple of 8, got {block!r}")
         object.__setattr__(self, "block", block)
 
     @property
@@ -173,6 +174,11 @@ def check_observables_fit(method, observe) -> None:
             )
 
 
+def _enumerate(names: list[str]) -> str:
+    """``a, b and c``."""
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
+
+
 def check_method_fits(method, effects, *, where: str = "the scene") -> None:
     """Refuse a method that does not fit the scene's effects (a symplectic method with a
     non-conservative effect such as damping or forcing), naming the method, the effects
@@ -198,6 +204,6 @@ def check_method_fits(method, effects, *, where: str = "the scene") -> None:
         raise ValueError(
             f"method {method.name!r} is symplectic and integrates only conservative scenes "
             f"(no {', no '.join(dissipative)}), but {where} has {' and '.join(offending)}; "
-            f"accepted: a scene (and grid) without {' and '.join(dissipative)}, or one of "
+            f"accepted: a scene (and grid) without {_enumerate(dissipative)}, or one of "
             f"{others}"
         )
