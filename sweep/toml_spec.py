@@ -43,6 +43,7 @@ from typing import Any
 
 import numpy as np
 
+from ._validate import check_flag, check_positive_int
 from .engine import validate_settings
 from .grid import Grid, from_degrees
 from .observables import resolve
@@ -294,4 +295,10 @@ def _run(source: str, table: dict) -> dict[str, Any]:
             if chunk_size < 1:
                 raise ValueError(f"chunk_size must be an integer >= 1 (trajectories), "
                                  f"got {chunk_size!r}")
+        for flag in ("stop_early", "check_stability"):
+            if flag in kwargs:
+                check_flag(flag, kwargs[flag])
+        if "estimate_error" in kwargs:
+            check_positive_int("estimate_error", kwargs["estimate_error"],
+                               "an int >= 1 (trajectories)")
     return kwargs
