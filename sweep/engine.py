@@ -489,6 +489,8 @@ def run(
                                 todo, persisted, finished, retries=2)
     if store is not None and not keep_checkpoint:
         store.remove()
+    if store is not None:  # one writer per checkpoint: let the next run have it
+        store.release()
 
     failed = int(np.count_nonzero(status != Status.OK))
     if failed:
