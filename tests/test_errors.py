@@ -214,6 +214,14 @@ CASES = [
      r"keep_checkpoint must be True or False, got 1"),
     ("resume as a string", lambda: _run(resume="yes"), TypeError,
      r"resume must be True or False, got 'yes'"),
+    ("booleans as convergence steps",
+     lambda: sweep.accuracy.convergence(sweep.Scene(), [0.1], [0.0], 1.0, "rk4",
+                                        [True, 0.1]),
+     ValueError, r"dts has True \(bool\) at index 0; accepted: real numbers"),
+    ("repeated response frequency",
+     lambda: sweep.response.frequency_response(
+         sweep.Scene(effects=(sweep.Forcing(1.0, 1.0),)), [0.5, 0.5]),
+     ValueError, r"'frequencies' has the value 0\.5 more than once \(indices 0, 1\)"),
 ]
 
 
