@@ -6,7 +6,6 @@ import contextlib
 import io
 import sys
 
-import numpy as np
 import pytest
 import xarray as xr
 

@@ -242,7 +242,8 @@ class Checkpoint:
 
 
 def _is_ours(name: str) -> bool:
-    return name in (MANIFEST, _lock.LOCK) or bool(_CHUNK.match(name)) or name.startswith(_TEMP_PREFIX)
+    return (name in (MANIFEST, _lock.LOCK) or bool(_CHUNK.match(name))
+            or name.startswith(_TEMP_PREFIX))
 
 
 def remove(folder) -> None:

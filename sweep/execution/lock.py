@@ -159,8 +159,9 @@ def acquire(folder) -> FolderLock:
             lock = FolderLock(path, fd)
             _HELD[key] = (weakref.ref(lock), threading.get_ident())
             return lock
-    raise CheckpointInUseError(f"checkpoint {str(folder)!r}: its lock file keeps changing; "  # pragma: no cover
-                               "accepted: one run per checkpoint folder")
+    raise CheckpointInUseError(  # pragma: no cover
+        f"checkpoint {str(folder)!r}: its lock file keeps changing; accepted: one run per "
+        "checkpoint folder")
 
 
 def _thread_alive(ident: int) -> bool:
