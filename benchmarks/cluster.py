@@ -109,8 +109,8 @@ def main(argv=None) -> int:
     workers = client.scheduler_info()["workers"]
     try:
         # warm every worker: one small task per worker loads the kernel
-        sweep.run(scene, sweep.Grid(theta0=np.zeros(len(workers))), client=client,
-                  chunk_size=1, **kwargs)
+        warm = sweep.Grid(theta0=np.linspace(0.0, 0.1, len(workers)))  # distinct values
+        sweep.run(scene, warm, client=client, chunk_size=1, **kwargs)
         rows = []
         for chunk in chunk_sizes:
             remote, t_remote = _timed(scene, grid, args.repeats, client=client,

@@ -30,7 +30,11 @@ def check_real(
     """
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be {accepted}, got {value!r} ({type(value).__name__})")
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:  # an int beyond the float range
+        raise ValueError(f"{name} must be {accepted}, got {value!r} (beyond the float "
+                         "range)") from None
     if not math.isfinite(value):
         raise ValueError(f"{name} must be {accepted}, got {value!r}")
     if minimum is not None and (value < minimum or (strict and value == minimum)):
@@ -52,6 +56,25 @@ def check_positive_int(name: str, value: Any, accepted: str = "an int >= 1") -> 
     return int(value)
 
 
+def check_flag(name: str, value: Any, *, allow_none: bool = False) -> bool | None:
+    """Return ``value`` as a bool if it is True or False (or None, when allowed).
+
+    Strings such as ``"no"`` and numbers such as ``0`` are refused: they would be taken
+    by their truth value, which is rarely what was meant.
+
+    Raises
+    ------
+    TypeError
+        ``"{name} must be True or False, got {value!r}"``.
+    """
+    if value is None and allow_none:
+        return None
+    if not isinstance(value, (bool, np.bool_)):
+        accepted = "True, False or None" if allow_none else "True or False"
+        raise TypeError(f"{name} must be {accepted}, got {value!r}")
+    return bool(value)
+
+
 def check_choice(name: str, value: Any, choices: Sequence[str]) -> str:
     """Return ``value`` if it is one of ``choices``; otherwise raise ValueError."""
     if not isinstance(value, str) or value not in choices:
@@ -61,8 +84,97 @@ def check_choice(name: str, value: Any, choices: Sequence[str]) -> str:
     return value
 
 
+def _describe(value: Any) -> str:
+    """``'1.0' (str)``, the repr shortened to 60 characters."""
+    text = repr(value)
+    text = text if len(text) <= 60 else text[:57] + "..."
+    return f"{text} ({type(value).__name__})"
+
+
+def check_numbers(what: str, values: Any) -> np.ndarray:
+    """Return ``values`` as a float64 array if every element is a real number.
+
+    Refused, because they would convert silently into numbers nobody meant:
+    booleans (Python and NumPy, ``True`` -> 1.0), strings and bytes (``"1.0"``),
+    ``None`` (-> NaN), complex numbers, datetimes and timedeltas, and masked elements of
+    a masked array (the mask would be dropped). Integers and floats of any width are
+    accepted.
+
+    Parameters
+    ----------
+    what : str
+        How to name the values in a message, e.g. ``"grid axis 'theta0'"``.
+    values : array_like
+        A scalar or an array of any shape.
+
+    Returns
+    -------
+    ndarray, float64
+        Same shape as ``values``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``what``, the bad value, its index and what is accepted.
+    """
+    accepted = "accepted: real numbers (int or float)"
+    if isinstance(values, (str, bytes)):
+        raise ValueError(f"{what} must be a 1-D array of numbers, got {values!r}; {accepted}")
+    if np.ma.isMaskedArray(values) and np.ma.getmaskarray(values).any():
+        index = int(np.flatnonzero(np.ma.getmaskarray(values))[0])
+        raise ValueError(f"{what} has a masked value at flat index {index}; {accepted} "
+                         "(fill or drop masked values first)")
+    try:
+        raw = np.asarray(values)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} must be a 1-D array of numbers, got {values!r}") from None
+    if raw.dtype.kind == "b":
+        raise ValueError(f"{what} holds booleans ({raw.reshape(-1)[:3].tolist()!r}...); "
+                         f"booleans are not numbers here; {accepted}")
+    if raw.dtype.kind in "fiu":
+        if isinstance(values, (list, tuple)):
+            _check_items(what, values, accepted)  # [True, 1.0] is a float64 array
+        return raw.astype(np.float64, copy=False)
+    if raw.ndim == 0 and raw.dtype.kind in "OV":
+        item = raw.item()
+        if isinstance(item, (bool, np.bool_)) or not isinstance(item, numbers.Real):
+            raise ValueError(f"{what} must be a number or a 1-D array of numbers, got "
+                             f"{_describe(item)}; {accepted}")
+    if raw.dtype.kind in "USaOcmMV":
+        _check_items(what, raw.reshape(-1).tolist() if raw.dtype.kind != "O"
+                     else list(raw.reshape(-1)), accepted)
+    try:
+        return raw.astype(np.float64)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{what} must be an array of numbers, got {values!r}; "
+                         f"{accepted}") from None
+
+
+def _check_items(what: str, items: Sequence, accepted: str) -> None:
+    """Refuse the first item of a flat or nested sequence that is not a real number."""
+    for index, item in enumerate(items):
+        if isinstance(item, (list, tuple)):
+            _check_items(f"{what}[{index}]", item, accepted)
+            continue
+        bad = (isinstance(item, (bool, np.bool_)) or not isinstance(item, numbers.Real)
+               or isinstance(item, (np.datetime64, np.timedelta64)))
+        if bad:
+            raise ValueError(f"{what} has {_describe(item)} at index {index}; {accepted}")
+        try:
+            float(item)
+        except OverflowError:
+            raise ValueError(f"{what} has {_describe(item)} at index {index}, beyond the float "
+                             f"range; {accepted}") from None
+
+
 def check_axis(name: str, values: Any) -> np.ndarray:
-    """Return ``values`` as a 1-D, C-contiguous, finite, non-empty float64 array.
+    """Return ``values`` as a 1-D, C-contiguous, finite, non-empty float64 array of
+    distinct values, in the order given.
+
+    An axis need not be sorted: the dataset keeps the order given (``.sel`` works
+    either way). Booleans, strings, None, complex numbers and the like are refused
+    (see `check_numbers`); so is a value given twice, which would make the dataset's
+    coordinate non-unique and compute the same trajectories twice.
 
     Raises
     ------
@@ -71,12 +183,7 @@ def check_axis(name: str, values: Any) -> np.ndarray:
     """
     if isinstance(values, (str, bytes)):
         raise ValueError(f"grid axis {name!r} must be a 1-D array of numbers, got {values!r}")
-    try:
-        array = np.asarray(values, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(
-            f"grid axis {name!r} must be a 1-D array of numbers, got {values!r}"
-        ) from None
+    array = check_numbers(f"grid axis {name!r}", values)
     if array.ndim == 0:
         array = array.reshape(1)
     if array.ndim != 1:
@@ -91,5 +198,16 @@ def check_axis(name: str, values: Any) -> np.ndarray:
         raise ValueError(
             f"grid axis {name!r} has non-finite value {float(array[bad][0])!r} at index "
             f"{int(np.flatnonzero(bad)[0])}; accepted: finite numbers"
+        )
+    order = np.argsort(array, kind="stable")
+    repeated = np.flatnonzero(array[order][1:] == array[order][:-1])
+    if repeated.size:
+        value = array[order][repeated[0]]
+        indices = np.flatnonzero(array == value)
+        raise ValueError(
+            f"grid axis {name!r} has the value {float(value)!r} more than once (indices "
+            f"{', '.join(map(str, indices.tolist()))}); each value is one grid point, so a "
+            "repeat computes the same trajectories twice and makes the coordinate "
+            "non-unique; accepted: distinct values (e.g. np.unique(values))"
         )
     return np.ascontiguousarray(array)

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import check_positive_int
+from ._validate import check_numbers, check_positive_int
 from .grid import Grid
 from .physics import Scene, parameter_names
 
@@ -453,7 +453,7 @@ def convergence(scene: Scene, theta0, omega0, t_end: float, method, dts, *,
         raise ValueError(f"convergence needs a fixed-step method; {integrator.name!r} is "
                          "adaptive; accepted: a fixed-step method, or work_precision(..., "
                          "tolerances=...) for an adaptive one")
-    dts = np.asarray(dts, dtype=np.float64)
+    dts = check_numbers("dts", dts)  # no booleans or strings taken as steps
     if dts.ndim != 1 or dts.size < 2:
         raise ValueError(f"dts must be a 1-D sequence of at least two steps, got {dts!r}")
     grid = Grid(theta0=theta0, omega0=omega0)

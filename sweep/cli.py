@@ -2,7 +2,8 @@
 
 ::
 
-    sweep run RUN.toml -o OUT.nc [--checkpoint DIR] [--resume] [--progress | --no-progress]
+    sweep run RUN.toml -o OUT.nc [--checkpoint DIR] [--resume] [--scheduler ADDRESS]
+                                 [--progress | --no-progress]
     sweep demo [-o FOLDER] [--size N]
     sweep plot FILE.nc --var NAME [--sel DIM=VALUE ...] -o OUT.png
     sweep plot FILE.nc --trajectory --sel theta0=VALUE --sel omega0=VALUE -o OUT.png
@@ -71,6 +72,11 @@ def build_parser() -> argparse.ArgumentParser:
                      help="continue the interrupted run whose checkpoint is in DIR: finished "
                      "chunks are loaded, not recomputed, and OUT.nc is bit-identical to an "
                      "uninterrupted run (a checkpoint of a different run is refused)")
+    run.add_argument("--scheduler", metavar="ADDRESS",
+                     help="run the chunks on the Dask cluster of this scheduler "
+                     "(tcp://HOST:8786; overrides [run] scheduler); needs the dask extra. "
+                     "Results are bit-identical to a local run; --checkpoint/--resume work "
+                     "the same")
     _progress_option(run)
     run.set_defaults(handler=_command_run)
 
@@ -198,25 +204,64 @@ def _command_run(args: argparse.Namespace) -> int:
     from .io import check_output_path, save
     from .toml_spec import load_run
 
-    scene, grid, kwargs = load_run(args.run_file)
+    options = {}
+    scene, grid, kwargs = load_run(args.run_file, options)
     output = check_output_path(args.output)
     folder = None
     if args.checkpoint is not None or args.resume:
         folder = Path(args.checkpoint) if args.checkpoint is not None else \
             default_checkpoint(output)
         kwargs.update(checkpoint=folder, resume=args.resume, keep_checkpoint=True)
+    scheduler = args.scheduler if args.scheduler is not None else options.get("scheduler")
+    client = _connect(scheduler) if scheduler is not None else None
     try:
-        ds, seconds = _run_quietly(scene, grid, progress=args.progress, **kwargs)
+        ds, seconds = _run_quietly(scene, grid, progress=args.progress, client=client,
+                                   **kwargs)
         save(ds, output)
     except KeyboardInterrupt:
         if args.progress or (args.progress is None and sys.stderr.isatty()):
             sys.stderr.write("\n")  # end the progress line
         print(f"sweep: interrupted; {_resume_hint(args, folder, output)}", file=sys.stderr)
         return 130
+    finally:
+        if client is not None:
+            client.close()
     if folder is not None:
         _checkpoint.remove(folder)
     print(f"wrote {output}: {_summary(ds, grid, seconds)}")
     return 0
+
+
+#: Seconds to wait for a Dask scheduler to answer before giving up.
+CONNECT_TIMEOUT_S = 30
+
+
+def _connect(address: str):
+    """A `dask.distributed.Client` of the scheduler at ``address``.
+
+    Raises
+    ------
+    ValueError
+        One line: dask is not installed (how to install it), the address is not one,
+        or the scheduler cannot be reached within `CONNECT_TIMEOUT_S`.
+    """
+    from .toml_spec import check_scheduler
+
+    address = check_scheduler("--scheduler", address)
+    try:
+        from distributed import Client
+    except ImportError:
+        raise ValueError(f"--scheduler {address}: running on a Dask cluster needs "
+                         "dask.distributed, which is not installed; accepted: pip install "
+                         "'sweep[dask]', or run without --scheduler (and without [run] "
+                         "scheduler)") from None
+    try:
+        return Client(address, timeout=CONNECT_TIMEOUT_S)
+    except Exception as exc:  # noqa: BLE001 - OSError, TimeoutError, ValueError (address)
+        raise ValueError(f"cannot connect to the Dask scheduler at {address!r}: "
+                         f"{' '.join(str(exc).split()) or type(exc).__name__}; accepted: the "
+                         "address of a running scheduler (dask scheduler prints it)") \
+            from None
 
 
 def _resume_hint(args: argparse.Namespace, folder, output: Path) -> str:
@@ -232,6 +277,8 @@ def _resume_hint(args: argparse.Namespace, folder, output: Path) -> str:
     command = ["sweep", "run", args.run_file, "-o", str(output)]
     if args.checkpoint is not None and Path(args.checkpoint) != default_checkpoint(output):
         command += ["--checkpoint", str(args.checkpoint)]
+    if getattr(args, "scheduler", None) is not None:
+        command += ["--scheduler", args.scheduler]
     command.append("--resume")
     return (f"{done} finished chunks are checkpointed in {str(folder)!r}; resume with: "
             f"{shlex.join(command)}")

@@ -119,8 +119,11 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
             if nc is None:  # the layout from the first block to arrive, 0 rows long
                 import netCDF4
 
-                block.isel({first: slice(0, 0)}).to_netcdf(
-                    tmp, engine="netcdf4", format="NETCDF4", unlimited_dims=[first])
+                empty = block.isel({first: slice(0, 0)})
+                empty.to_netcdf(tmp, engine="netcdf4", format="NETCDF4",
+                                unlimited_dims=[first],  # compressed as `sweep.save`
+                                encoding=io.netcdf_encoding(empty, sizes=dict(
+                                    zip(grid.dims, grid.shape))))
                 nc = netCDF4.Dataset(tmp, "a")
             for name, variable in block.variables.items():
                 if variable.dims[:1] == (first,):

@@ -20,7 +20,7 @@ from . import _config, io
 from . import methods as _methods
 from . import stability as _stability
 from ._timesteps import WHOLE_STEPS_RTOL, transient_steps, whole_steps
-from ._validate import check_positive_int, check_real
+from ._validate import check_flag, check_positive_int, check_real
 from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
 from .grid import Grid
@@ -333,6 +333,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     _check_stop_early(names, scene, grid, stop_early, save_every)
     if not isinstance(check_stability, (bool, np.bool_)):
         raise TypeError(f"check_stability must be True or False, got {check_stability!r}")
+    check_flag("specialize", specialize)
     if check_stability:
         _check_stable_step(scene, grid, settings, effects)
     if not specialize:  # every registered effect the method can integrate, fed zeros
@@ -478,6 +479,8 @@ def run(
     RuntimeWarning
         When some trajectories became non-finite (count given; see ``ds.status``).
     """
+    check_flag("progress", progress, allow_none=True)
+    check_flag("keep_checkpoint", keep_checkpoint)
     settings, spec, chunk_size = _prepare(
         scene, grid, t_end=t_end, dt=dt, t0=t0, t_transient=t_transient, observe=observe,
         save_every=save_every, method=method, rtol=rtol, atol=atol, chunk_size=chunk_size,
@@ -540,6 +543,8 @@ def run(
                                 todo, persisted, finished, retries=2)
     if store is not None and not keep_checkpoint:
         store.remove()
+    if store is not None:  # one writer per checkpoint: let the next run have it
+        store.release()
 
     failed = int(np.count_nonzero(status != Status.OK))
     if failed:

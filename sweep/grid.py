@@ -13,7 +13,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from ._validate import check_axis
+from ._validate import check_axis, check_numbers
 from .physics import EFFECTS, Scene, parameter_names, parameters
 
 __all__ = ["Grid", "from_degrees"]
@@ -35,7 +35,7 @@ def from_degrees(values) -> np.ndarray:
     ndarray, float64
         Same shape, in radians (or rad/s).
     """
-    return np.deg2rad(np.asarray(values, dtype=np.float64))
+    return np.deg2rad(check_numbers("from_degrees: values", values))
 
 
 class Grid:
@@ -50,7 +50,9 @@ class Grid:
         ``forcing_phase`` [rad], and those of any registered effect. The keyword order
         is the dimension order of the resulting dataset. An axis overrides the scene's
         value of that parameter; ``theta0`` and ``omega0`` default to 0 when absent.
-        A scalar is taken as a one-point axis.
+        A scalar is taken as a one-point axis. Values must be real numbers (booleans,
+        strings, None and complex numbers are refused) and distinct; they need not be
+        sorted: the dataset keeps the order given, and ``.sel`` works either way.
 
     Examples
     --------

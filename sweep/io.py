@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime
 import json
+import math
 import os
 import tempfile
 from pathlib import Path
@@ -15,7 +16,17 @@ from .kernels import Status
 from .observables import OBSERVABLES
 from .physics import EFFECTS, Scene, parameter_info
 
-__all__ = ["to_dataset", "save", "load", "scene_from", "run_arguments"]
+__all__ = ["to_dataset", "save", "load", "scene_from", "run_arguments", "netcdf_encoding"]
+
+#: zlib level of the variables `save` writes (with the byte shuffle filter), chosen by
+#: measurement (``python benchmarks/compression.py``): level 1 gets nearly all of the
+#: size reduction of higher levels at a fraction of their write time.
+COMPLEVEL = 1
+
+#: Target size of one netCDF/HDF5 chunk of a variable, in bytes (uncompressed): big
+#: enough for compression and few chunk-index entries, small enough that reading one
+#: map row or one point does not decompress much more than it needs.
+CHUNK_BYTES = 1 << 20
 
 
 def _version() -> str:
@@ -167,9 +178,61 @@ def check_output_path(path) -> Path:
     return path
 
 
+def _chunk_shape(shape: tuple[int, ...], itemsize: int) -> tuple[int, ...]:
+    """A chunk of at most `CHUNK_BYTES` bytes: the whole variable, with its largest
+    dimension halved (rounding up) until it fits. Leading dimensions are halved first
+    on ties, so a chunk keeps whole rows of the last, fastest-varying axis as long as
+    it can."""
+    chunk = [max(1, n) for n in shape]
+    while math.prod(chunk) * itemsize > CHUNK_BYTES and max(chunk) > 1:
+        largest = chunk.index(max(chunk))
+        chunk[largest] = (chunk[largest] + 1) // 2
+    return tuple(chunk)
+
+
+def netcdf_encoding(ds: xr.Dataset, *, complevel: int = COMPLEVEL,
+                    sizes: dict[str, int] | None = None) -> dict[str, dict]:
+    """netCDF4 encoding that compresses and chunks every data variable of ``ds``.
+
+    zlib (deflate) with the byte shuffle filter: every netCDF4/HDF5 reader decodes it
+    (``ncdump``, h5netcdf/h5py, Panoply), which zstd (a filter plugin) is not. Chunks
+    are about `CHUNK_BYTES` (see `_chunk_shape`). Coordinates, scalars and strings are
+    left as they are (small or not compressible by netCDF).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+    complevel : int, default `COMPLEVEL`
+        zlib level 1-9; 0 writes the variables uncompressed (contiguous).
+    sizes : dict, optional
+        Dimension sizes to chunk for instead of ``ds``'s (for a file written in
+        blocks, whose first dimension grows).
+
+    Returns
+    -------
+    dict
+        ``{variable: {"zlib", "complevel", "shuffle", "chunksizes"}}`` for
+        ``Dataset.to_netcdf(encoding=...)``.
+    """
+    sizes = {**ds.sizes, **(sizes or {})}
+    encoding = {}
+    if not complevel:
+        return encoding
+    for name, variable in ds.data_vars.items():
+        if variable.ndim == 0 or variable.dtype.kind not in "biuf":
+            continue
+        shape = tuple(sizes[dim] for dim in variable.dims)
+        encoding[name] = {"zlib": True, "complevel": int(complevel), "shuffle": True,
+                          "chunksizes": _chunk_shape(shape, variable.dtype.itemsize)}
+    return encoding
+
+
 def save(ds: xr.Dataset, path) -> Path:
     """Write ``ds`` to netCDF4 atomically: a temporary file in the same folder, then
     an atomic rename. An interrupted save leaves any previous file at ``path`` intact.
+
+    Data variables are compressed (zlib level `COMPLEVEL`, byte shuffle) in chunks of
+    about `CHUNK_BYTES` (`netcdf_encoding`); values read back bit-identical.
 
     Parameters
     ----------
@@ -187,7 +250,8 @@ def save(ds: xr.Dataset, path) -> Path:
     os.umask(umask)
     os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a saved file gets the usual mode
     try:
-        ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4")
+        ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4",
+                     encoding=netcdf_encoding(ds))
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -26,6 +26,7 @@ number of steps.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 __all__ = ["Observable", "OBSERVABLES", "DEFAULT_OBSERVE", "resolve"]
@@ -329,7 +330,15 @@ def resolve(observe) -> tuple[str, ...]:
         Naming the unknown observable and listing the accepted ones.
     """
     if isinstance(observe, str):
+        if observe not in OBSERVABLES and any(sep in observe for sep in ", ;"):
+            raise ValueError(
+                f"observe = {observe!r} is one string; accepted: a name or a sequence of "
+                f"names, e.g. {observe.replace(',', ' ').replace(';', ' ').split()!r}"
+            )
         observe = (observe,)
+    if isinstance(observe, (Mapping, bytes)):
+        raise ValueError(f"observe must be a sequence of names from {', '.join(OBSERVABLES)}, "
+                         f"got {observe!r}")
     try:
         names = tuple(observe)
     except TypeError:

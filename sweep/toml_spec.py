@@ -26,6 +26,7 @@ A run file has three tables::
     save_every = 10              # steps; stores theta(t), omega(t)
     method = "rk4"
     chunk_size = 1000            # trajectories per chunk (progress and checkpoints)
+    scheduler = "tcp://HOST:8786"  # run the chunks on this Dask cluster (sweep run only)
 
 ``units = "deg"`` is accepted for the angle-like axes ``theta0`` (deg),
 ``omega0`` (deg/s), ``forcing_phase`` (deg) and any effect parameter declared as an
@@ -44,19 +45,26 @@ from typing import Any
 
 import numpy as np
 
+from ._validate import check_flag, check_positive_int
 from .engine import validate_settings
 from .grid import Grid, from_degrees
 from .observables import resolve
 from .physics import Scene, parameter_names, parameters
 
-__all__ = ["RUN_KEYS", "angle_axes", "TABLES", "load_run", "parse_run"]
+__all__ = ["OPTION_KEYS", "RUN_KEYS", "TABLES", "angle_axes", "check_scheduler", "load_run",
+           "parse_run"]
 
 #: Top-level tables of a run file.
 TABLES = ("scene", "grid", "run")
 
 #: Keys of the ``[run]`` table (keyword arguments of `sweep.run`).
 RUN_KEYS = ("t_end", "dt", "t0", "t_transient", "observe", "save_every", "method", "rtol",
-            "atol", "chunk_size", "stop_early", "check_stability", "estimate_error")
+            "atol", "chunk_size", "stop_early", "check_stability", "estimate_error",
+            "scheduler")
+
+#: Keys of ``[run]`` that say where the run executes, not what it computes: returned
+#: in ``options`` by `load_run`, never among the keyword arguments of `sweep.run`.
+OPTION_KEYS = ("scheduler",)
 
 #: Keys of ``[run]`` that must be present.
 REQUIRED_RUN_KEYS = ("t_end", "dt")
@@ -79,7 +87,7 @@ def _units(name: str) -> dict[str, bool]:
 _RANGE_KEYS = ("start", "stop", "num")
 
 
-def load_run(path) -> tuple[Scene, Grid, dict[str, Any]]:
+def load_run(path, options: dict | None = None) -> tuple[Scene, Grid, dict[str, Any]]:
     """Read a TOML run file into the arguments of `sweep.run`.
 
     Parameters
@@ -87,6 +95,10 @@ def load_run(path) -> tuple[Scene, Grid, dict[str, Any]]:
     path : str or Path
         The run file (UTF-8 TOML with tables ``[scene]``, ``[grid]``, ``[run]``;
         see the module docstring).
+    options : dict, optional
+        Receives the `OPTION_KEYS` the file gives (``scheduler``: the address of a
+        Dask scheduler, which ``sweep run`` connects to). From Python, pass
+        ``client=dask.distributed.Client(address)`` to `sweep.run` instead.
 
     Returns
     -------
@@ -119,10 +131,10 @@ def load_run(path) -> tuple[Scene, Grid, dict[str, Any]]:
                          f"{exc.strerror or exc}") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"run file {str(path)!r} is not valid TOML: {exc}") from None
-    return parse_run(spec, source=str(path))
+    return parse_run(spec, source=str(path), options=options)
 
 
-def parse_run(spec: dict[str, Any], source: str = "run file"
+def parse_run(spec: dict[str, Any], source: str = "run file", options: dict | None = None
               ) -> tuple[Scene, Grid, dict[str, Any]]:
     """Turn a parsed run file (nested dicts, as `tomllib` returns) into run arguments.
 
@@ -133,6 +145,8 @@ def parse_run(spec: dict[str, Any], source: str = "run file"
         (the default `Scene`).
     source : str
         Where ``spec`` came from, put at the start of every error message.
+    options : dict, optional
+        As `load_run`.
 
     Returns
     -------
@@ -154,7 +168,29 @@ def parse_run(spec: dict[str, Any], source: str = "run file"
     grid = _grid(source, tables["grid"])
     with _context(source, "grid"):
         grid.check_against(scene)
-    return scene, grid, _run(source, tables["run"])
+    kwargs = _run(source, tables["run"])
+    found = {key: kwargs.pop(key) for key in OPTION_KEYS if key in kwargs}
+    if options is not None:
+        options.update(found)
+    return scene, grid, kwargs
+
+
+def check_scheduler(name: str, address: Any) -> str:
+    """Return ``address`` if it can name a Dask scheduler (``tcp://HOST:8786``,
+    ``tls://...``, ``HOST:8786``): a non-empty string without spaces.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming ``name``, the value and what is accepted.
+    """
+    accepted = "a Dask scheduler address such as 'tcp://HOST:8786'"
+    if not isinstance(address, str):
+        raise TypeError(f"{name} must be {accepted}, got {address!r}")
+    if not address.strip() or any(c.isspace() for c in address.strip()) or \
+            address.strip().endswith("://"):
+        raise ValueError(f"{name} must be {accepted}, got {address!r}")
+    return address.strip()
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -300,4 +336,12 @@ def _run(source: str, table: dict) -> dict[str, Any]:
             if chunk_size < 1:
                 raise ValueError(f"chunk_size must be an integer >= 1 (trajectories), "
                                  f"got {chunk_size!r}")
+        for flag in ("stop_early", "check_stability"):
+            if flag in kwargs:
+                check_flag(flag, kwargs[flag])
+        if "scheduler" in kwargs:
+            check_scheduler("scheduler", kwargs["scheduler"])
+        if "estimate_error" in kwargs:
+            check_positive_int("estimate_error", kwargs["estimate_error"],
+                               "an int >= 1 (trajectories)")
     return kwargs

@@ -18,8 +18,10 @@ at all, whatever kills the process (Ctrl-C, SIGKILL, power loss). Temporary file
 killed process left behind are ignored and cleaned up; a chunk file that cannot be read
 is recomputed.
 
-Not guarded: two processes writing to the same checkpoint folder at once (there is
-no lock); each run should have its own folder.
+One writer per folder: ``FOLDER/lock`` names the process (pid, host) whose run writes
+the folder, and a second run (another process, or another thread) is refused while
+that one is alive, naming it; a lock left by a dead process on this host is taken over
+(`sweep.execution.lock`). The lock is released when the run completes or fails.
 
 The manifest records a fingerprint of everything that determines the results: the
 scene, the grid (axis names, sizes and a SHA-256 of each axis's values), the
@@ -43,6 +45,8 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from . import lock as _lock
 
 __all__ = ["Checkpoint", "fingerprint", "open_checkpoint", "remove"]
 
@@ -185,6 +189,7 @@ class Checkpoint:
 
     def __init__(self, folder: Path, chunks: dict[tuple[int, int], Path]) -> None:
         self.folder = folder
+        self.lock = None   #: the folder's `sweep.execution.lock.FolderLock`, once taken
         self._chunks = chunks
         self.resumed = 0   #: chunks loaded instead of computed
         self.stored = 0    #: chunks computed and written
@@ -225,13 +230,20 @@ class Checkpoint:
         self._chunks[(start, stop)] = self.folder / name
         self.stored += 1
 
+    def release(self) -> None:
+        """Let go of the folder's lock (idempotent): another run may then write it."""
+        if self.lock is not None:
+            self.lock.release()
+
     def remove(self) -> None:
         """Delete the files of this checkpoint (and the folder if that empties it)."""
+        self.release()
         remove(self.folder)
 
 
 def _is_ours(name: str) -> bool:
-    return name == MANIFEST or bool(_CHUNK.match(name)) or name.startswith(_TEMP_PREFIX)
+    return (name in (MANIFEST, _lock.LOCK) or bool(_CHUNK.match(name))
+            or name.startswith(_TEMP_PREFIX))
 
 
 def remove(folder) -> None:
@@ -240,8 +252,8 @@ def remove(folder) -> None:
     folder = Path(folder)
     if not folder.is_dir():
         return
-    for path in folder.iterdir():
-        if _is_ours(path.name) and path.is_file():
+    for path in folder.iterdir():  # a lock file is its owner's to remove
+        if _is_ours(path.name) and path.name != _lock.LOCK and path.is_file():
             path.unlink(missing_ok=True)
     try:
         folder.rmdir()
@@ -269,6 +281,8 @@ def open_checkpoint(folder, fp: dict, *, resume: bool) -> Checkpoint:
         The folder's parent is missing, the path is not a folder, it holds another
         run's checkpoint (each difference named), it holds a checkpoint and ``resume``
         is False, or it holds other files but no checkpoint.
+    sweep.execution.lock.CheckpointInUseError
+        (a ValueError) Another live run writes the folder; its pid and host are named.
     """
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
@@ -280,7 +294,19 @@ def open_checkpoint(folder, fp: dict, *, resume: bool) -> Checkpoint:
             raise ValueError(f"checkpoint {str(folder)!r}: folder {str(parent)!r} does not "
                              "exist; accepted: a path in an existing folder")
         folder.mkdir()
-    names = [p.name for p in folder.iterdir()]
+    lock = _lock.acquire(folder)
+    try:
+        checkpoint = _open_locked(folder, fp, resume=resume)
+    except BaseException:
+        lock.release()
+        raise
+    checkpoint.lock = lock
+    return checkpoint
+
+
+def _open_locked(folder: Path, fp: dict, *, resume: bool) -> Checkpoint:
+    """`open_checkpoint` once the folder exists and its lock is held."""
+    names = [p.name for p in folder.iterdir() if p.name != _lock.LOCK]
     manifest = folder / MANIFEST
     if MANIFEST not in names:
         foreign = [n for n in names if not _is_ours(n)]

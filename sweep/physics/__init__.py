@@ -12,8 +12,9 @@ from .scene import (BASE_PARAMETERS, MODELS, Scene, parameter_info, parameter_na
                     parameter_table, parameters)
 
 __all__ = ["BASE_PARAMETERS", "Damping", "Drive", "EFFECTS", "Effect", "EffectDeclaration",
-           "Forcing", "MODELS", "PivotDrive", "QuadraticDrag", "Torque", "PARAMETERS", "PARAMETER_INFO", "Parameter", "Scene",
-           "parameter_info", "parameter_names", "parameter_table", "parameters", "register", "unregister"]
+           "Forcing", "MODELS", "PARAMETERS", "PARAMETER_INFO", "Parameter", "PivotDrive",
+           "QuadraticDrag", "Scene", "Torque", "parameter_info", "parameter_names",
+           "parameter_table", "parameters", "register", "unregister"]
 
 
 def __getattr__(name):
