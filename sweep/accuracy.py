@@ -32,7 +32,6 @@ from __future__ import annotations
 import json
 import math
 import time
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -643,71 +642,9 @@ def cost_at(wp, errors=(1e-4, 1e-8, 1e-12)):
 # ------------------------------------------------------------ error estimate on a run
 def estimate_error(scene: Scene, grid: Grid, *, sample: int = 32, seed: int = 0,
                    **run_kwargs) -> dict:
-    """Estimate the global error of a run from a random sample of its trajectories.
+    """Estimate the global error of a run from a random sample of its trajectories
+    (what ``sweep.run(..., estimate_error=N)`` attaches; see `sweep.engine.estimate_error`
+    for the method and the attributes returned)."""
+    from .engine import estimate_error as _estimate
 
-    Each sampled trajectory is integrated again with half the step (fixed-step methods;
-    the difference times ``2^p / (2^p - 1)`` is Richardson's estimate of the error of
-    the run's step, p the method's order) or with tolerances 100 times tighter (the
-    adaptive method: the difference estimates the error of the run's tolerances).
-
-    Parameters
-    ----------
-    scene, grid
-        As given to `sweep.run`.
-    sample : int, default 32
-        Trajectories re-run (at most the grid size); chosen uniformly without
-        replacement with ``numpy.random.default_rng(seed)``.
-    seed : int, default 0
-    **run_kwargs
-        The run's keyword arguments (``t_end``, ``dt``, ``method``, ...).
-
-    Returns
-    -------
-    dict
-        Attributes for the dataset: ``error_estimate_max`` and ``error_estimate_rms``
-        [rad] of the per-trajectory state error max(|d theta|, |d omega| / omega_n) at
-        ``t_end`` (failed trajectories left out), ``error_estimate_sample`` and
-        ``error_estimate_method``. For chaotic trajectories the estimate is large:
-        that is the honest answer about their final state.
-    """
-    from . import engine, methods
-
-    check_positive_int("estimate_error", sample, "None or an int >= 1 (trajectories)")
-    method = methods.resolve(run_kwargs.get("method", "rk4"))
-    rng = np.random.default_rng(seed)
-    picks = rng.choice(grid.size, size=min(int(sample), grid.size), replace=False)
-    base = {k: v for k, v in run_kwargs.items()
-            if k in ("t_end", "dt", "t0", "t_transient", "method", "rtol", "atol")}
-    base.update(observe=("final",), progress=False)
-    fine = dict(base)
-    if method.adaptive:
-        fine["rtol"] = (run_kwargs.get("rtol") or 1e-6) / 100
-        fine["atol"] = (run_kwargs.get("atol") or 1e-9) / 100
-        factor, how = 1.0, "re-run with rtol and atol / 100; difference of final states"
-    else:
-        fine["dt"] = run_kwargs["dt"] / 2
-        factor = 2.0**method.order / (2.0**method.order - 1)
-        how = (f"Richardson: re-run with dt/2, difference x 2^{method.order}/"
-               f"(2^{method.order} - 1)")
-    errors = []
-    axes = grid.axes
-    for flat in np.sort(picks):
-        index = np.unravel_index(flat, grid.shape)
-        point = Grid(**{name: [values[i]] for (name, values), i in zip(axes.items(), index)})
-        with warnings.catch_warnings():  # the run itself already reported failures
-            warnings.simplefilter("ignore", RuntimeWarning)
-            coarse_ds = engine.run(scene, point, **base)
-            fine_ds = engine.run(scene, point, **fine)
-        err = factor * state_error(scene, coarse_ds.theta_final.values,
-                                   coarse_ds.omega_final.values,
-                                   fine_ds.theta_final.values, fine_ds.omega_final.values)
-        errors.append(float(err.ravel()[0]))
-    errors = np.array(errors)
-    errors = errors[np.isfinite(errors)]
-    return {
-        "error_estimate_max": float(errors.max()) if errors.size else float("nan"),
-        "error_estimate_rms": float(np.sqrt(np.mean(errors**2))) if errors.size
-        else float("nan"),
-        "error_estimate_sample": int(len(picks)),
-        "error_estimate_method": how,
-    }
+    return _estimate(scene, grid, sample=sample, seed=seed, **run_kwargs)

@@ -30,7 +30,7 @@ from .methods import METHODS
 from .observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
 from .physics import EFFECTS, Scene
 
-__all__ = ["run", "warm_up", "RunSettings", "METHODS"]
+__all__ = ["run", "warm_up", "estimate_error", "RunSettings", "METHODS"]
 
 #: Default tolerances of the adaptive methods (per step, RMS norm over theta, omega):
 #: about 1e-6 global error on a few periods of the pendulum.
@@ -443,7 +443,7 @@ def run(
         Opt-in accuracy estimate: re-run this many random trajectories with half the
         step (or 100x tighter tolerances) and attach the estimated global error of the
         final state to the attributes (``error_estimate_max``, ``error_estimate_rms``
-        [rad]); see `sweep.accuracy.estimate_error`.
+        [rad]); see `estimate_error`.
     checkpoint : str or Path, optional
         A folder (created if missing) where each finished chunk is written atomically,
         so that an interrupted run can be resumed (see `sweep.execution.checkpoint`). Without
@@ -558,8 +558,6 @@ def run(
     if settings.adaptive:
         _add_step_statistics(ds, grid, settings, stats)
     if estimate_error is not None:
-        from .accuracy import estimate_error as _estimate
-
         ds.attrs.update(_estimate(scene, grid, sample=estimate_error, t_end=t_end, dt=dt,
                                   t0=t0, t_transient=t_transient, method=method, rtol=rtol,
                                   atol=atol))
@@ -626,3 +624,78 @@ def _add_step_statistics(ds, grid, settings, stats) -> None:
         "per-trajectory embedded error control: error estimate <= atol + rtol |y| (RMS "
         "over theta, omega); dt is the first trial and the largest step"
     )
+
+
+def estimate_error(scene: Scene, grid: Grid, *, sample: int = 32, seed: int = 0,
+                   **run_kwargs) -> dict:
+    """Estimate the global error of a run from a random sample of its trajectories.
+
+    Each sampled trajectory is integrated again with half the step (fixed-step methods;
+    the difference times ``2^p / (2^p - 1)`` is Richardson's estimate of the error of
+    the run's step, p the method's order) or with tolerances 100 times tighter (the
+    adaptive method: the difference estimates the error of the run's tolerances).
+
+    Parameters
+    ----------
+    scene, grid
+        As given to `sweep.run`.
+    sample : int, default 32
+        Trajectories re-run (at most the grid size); chosen uniformly without
+        replacement with ``numpy.random.default_rng(seed)``.
+    seed : int, default 0
+    **run_kwargs
+        The run's keyword arguments (``t_end``, ``dt``, ``method``, ...).
+
+    Returns
+    -------
+    dict
+        Attributes for the dataset: ``error_estimate_max`` and ``error_estimate_rms``
+        [rad] of the per-trajectory state error max(|d theta|, |d omega| / omega_n) at
+        ``t_end`` (failed trajectories left out), ``error_estimate_sample`` and
+        ``error_estimate_method``. For chaotic trajectories the estimate is large:
+        that is the honest answer about their final state.
+    """
+    check_positive_int("estimate_error", sample, "None or an int >= 1 (trajectories)")
+    method = _methods.resolve(run_kwargs.get("method", "rk4"))
+    rng = np.random.default_rng(seed)
+    picks = rng.choice(grid.size, size=min(int(sample), grid.size), replace=False)
+    base = {k: v for k, v in run_kwargs.items()
+            if k in ("t_end", "dt", "t0", "t_transient", "method", "rtol", "atol")}
+    base.update(observe=("final",), progress=False)
+    fine = dict(base)
+    if method.adaptive:
+        fine["rtol"] = (run_kwargs.get("rtol") or 1e-6) / 100
+        fine["atol"] = (run_kwargs.get("atol") or 1e-9) / 100
+        factor, how = 1.0, "re-run with rtol and atol / 100; difference of final states"
+    else:
+        fine["dt"] = run_kwargs["dt"] / 2
+        factor = 2.0**method.order / (2.0**method.order - 1)
+        how = (f"Richardson: re-run with dt/2, difference x 2^{method.order}/"
+               f"(2^{method.order} - 1)")
+    errors = []
+    axes = grid.axes
+    for flat in np.sort(picks):
+        index = np.unravel_index(flat, grid.shape)
+        point = Grid(**{name: [values[i]] for (name, values), i in zip(axes.items(), index)})
+        with warnings.catch_warnings():  # the run itself already reported failures
+            warnings.simplefilter("ignore", RuntimeWarning)
+            coarse_ds = run(scene, point, **base)
+            fine_ds = run(scene, point, **fine)
+        # the state error max(|d theta|, |d omega| / omega_n) [rad] at t_end
+        err = factor * np.maximum(
+            np.abs(coarse_ds.theta_final.values - fine_ds.theta_final.values),
+            np.abs(coarse_ds.omega_final.values - fine_ds.omega_final.values)
+            / scene.natural_frequency)
+        errors.append(float(err.ravel()[0]))
+    errors = np.array(errors)
+    errors = errors[np.isfinite(errors)]
+    return {
+        "error_estimate_max": float(errors.max()) if errors.size else float("nan"),
+        "error_estimate_rms": float(np.sqrt(np.mean(errors**2))) if errors.size
+        else float("nan"),
+        "error_estimate_sample": int(len(picks)),
+        "error_estimate_method": how,
+    }
+
+
+_estimate = estimate_error  # `run`'s argument of the same name hides the function
