@@ -21,6 +21,7 @@ from . import methods as _methods
 from . import stability as _stability
 from ._timesteps import WHOLE_STEPS_RTOL, transient_steps, whole_steps
 from ._validate import check_flag, check_positive_int, check_real
+from ._version import __version__
 from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
 from .grid import Grid
@@ -607,7 +608,7 @@ def _open_checkpoint(checkpoint, resume, **run):
                         f"{checkpoint!r}")
     from .execution import checkpoint as _checkpoint
 
-    fp = _checkpoint.fingerprint(version=io._version(), **run)
+    fp = _checkpoint.fingerprint(version=__version__, **run)
     return _checkpoint.open_checkpoint(checkpoint, fp, resume=bool(resume))
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ._version import __version__
 from .kernels import Status
 from .observables import OBSERVABLES
 from .physics import EFFECTS, Scene, parameter_info
@@ -27,12 +28,6 @@ COMPLEVEL = 1
 #: enough for compression and few chunk-index entries, small enough that reading one
 #: map row or one point does not decompress much more than it needs.
 CHUNK_BYTES = 1 << 20
-
-
-def _version() -> str:
-    from ._version import __version__
-
-    return __version__
 
 
 def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Dataset:
@@ -107,10 +102,10 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     attrs = {
         "Conventions": "CF-1.10",
         "title": "pendulum parameter sweep",
-        "source": f"sweep {_version()}",
+        "source": f"sweep {__version__}",
         "history": f"{datetime.datetime.now(datetime.UTC).isoformat(timespec='seconds')}"
-                   f" created by sweep {_version()}",
-        "sweep_version": _version(),
+                   f" created by sweep {__version__}",
+        "sweep_version": __version__,
         "equation": equation(),
         "model": scene.model,
         "effects": " ".join(simulated) if simulated else "none",
