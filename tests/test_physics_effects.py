@@ -326,7 +326,7 @@ NAIVE_SCENES = {
 
 
 NAIVE_CASES = [("torque", "nonlinear"), ("drag", "nonlinear"), ("pivot", "nonlinear"),
-               ("pivot", "linear"), ("all", "nonlinear"), ("all", "linear")]
+               ("all", "nonlinear"), ("all", "linear")]
 
 
 @pytest.mark.parametrize("name,model", NAIVE_CASES, ids=[f"{n}-{m}" for n, m in NAIVE_CASES])
