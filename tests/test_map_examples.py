@@ -54,3 +54,27 @@ def test_forced_basins(tmp_path, capsys):
     _assert_png(tmp_path / "forced_basins.png")
     out = capsys.readouterr().out
     assert "turns/period" in out and "boundary basin entropy" in out
+
+
+def test_torque_locked_running(tmp_path, capsys):
+    assert _load("torque_locked_running").main(["--size", "13", "--out", str(tmp_path)]) == 0
+    _assert_png(tmp_path / "torque_locked_running.png")
+    out = capsys.readouterr().out
+    # a running start runs in more of the (torque, damping) plane than a start at rest
+    # (hysteresis): between 4 c / pi and the rest start's threshold only it runs
+    shares = [float(line.rsplit(" ", 1)[1]) for line in out.splitlines() if "share" in line]
+    assert shares[1] > shares[0]
+
+
+def test_kapitza(tmp_path, capsys):
+    assert _load("kapitza").main(["--size", "9", "--out", str(tmp_path)]) == 0
+    _assert_png(tmp_path / "kapitza.png")
+    share = float(capsys.readouterr().out.split("share ")[1].split()[0])
+    assert 0.2 < share < 0.95  # both sides of Kapitza's threshold are on the map
+
+
+def test_mathieu_chart(tmp_path, capsys):
+    assert _load("mathieu_chart").main(["--size", "11", "--out", str(tmp_path)]) == 0
+    _assert_png(tmp_path / "mathieu_chart.png")
+    share = float(capsys.readouterr().out.split("share ")[1].split(";")[0])
+    assert 0.1 < share < 0.9  # the first tongue and the stable region are both on it

@@ -129,6 +129,7 @@ class QuadraticDrag(Effect):
         conservative=False,
         # d/d(theta') of -k theta'|theta'| is -2 k |theta'|: stiff for fast motion
         linear_damping="2.0 * kd * omega_max",
+        switched_on_by_grid=True,  # like damping: a drag axis alone switches it on
     )
 
 
