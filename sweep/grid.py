@@ -124,10 +124,11 @@ class Grid:
             declaration = effect_type.declaration
             given = [axis for axis in declaration.axes if axis in self._axes]
             if given and scene.effect(name) is None and not declaration.switched_on_by_grid:
+                what = (f"to supply the other {name} parameters" if len(declaration.parameters) > 1
+                        else "(the axis alone does not switch it on)")
                 raise ValueError(
-                    f"grid axis {given[0]!r} needs a {name} in the scene to supply the "
-                    f"other {name} parameters; accepted: add {effect_type.signature()} to "
-                    "Scene.effects"
+                    f"grid axis {given[0]!r} needs a {name} in the scene {what}; accepted: "
+                    f"add {effect_type.signature()} to Scene.effects"
                 )
 
     def effects(self, scene: Scene) -> frozenset[str]:
