@@ -14,8 +14,6 @@ Chunks of one `sweep.run` on a Dask cluster are `sweep.execution.dask`'s work
 
 from __future__ import annotations
 
-import numpy as np
-
 from ._validate import check_positive_int
 from .execution.dask import _KERNEL_LOCK, check_client
 
@@ -77,7 +75,7 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     import warnings
 
     from . import engine, io
-    from .kernels import Status
+    from .kernels import failure_summary, status_counts
     from .grid import Grid
 
     for name in _NOT_STREAMED:
@@ -111,11 +109,12 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
     os.close(fd)
     nc = None
-    done = failed = 0
+    done = 0
+    counts = {}
     futures = {}
     try:
         def write(i0, i1, block):
-            nonlocal nc, done, failed
+            nonlocal nc, done
             if nc is None:  # the layout from the first block to arrive, 0 rows long
                 import netCDF4
 
@@ -128,7 +127,8 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
             for name, variable in block.variables.items():
                 if variable.dims[:1] == (first,):
                     nc[name][i0:i1] = variable.values
-            failed += int(np.count_nonzero(block.status.values != Status.OK))
+            for code, k in status_counts(block.status.values).items():
+                counts[code] = counts.get(code, 0) + k
             done += block.status.size
             report(done)
 
@@ -159,9 +159,9 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
             nc.close()
         if os.path.exists(tmp):
             os.unlink(tmp)
-    if failed:
-        warnings.warn(f"{failed} of {grid.size} trajectories became non-finite; see "
-                      "ds.status", RuntimeWarning, stacklevel=2)
+    failures = failure_summary(counts, grid.size)
+    if failures:
+        warnings.warn(failures, RuntimeWarning, stacklevel=2)
     return path
 
 

@@ -25,8 +25,8 @@ from ._version import __version__
 from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
 from .grid import Grid
-from .kernels import (KernelSpec, Status, build, check_method_fits, check_observables_fit,
-                      declarations, n_columns)
+from .kernels import (KernelSpec, build, check_method_fits, check_observables_fit, declarations,
+                      failure_summary, n_columns, status_counts)
 from .methods import METHODS
 from .observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
 from .physics import EFFECTS, Scene
@@ -478,7 +478,8 @@ def run(
     Warns
     -----
     RuntimeWarning
-        When some trajectories became non-finite (count given; see ``ds.status``).
+        When some trajectories failed (counts by kind: non-finite, step underflow;
+        see ``ds.status``).
     """
     check_flag("progress", progress, allow_none=True)
     check_flag("keep_checkpoint", keep_checkpoint)
@@ -547,13 +548,9 @@ def run(
     if store is not None:  # one writer per checkpoint: let the next run have it
         store.release()
 
-    failed = int(np.count_nonzero(status != Status.OK))
-    if failed:
-        warnings.warn(
-            f"{failed} of {n} trajectories became non-finite; see ds.status",
-            RuntimeWarning,
-            stacklevel=2,
-        )
+    failures = failure_summary(status_counts(status), n)
+    if failures:
+        warnings.warn(failures, RuntimeWarning, stacklevel=2)
     ds = io.to_dataset(scene=scene, grid=grid, settings=settings, spec=spec, out=out,
                        status=status, saved=saved if save_every else None)
     if settings.adaptive:

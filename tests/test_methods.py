@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep import _config, engine, methods
+from sweep import Status, _config, engine, maps, methods
 from sweep import kernels as _kernels
 from sweep.kernels import vecmath as _vecmath
 from sweep.accuracy import ellipk, exact, state_error
@@ -472,15 +472,35 @@ def test_dopri5_observables_update_at_accepted_steps():
     assert abs(ds.energy_final.item() - ds.energy_initial.item()) < 1e-7
 
 
-def test_dopri5_overflow_is_flagged_not_raised():
-    # damping 1e30 makes the explicit step stable only for h < ~3e-30: the step size
-    # underflows below 16 eps t, which is reported as a failed trajectory
+def test_dopri5_step_underflow_is_flagged_not_raised():
+    # damping 1e300 makes the explicit step stable only for h < ~3e-300: the step size
+    # underflows below 16 eps t, which is reported as its own kind of failure
     scene = sweep.Scene(effects=(sweep.Damping(0.1),))
-    with pytest.warns(RuntimeWarning, match=r"1 of 2 trajectories"):
+    with pytest.warns(RuntimeWarning,
+                      match=r"^1 of 2 trajectories failed \(1 step_underflow\)"):
         ds = sweep.run(scene, sweep.Grid(theta0=[1.0], damping=[0.1, 1e300]), t_end=1.0,
-                       dt=0.1, method="dopri5", observe=("final",))
-    assert list(ds.status.values.ravel()) == [0, 1]
-    assert np.isnan(ds.theta_final.values[0, 1])
+                       dt=0.1, method="dopri5", observe=("final", "theta_max"))
+    assert list(ds.status.values.ravel()) == [Status.OK, Status.STEP_UNDERFLOW]
+    assert np.isnan(ds.theta_final.values[0, 1]) and np.isnan(ds.theta_max.values[0, 1])
+    assert ds.status.attrs["flag_meanings"].split()[Status.STEP_UNDERFLOW] == "step_underflow"
+    assert "adaptive step shrank" in ds.status.attrs["comment"]
+    assert maps.motion(ds).values[0, 1] == -127  # unresolved in every map
+
+
+def test_a_blow_up_under_dopri5_is_a_step_underflow_and_under_rk4_non_finite():
+    """A torque of 1e306 rad/s^2 spins the pendulum up as theta ~ tau t^2 / 2, past the
+    largest double (1.8e308) at t ~ 19 s: the fixed step overflows to inf (non-finite);
+    the adaptive step is rejected there and shrinks until it underflows. The two
+    failures are told apart."""
+    scene = sweep.Scene(effects=(sweep.Torque(1e306),))
+    grid = sweep.Grid(theta0=[0.0, 1.0])
+    with pytest.warns(RuntimeWarning, match="became non-finite"):
+        fixed = sweep.run(scene, grid, t_end=20.0, dt=0.1, observe=("final",))
+    assert (fixed.status == Status.NONFINITE).all()
+    with pytest.warns(RuntimeWarning, match=r"failed \(2 step_underflow\)"):
+        adaptive = sweep.run(scene, grid, t_end=20.0, dt=0.1, method="dopri5",
+                             observe=("final",))
+    assert (adaptive.status == Status.STEP_UNDERFLOW).all()
 
 
 def test_observables_on_the_step_grid_are_refused_with_an_adaptive_method(no_compute):

@@ -4,7 +4,8 @@ step (one trajectory per ``prange`` iteration).
 Each trajectory advances its own time ``t`` (a sum of accepted steps) and clips its
 last step so that it ends at ``t_end`` exactly. A trajectory whose step would have to
 shrink below ``16 eps max(|t0|, |t_end|)`` (which only a state on its way to overflow
-does) is flagged like a non-finite one.
+does) is flagged ``STEP_UNDERFLOW``: a rejected step whose new state is non-finite
+shrinks the step, so a blow-up ends there too (its state stays finite).
 """
 
 from __future__ import annotations
@@ -119,7 +120,7 @@ def _final_block(spec: KernelSpec) -> str:
             status[i] = {int(Status.OK)}
 {indent(snippets(spec, "final"), 3) or "            pass"}
         else:
-            status[i] = {int(Status.NONFINITE)}
+            status[i] = {int(Status.STEP_UNDERFLOW)}
             for col in range({n_columns(spec)}):
                 out[i, col] = math.nan
 '''

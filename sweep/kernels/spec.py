@@ -13,7 +13,7 @@ from ..observables import OBSERVABLES
 from ..physics import EFFECTS, EffectDeclaration
 
 __all__ = ["KernelSpec", "Status", "check_method_fits", "check_observables_fit",
-           "declarations", "method_of", "n_columns"]
+           "declarations", "failure_summary", "method_of", "n_columns", "status_counts"]
 
 
 class Status(enum.IntEnum):
@@ -21,6 +21,7 @@ class Status(enum.IntEnum):
 
     OK = 0
     NONFINITE = 1
+    STEP_UNDERFLOW = 2
 
     @property
     def message(self) -> str:
@@ -30,9 +31,39 @@ class Status(enum.IntEnum):
 
 _STATUS_MESSAGES = {
     Status.OK: "integrated to t_end",
-    Status.NONFINITE: "state became non-finite (overflow or NaN), or an adaptive step "
-                      "underflowed; integration stopped",
+    Status.NONFINITE: "state became non-finite (overflow or NaN); integration stopped",
+    Status.STEP_UNDERFLOW: "the adaptive step shrank below 16 eps |t| (the solution blows "
+                           "up, or is too stiff for the tolerances); integration stopped",
 }
+
+
+def status_counts(status) -> dict[int, int]:
+    """``{code: trajectories}`` of a `Status` array (any shape)."""
+    import numpy as np
+
+    codes, counts = np.unique(np.asarray(status), return_counts=True)
+    return {int(c): int(k) for c, k in zip(codes, counts)}
+
+
+def failure_summary(counts: dict[int, int], total: int) -> str | None:
+    """``"3 of 12 trajectories became non-finite; see ds.status"`` (or ``"... failed (2
+    nonfinite, 1 step_underflow) ..."`` when the kinds differ); None if none failed.
+
+    Parameters
+    ----------
+    counts : dict
+        Trajectories per `Status` code (`status_counts`).
+    total : int
+        Trajectories of the run.
+    """
+    failed = {Status(c): k for c, k in counts.items() if c != Status.OK and k}
+    if not failed:
+        return None
+    n = sum(failed.values())
+    if set(failed) == {Status.NONFINITE}:
+        return f"{n} of {total} trajectories became non-finite; see ds.status"
+    kinds = ", ".join(f"{k} {s.name.lower()}" for s, k in sorted(failed.items()))
+    return f"{n} of {total} trajectories failed ({kinds}); see ds.status"
 
 
 def declarations(effects) -> tuple[EffectDeclaration, ...]:
