@@ -38,9 +38,19 @@ NARROW_BELOW = 8
 #: numba ``boundscheck``: off in production; tests index-check through the oracle.
 BOUNDSCHECK = False
 
-#: Trajectories per chunk: the unit of progress reporting (and, later, of
-#: checkpoints and distributed tasks). Results do not depend on it.
+#: Most trajectories per chunk: the unit of progress reporting, checkpoints and Dask
+#: tasks. Results do not depend on it.
 CHUNK_SIZE = 1 << 16
+
+#: Trajectory-steps of work per chunk when `sweep.run` chooses the chunk size: about one
+#: second of the full scene on 2 cores (~3e8 trajectory-steps/s), so that a long run's
+#: progress moves every second or so (a chunk of CHUNK_SIZE trajectories x 30,000 steps
+#: would take 6 s). Never fewer than CHUNK_MIN trajectories, so that a chunk still has
+#: blocks for every thread.
+CHUNK_WORK = 3 * 10**8
+
+#: Fewest trajectories per chunk chosen by `sweep.run` (16 blocks of BLOCK).
+CHUNK_MIN = 16 * BLOCK
 
 
 def jit_options() -> dict:

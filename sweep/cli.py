@@ -118,8 +118,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _progress_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                        help="show a progress line on stderr (default: when stderr is a "
-                        "terminal)")
+                        help="show a progress bar on stderr (default: when stderr is a "
+                        "terminal and CI is not set)")
 
 
 # ------------------------------------------------------------------------------- main

@@ -62,20 +62,21 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     retries : int, default 2
         Retries of a block whose task raised (a lost worker's blocks are rerun anyway).
     progress : bool, optional
-        One progress line on stderr (default: when stderr is a tty).
+        A progress bar on stderr (default as for `sweep.run`).
 
     Returns
     -------
     pathlib.Path
     """
+    import contextlib
     import inspect
     import os
-    import sys
     import tempfile
     import warnings
 
     from . import engine, io
     from .kernels import failure_summary, status_counts
+    from .execution.progress import progress_bar
     from .grid import Grid
 
     for name in _NOT_STREAMED:
@@ -104,17 +105,16 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
         return Grid(**{name: (values[i0:i1] if name == first else values)
                        for name, values in axes.items()})
 
-    report = engine._progress_printer(sys.stderr.isatty() if progress is None
-                                      else bool(progress), grid.size)
+    closing = contextlib.ExitStack()
+    bar = closing.enter_context(progress_bar(progress, grid.size))
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
     os.close(fd)
     nc = None
-    done = 0
     counts = {}
     futures = {}
     try:
         def write(i0, i1, block):
-            nonlocal nc, done
+            nonlocal nc
             if nc is None:  # the layout from the first block to arrive, 0 rows long
                 import netCDF4
 
@@ -129,8 +129,7 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
                     nc[name][i0:i1] = variable.values
             for code, k in status_counts(block.status.values).items():
                 counts[code] = counts.get(code, 0) + k
-            done += block.status.size
-            report(done)
+            bar.update(block.status.size)
 
         kwargs = dict(run_kwargs)
         if client is None:
@@ -153,6 +152,7 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
     finally:
+        closing.close()
         if futures:
             client.cancel([f for f, _, _ in futures.values()])
         if nc is not None:

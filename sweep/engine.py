@@ -9,8 +9,6 @@ from __future__ import annotations
 import inspect
 import math
 import os
-import sys
-import time
 import warnings
 from dataclasses import dataclass
 
@@ -22,8 +20,10 @@ from . import stability as _stability
 from ._timesteps import WHOLE_STEPS_RTOL, transient_steps, whole_steps
 from ._validate import check_flag, check_positive_int, check_real
 from ._version import __version__
+from .execution import RunContext, execute
 from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
+from .execution.progress import progress_bar
 from .grid import Grid
 from .kernels import (KernelSpec, build, check_method_fits, check_observables_fit, declarations,
                       failure_summary, n_columns, status_counts)
@@ -31,7 +31,7 @@ from .methods import METHODS
 from .observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
 from .physics import EFFECTS, Scene
 
-__all__ = ["run", "warm_up", "estimate_error", "RunSettings", "METHODS"]
+__all__ = ["run", "warm_up", "estimate_error", "default_chunk_size", "RunSettings", "METHODS"]
 
 #: Default tolerances of the adaptive methods (per step, RMS norm over theta, omega):
 #: about 1e-6 global error on a few periods of the pendulum.
@@ -167,23 +167,14 @@ def validate_method(method):
                      f"sweep.methods.ButcherTableau or SplittingMethod), got {method!r}")
 
 
-def _progress_printer(enabled: bool, total: int):
-    """One aggregated progress line on stderr; a no-op when disabled."""
-    if not enabled:
-        return lambda done: None
-    start = time.perf_counter()
-
-    def report(done: int) -> None:
-        elapsed = time.perf_counter() - start
-        width = 30
-        filled = int(width * done / total)
-        sys.stderr.write(f"\rsweep: [{'#' * filled}{'.' * (width - filled)}] "
-                         f"{done}/{total} trajectories, {elapsed:.1f} s")
-        if done == total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
-
-    return report
+def default_chunk_size(settings: RunSettings) -> int:
+    """Trajectories per chunk when ``run`` is given none: about `_config.CHUNK_WORK`
+    trajectory-steps of work (a second or so), a multiple of `_config.CHUNK_MIN`, at
+    most `_config.CHUNK_SIZE`. A function of the time settings alone, so a resumed run
+    computes the same chunks."""
+    steps = settings.n_steps or math.ceil((settings.t_end - settings.t0) / settings.dt)
+    chunks = max(1, _config.CHUNK_WORK // max(steps, 1) // _config.CHUNK_MIN)
+    return min(_config.CHUNK_SIZE, chunks * _config.CHUNK_MIN)
 
 
 def _check_stop_early(names, scene: Scene, grid: Grid, stop_early, save_every) -> None:
@@ -323,7 +314,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         check_positive_int("estimate_error", estimate_error,
                            "None or an int >= 1 (trajectories)")
     if chunk_size is None:
-        chunk_size = _config.CHUNK_SIZE
+        chunk_size = default_chunk_size(settings)
     check_positive_int("chunk_size", chunk_size)
 
     integrator = settings.integrator
@@ -419,9 +410,13 @@ def run(
         the last step is clipped so every trajectory ends at ``t_end`` exactly. The
         dataset gains ``steps_accepted`` and ``steps_rejected`` per trajectory.
     progress : bool, optional
-        Print one aggregated progress line to stderr; default: when stderr is a tty.
+        Show a progress bar (`tqdm`: trajectories done, rate, time left; a widget in
+        Jupyter) on stderr. Default: when stderr is a terminal or in a notebook, and
+        never when the environment variable ``CI`` is set (true).
     chunk_size : int, optional
-        Trajectories per chunk (progress granularity); results do not depend on it.
+        Trajectories per chunk (the unit of progress, checkpoints and Dask tasks);
+        results do not depend on it. Default `default_chunk_size`: about a second of
+        work per chunk, at most 65,536 trajectories.
     specialize : bool, default True
         False builds the fully general kernel (damping and forcing terms present and
         fed zeros when the scene lacks them): for tests and benchmarks.
@@ -504,57 +499,39 @@ def run(
         )
 
     if client is not None:
-        from .execution import dask as _distributed
+        from .execution.dask import check_client
 
-        _distributed.check_client(client)
+        check_client(client)
     store = _open_checkpoint(checkpoint, resume, scene=scene, grid=grid, settings=settings,
                              spec=spec, chunk_size=int(chunk_size))
     # every per-trajectory array the kernel writes (out, status, [saved], [stats]); a
     # checkpoint stores and restores these, a distributed task returns its rows of them
     persisted = _allocate(spec, settings, n)
-    out, status = persisted["out"], persisted["status"]
-    saved = persisted.get("saved", np.empty((0, 2, 0)))
-    stats = persisted.get("stats")
-    if progress is None:
-        progress = sys.stderr.isatty()
-    report = _progress_printer(bool(progress), n)
-    done = 0
+    todo = [(start, stop) for start, stop in grid.chunks(int(chunk_size))
+            if store is None or not store.restore(start, stop, persisted)]
+    resumed = n - sum(stop - start for start, stop in todo)
+    with progress_bar(progress, n, initial=resumed) as bar:
 
-    def finished(start, stop):
-        nonlocal done
-        if store is not None:
-            store.store(start, stop, persisted)
-        done += stop - start
-        report(done)
+        def finished(start, stop):
+            if store is not None:
+                store.store(start, stop, persisted)
+            bar.update(stop - start)
 
-    todo = []
-    for start, stop in grid.chunks(int(chunk_size)):
-        if store is not None and store.restore(start, stop, persisted):
-            done += stop - start
-            report(done)  # resumed chunks count as done
-        else:
-            todo.append((start, stop))
-    if client is None:
-        kernel = build(spec)
-        for start, stop in todo:
-            _integrate(kernel, grid.table(scene, start, stop), settings,
-                       {name: array[start:stop] for name, array in persisted.items()})
-            finished(start, stop)
-    else:  # one task per chunk on the cluster, gathered as they finish
-        _distributed.run_chunks(client, _distributed.RunContext(scene, grid, spec, settings),
-                                todo, persisted, finished, retries=2)
+        execute(RunContext(scene, grid, spec, settings), todo, persisted, finished,
+                client=client)
     if store is not None and not keep_checkpoint:
         store.remove()
     if store is not None:  # one writer per checkpoint: let the next run have it
         store.release()
 
+    out, status = persisted["out"], persisted["status"]
     failures = failure_summary(status_counts(status), n)
     if failures:
         warnings.warn(failures, RuntimeWarning, stacklevel=2)
     ds = io.to_dataset(scene=scene, grid=grid, settings=settings, spec=spec, out=out,
-                       status=status, saved=saved if save_every else None)
+                       status=status, saved=persisted.get("saved"))
     if settings.adaptive:
-        _add_step_statistics(ds, grid, settings, stats)
+        _add_step_statistics(ds, grid, settings, persisted["stats"])
     if estimate_error is not None:
         ds.attrs.update(_estimate(scene, grid, sample=estimate_error, t_end=t_end, dt=dt,
                                   t0=t0, t_transient=t_transient, method=method, rtol=rtol,

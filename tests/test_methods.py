@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep import Status, _config, engine, maps, methods
+from sweep import Status, _config, maps, methods
 from sweep import kernels as _kernels
 from sweep.kernels import vecmath as _vecmath
 from sweep.accuracy import ellipk, exact, state_error
@@ -226,14 +226,6 @@ def test_a_user_tableau_runs_and_equal_data_gives_equal_numbers():
 
 
 # =========================================================================== refusals
-@pytest.fixture
-def no_compute(monkeypatch):
-    def forbidden(*args, **kwargs):
-        raise AssertionError("compute started before the input was validated")
-
-    monkeypatch.setattr(engine, "build", forbidden)
-
-
 REFUSALS = [
     ("verlet with damping", dict(scene=sweep.Scene(effects=(sweep.Damping(0.1),)),
                                  method="verlet"),

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import sweep
-from sweep import engine, kernels, maps, toml_spec
+from sweep import kernels, maps, toml_spec
 from sweep.kernels import KernelSpec
 
 scipy_integrate = pytest.importorskip("scipy.integrate")
@@ -415,14 +415,6 @@ BAD_EFFECTS = [
 def test_bad_effect_parameters_are_refused(call, exception, message):
     with pytest.raises(exception, match=message):
         call()
-
-
-@pytest.fixture
-def no_compute(monkeypatch):
-    def forbidden(*args, **kwargs):
-        raise AssertionError("compute started before the input was validated")
-
-    monkeypatch.setattr(engine, "build", forbidden)
 
 
 PIVOT_SCENE = sweep.Scene(effects=(sweep.PivotDrive(0.01, 10.0),))

@@ -22,7 +22,8 @@ import xarray as xr
 
 import sweep
 from sweep.execution import checkpoint as ckpt
-from sweep import cli, engine
+from sweep.execution import local
+from sweep import cli
 from sweep.toml_spec import load_run
 
 SCENE = sweep.Scene(effects=(sweep.Damping(0.3),))
@@ -42,12 +43,13 @@ def identical(a: xr.Dataset, b: xr.Dataset) -> None:
 
 
 class Interrupt:
-    """Wraps `sweep.engine.build`: the kernel raises KeyboardInterrupt on call
-    ``after + 1`` (like a Ctrl-C during that chunk) and counts its calls."""
+    """Wraps the `build` that local execution calls: the kernel raises
+    KeyboardInterrupt on call ``after + 1`` (like a Ctrl-C during that chunk) and counts
+    its calls."""
 
     def __init__(self, monkeypatch, after: int | None) -> None:
         self.after, self.calls = after, 0
-        real = engine.build
+        real = local.build
 
         def build(spec):
             kernel = real(spec)
@@ -60,7 +62,7 @@ class Interrupt:
 
             return wrapped
 
-        monkeypatch.setattr(engine, "build", build)
+        monkeypatch.setattr(local, "build", build)
 
 
 def chunk_files(folder: Path) -> list[str]:
@@ -115,8 +117,9 @@ def test_progress_counts_resumed_chunks(tmp_path, monkeypatch, capsys):
     sweep.run(SCENE, GRID, chunk_size=CHUNK, checkpoint=folder, resume=True, progress=True,
               **KWARGS)
     err = capsys.readouterr().err
-    assert err.count("\n") == 1  # one aggregated line
-    assert " 7/45 trajectories" in err and " 45/45 trajectories" in err
+    assert err.count("\n") == 1  # one bar, redrawn in place
+    # the bar starts at the 4 resumed chunks of 7 (they do not count in the rate)
+    assert " 28/45 [" in err and " 45/45 [" in err
 
 
 def test_damaged_chunk_and_stale_temporary_file_are_recomputed(tmp_path, monkeypatch):

@@ -44,7 +44,7 @@ import uuid
 import numpy as np
 
 from ..kernels import build
-from .local import allocate, integrate
+from .local import RunContext, allocate, integrate
 
 __all__ = ["RunContext", "check_client", "run_chunk_task", "run_chunks"]
 
@@ -52,21 +52,6 @@ __all__ = ["RunContext", "check_client", "run_chunk_task", "run_chunks"]
 #: process at once; a Dask worker with several threads would do that.
 _KERNEL_LOCK = threading.Lock()
 
-
-class RunContext:
-    """What every chunk task needs: scene, grid, kernel spec and time settings.
-
-    A plain picklable object; `table` gives a chunk's parameter rows.
-    """
-
-    def __init__(self, scene, grid, spec, settings) -> None:
-        self.scene = scene
-        self.grid = grid
-        self.spec = spec
-        self.settings = settings
-
-    def table(self, start: int, stop: int) -> np.ndarray:
-        return self.grid.table(self.scene, start, stop)
 
 def run_chunk_task(context: RunContext, start: int, stop: int) -> dict:
     """Worker side: integrate trajectories ``start:stop`` of the run ``context``.

@@ -1,13 +1,31 @@
-"""Run chunks of a sweep in this process: the arrays a kernel writes, and the one call
-of the kernel contract (`sweep.kernels`), shared by local runs and Dask workers."""
+"""Run chunks of a sweep in this process: what a chunk needs (`RunContext`), the arrays
+a kernel writes, and the one call of the kernel contract (`sweep.kernels`), shared by
+local runs and Dask workers."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import n_columns
+from ..kernels import build, n_columns
 
-__all__ = ["allocate", "integrate"]
+__all__ = ["RunContext", "allocate", "integrate", "run_chunks"]
+
+
+class RunContext:
+    """What every chunk needs: scene, grid, kernel spec and time settings.
+
+    A plain picklable object (a Dask task carries it); `table` gives a chunk's
+    parameter rows.
+    """
+
+    def __init__(self, scene, grid, spec, settings) -> None:
+        self.scene = scene
+        self.grid = grid
+        self.spec = spec
+        self.settings = settings
+
+    def table(self, start: int, stop: int) -> np.ndarray:
+        return self.grid.table(self.scene, start, stop)
 
 
 def allocate(spec, settings, n: int) -> dict[str, np.ndarray]:
@@ -35,3 +53,15 @@ def integrate(kernel, table, settings, arrays: dict[str, np.ndarray]) -> None:
         kernel(table, settings.t0, settings.dt, settings.n_steps, settings.n_transient,
                settings.save_every or 1, arrays["out"], arrays["status"],
                saved if saved is not None else np.empty((0, 2, 0)))
+
+
+def run_chunks(context: RunContext, chunks, arrays: dict[str, np.ndarray], done) -> None:
+    """Integrate ``chunks`` (``(start, stop)`` pairs) in this process, in order, writing
+    each into ``arrays[name][start:stop]`` and then calling ``done(start, stop)``."""
+    if not chunks:
+        return
+    kernel = build(context.spec)
+    for start, stop in chunks:
+        integrate(kernel, context.table(start, stop), context.settings,
+                  {name: array[start:stop] for name, array in arrays.items()})
+        done(start, stop)
