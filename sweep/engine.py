@@ -484,20 +484,7 @@ def run(
         specialize=specialize, check_stability=check_stability,
         estimate_error=estimate_error, stop_early=stop_early)
     n = grid.size
-    width = n_columns(spec)
-    n_saved = settings.n_steps // save_every + 1 if save_every is not None else 0
-    needed = n * (width * 8 + 1 + 2 * n_saved * 8)
-    available = _available_memory()
-    if needed > available // 2:
-        raise ValueError(
-            f"save_every = {save_every!r} with {n} trajectories needs {needed / 2**30:.2f} GiB "
-            f"but only {available / 2**30:.2f} GiB is available; accepted: a larger "
-            "save_every, fewer trajectories, or save_every=None"
-            if save_every is not None else
-            f"a grid of {n} trajectories needs {needed / 2**30:.2f} GiB for its outputs but only "
-            f"{available / 2**30:.2f} GiB is available; accepted: a smaller grid"
-        )
-
+    _check_memory(n, spec, settings)
     if client is not None:
         from .execution.dask import check_client
 
@@ -565,6 +552,25 @@ def warm_up(scene: Scene, grid: Grid, **kwargs) -> KernelSpec:
     _integrate(build(spec), grid.table(scene, 0, 0), settings,
                _allocate(spec, settings, 0))  # no trajectories: compiles, runs nothing
     return spec
+
+
+def _check_memory(n: int, spec, settings) -> None:
+    """Refuse outputs (and saved samples) that would need more than half the available
+    memory, before anything is allocated."""
+    save_every = settings.save_every
+    width = n_columns(spec)
+    n_saved = settings.n_steps // save_every + 1 if save_every is not None else 0
+    needed = n * (width * 8 + 1 + 2 * n_saved * 8)
+    available = _available_memory()
+    if needed > available // 2:
+        raise ValueError(
+            f"save_every = {save_every!r} with {n} trajectories needs {needed / 2**30:.2f} GiB "
+            f"but only {available / 2**30:.2f} GiB is available; accepted: a larger "
+            "save_every, fewer trajectories, or save_every=None"
+            if save_every is not None else
+            f"a grid of {n} trajectories needs {needed / 2**30:.2f} GiB for its outputs but only "
+            f"{available / 2**30:.2f} GiB is available; accepted: a smaller grid"
+        )
 
 
 def _open_checkpoint(checkpoint, resume, **run):
