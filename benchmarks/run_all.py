@@ -974,9 +974,9 @@ def markdown(r) -> str:
             "ulp), so each step differs by rounding (~1e-16 relative); over the full 2000 "
             "steps this scene, which is chaotic, amplifies such differences to ~1e-11 to "
             "1e-10 (the table's column), while over 100 steps they stay near 1e-15 and "
-            f"{C_CHECK_TOL:g} leaves room for growth at the pendulum's Lipschitz rate but "
-            "not for any real error (a wrong sine coefficient or forcing time shows as "
-            ">= 1e-9)."]
+            f"{C_CHECK_TOL:g} leaves room for their growth but not for a different "
+            "algorithm (a forcing evaluated at other times, a term missing, a less "
+            "accurate sine: each changes the state after 100 steps by far more)."]
     lines += ["", "## Fast-math flags of the kernels", "",
               "The full scene with each set of numba fast-math flags (`reassoc` is never "
               "considered: it would reorder sums, drift from the NumPy oracle and break "
