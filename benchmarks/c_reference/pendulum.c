@@ -6,29 +6,45 @@
  * step n is t_n = t0 + n*dt (never accumulated); the forcing is evaluated at t_n,
  * t_n + dt/2 and t_{n+1} = t0 + (n+1)*dt, and f(t_{n+1}) is carried to the next step.
  * All trajectories of a call share (w0sq, c, A, W, phi), as in a (theta0, omega0) grid,
- * so the forcing is computed once per step for a whole block of trajectories.
+ * so the forcing sine is never computed per trajectory:
+ *
+ *   default        once per step for a whole block of trajectories (as sweep's kernel)
+ *   FORCING_TABLE  once per step for the whole call: a table f(t_n), f(t_n + dt/2)
+ *                  computed before the parallel loop, read by every block (the same
+ *                  values to the bit, one libm call per step and call instead of per
+ *                  step and block; it matters for small blocks)
  *
  * Layout: OpenMP threads take blocks of BLOCK trajectories; within a block the time
  * loop is outside and the lane loop inside (`omp simd`), so the trajectories fill
  * the SIMD lanes.  The sine of theta is selected at compile time:
  *
- *   SIN_VARIANT 0  libm's scalar sin (default; a call per lane, not vectorised)
+ *   SIN_VARIANT 0  libm's scalar sin (a call per lane, not vectorised)
  *   SIN_VARIANT 1  glibc's vector sin (libmvec, _ZGV*_sin), declared `omp declare simd`
- *   SIN_VARIANT 2  the polynomial sin of sweep/_vecmath.py (Cody-Waite + fdlibm
- *                  polynomials), inlined
+ *   SIN_VARIANT 2  the polynomial sin of sweep/kernels/vecmath.py (magic-number
+ *                  quadrant, three-part Cody-Waite reduction by pi/2, fdlibm sin and
+ *                  cos polynomials on [-pi/4, pi/4], select by quadrant), inlined:
+ *                  the same operations in the same order, so the same accuracy
+ *                  (<= ~2.2e-16 absolute for |x| <= 1e4); with FMA contraction the
+ *                  roundings differ from sweep's where gcc and LLVM fuse other products
+ *   SIN_VARIANT 3  as 2, but the quadrant's two low bits are read from the bits of
+ *                  (x * 2/pi + 1.5 * 2**52) instead of converting kf to int64: the
+ *                  same quadrant for |x| < 2**51 (where the magic-number rounding is
+ *                  valid at all), one integer AND instead of a float -> int64 convert
  *
- * Build (the benchmark does this):
- *   gcc -O3 -march=native -fopenmp -shared -fPIC -ffp-contract=off [-DSIN_VARIANT=n]
+ * Build (benchmarks/run_all.py does this and sweeps the options):
+ *   gcc -O3 -march=native -fopenmp -shared -fPIC [-mprefer-vector-width=512]
+ *       [-ffp-contract=fast|off] [-DSIN_VARIANT=n] [-DBLOCK=n] [-DFORCING_TABLE]
  *       [-DLINEAR] pendulum.c -o lib.so -lm
- * No -ffast-math, and -ffp-contract=off: the operations and their order are exactly
- * sweep's (numba without fastmath does not contract a*b+c into an FMA), so with
- * SIN_VARIANT 0 the results are sweep's to the last bit. Without -ffp-contract=off
- * gcc contracts under -march=native and results differ in the last bits, which a
- * chaotic trajectory amplifies.
+ * Never -ffast-math: reassociation would break the magic-number rounding and the
+ * exact Cody-Waite reduction, and change RK4's sums. -ffp-contract=fast (gcc's
+ * default for GNU C) fuses a*b + c into FMAs as sweep's kernels let LLVM do
+ * (fast-math flag `contract`); -ffp-contract=off keeps every product rounded, which
+ * with SIN_VARIANT 0 reproduces numba-without-fastmath to the last bit.
  */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 #ifndef SIN_VARIANT
 #define SIN_VARIANT 0
@@ -41,26 +57,35 @@
 #pragma omp declare simd notinbranch
 extern double sin(double);
 #define SIN(x) sin(x)
-#elif SIN_VARIANT == 2
+#elif SIN_VARIANT == 2 || SIN_VARIANT == 3
+static const double TWO_OVER_PI = 0.6366197723675814;
+static const double P1 = 1.570796325802803, P2 = 9.920935739593517e-10,
+                    P3 = 5.721188726109832e-18, MAGIC = 6755399441055744.0;
+static const double S1 = -1.66666666666666324348e-01, S2 = 8.33333333332248946124e-03,
+                    S3 = -1.98412698298579493134e-04, S4 = 2.75573137070700676789e-06,
+                    S5 = -2.50507602534068634195e-08, S6 = 1.58969099521155010221e-10;
+static const double C1 = 4.16666666666666019037e-02, C2 = -1.38888888888741095749e-03,
+                    C3 = 2.48015872894767294178e-05, C4 = -2.75573143513906633035e-07,
+                    C5 = 2.08757232129817482790e-09, C6 = -1.13596475577881948265e-11;
 static inline double vsin(double x) {
-    const double TWO_OVER_PI = 0.6366197723675814;
-    const double P1 = 1.570796325802803, P2 = 9.920935739593517e-10,
-                 P3 = 5.721188726109832e-18, MAGIC = 6755399441055744.0;
-    const double S1 = -1.66666666666666324348e-01, S2 = 8.33333333332248946124e-03,
-                 S3 = -1.98412698298579493134e-04, S4 = 2.75573137070700676789e-06,
-                 S5 = -2.50507602534068634195e-08, S6 = 1.58969099521155010221e-10;
-    const double C1 = 4.16666666666666019037e-02, C2 = -1.38888888888741095749e-03,
-                 C3 = 2.48015872894767294178e-05, C4 = -2.75573143513906633035e-07,
-                 C5 = 2.08757232129817482790e-09, C6 = -1.13596475577881948265e-11;
-    double kf = (x * TWO_OVER_PI + MAGIC) - MAGIC;
-    double r = ((x - kf * P1) - kf * P2) - kf * P3;
-    int64_t q = fabs(kf) < 4.0e15 ? (int64_t)kf : 0;
-    double z = r * r;
-    double s = r + (z * r) * (S1 + z * (S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))));
-    double p = z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))));
-    double hz = 0.5 * z, w = 1.0 - hz;
-    double c = w + (((1.0 - w) - hz) + z * p);
-    double v = (q & 1) ? c : s;
+    const double y = x * TWO_OVER_PI + MAGIC;
+    const double kf = y - MAGIC;
+    const double r = ((x - kf * P1) - kf * P2) - kf * P3;
+#if SIN_VARIANT == 2
+    const int64_t q = fabs(kf) < 4.0e15 ? (int64_t)kf : 0;
+#else
+    int64_t q;
+    memcpy(&q, &y, sizeof q); /* y = 1.5 * 2**52 + k: k's low bits are y's */
+#endif
+    /* vecmath._sin_poly and _cos_poly, operation for operation */
+    const double z = r * r;
+    const double v3 = z * r;
+    const double ps = S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)));
+    const double s = r + v3 * (S1 + z * ps);
+    const double pc = z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))));
+    const double hz = 0.5 * z, w = 1.0 - hz;
+    const double c = w + (((1.0 - w) - hz) + z * pc);
+    const double v = (q & 1) ? c : s;
     return (q & 2) ? -v : v;
 }
 #define SIN(x) vsin(x)
@@ -76,6 +101,10 @@ static inline double vsin(double x) {
 
 #define ACCEL(th, om, f) (-w0sq * RESTORING(th) - c * (om) + (f))
 
+/* The build's options, for the benchmark's report. */
+int64_t pendulum_block(void) { return BLOCK; }
+int64_t pendulum_sin_variant(void) { return SIN_VARIANT; }
+
 /* Integrate n trajectories from (th0[i], om0[i]) for n_steps steps; write the final
  * state to th_out, om_out. */
 void pendulum_rk4(int64_t n, const double *th0, const double *om0, double w0sq,
@@ -83,11 +112,22 @@ void pendulum_rk4(int64_t n, const double *th0, const double *om0, double w0sq,
                   int64_t n_steps, double *th_out, double *om_out) {
     const double cdt1 = dt * 0.5, dt_2 = dt / 2.0, dt_6 = dt / 6.0;
     const int64_t n_blocks = (n + BLOCK - 1) / BLOCK;
+#ifdef FORCING_TABLE
+    /* fnode[k] = f(t0 + k dt) for k = 0..n_steps, fhalf[k] = f(t0 + k dt + dt/2) */
+    double *fnode = malloc(sizeof(double) * (size_t)(2 * n_steps + 1));
+    double *fhalf = fnode + n_steps + 1;
+    fnode[0] = A * sin(W * t0 + phi);
+    for (int64_t step = 0; step < n_steps; step++) {
+        fhalf[step] = A * sin(W * (t0 + (double)step * dt + cdt1) + phi);
+        fnode[step + 1] = A * sin(W * (t0 + (double)(step + 1) * dt) + phi);
+    }
+#endif
 #pragma omp parallel for schedule(static)
     for (int64_t b = 0; b < n_blocks; b++) {
         const int64_t start = b * BLOCK;
         const int64_t m = n - start < BLOCK ? n - start : BLOCK;
-        double th[BLOCK], om[BLOCK];
+        double th[BLOCK] __attribute__((aligned(64)));
+        double om[BLOCK] __attribute__((aligned(64)));
         for (int64_t j = 0; j < m; j++) {
             th[j] = th0[start + j];
             om[j] = om0[start + j];
@@ -97,11 +137,17 @@ void pendulum_rk4(int64_t n, const double *th0, const double *om0, double w0sq,
             th[j] = 0.0;
             om[j] = 0.0;
         }
+#ifndef FORCING_TABLE
         double f0 = A * sin(W * t0 + phi);
+#endif
         for (int64_t step = 0; step < n_steps; step++) {
+#ifdef FORCING_TABLE
+            const double f0 = fnode[step], f1 = fhalf[step], f2 = fnode[step + 1];
+#else
             const double f1 = A * sin(W * (t0 + (double)step * dt + cdt1) + phi);
             const double f2 = A * sin(W * (t0 + (double)(step + 1) * dt) + phi);
-#pragma omp simd
+#endif
+#pragma omp simd aligned(th, om : 64)
             for (int64_t j = 0; j < BLOCK; j++) {
                 const double x = th[j], v = om[j];
                 const double k1t = v;
@@ -115,11 +161,16 @@ void pendulum_rk4(int64_t n, const double *th0, const double *om0, double w0sq,
                 th[j] = x + dt_6 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t);
                 om[j] = v + dt_6 * (k1o + 2.0 * k2o + 2.0 * k3o + k4o);
             }
+#ifndef FORCING_TABLE
             f0 = f2;
+#endif
         }
         for (int64_t j = 0; j < m; j++) {
             th_out[start + j] = th[j];
             om_out[start + j] = om[j];
         }
     }
+#ifdef FORCING_TABLE
+    free(fnode);
+#endif
 }

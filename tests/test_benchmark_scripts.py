@@ -1,0 +1,137 @@
+"""Smoke tests of the benchmark scripts: their code paths at tiny sizes.
+
+Correctness only, never speed: the scripts' alternatives and every C build they make
+must compute what ``sweep.run`` computes, and their entry points must run and write
+their results. The C part is skipped when gcc is absent.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import shutil
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
+sys.path.insert(0, str(BENCHMARKS))
+
+needs_gcc = pytest.mark.skipif(shutil.which("gcc") is None,
+                               reason="gcc not found: the C reference is not built")
+
+STEPS = 60  # t = 0.6: the scene is chaotic only over much longer horizons
+
+
+@pytest.fixture(scope="module")
+def run_all():
+    return importlib.import_module("run_all")
+
+
+@pytest.fixture(scope="module")
+def states(run_all):
+    """A tiny grid of the benchmark's workload (100 trajectories: not a multiple of
+    any block, so the C builds run a padded partial block) and sweep's final state."""
+    theta0, omega0 = np.linspace(-np.pi, np.pi, 20), np.linspace(-2.0, 2.0, 5)
+    th0, om0 = run_all.initial_states(theta0, omega0)
+    ds = run_all.run_sweep(run_all.scene_of(), theta0, omega0, STEPS)
+    ref = ds.theta_final.values.ravel(), ds.omega_final.values.ravel()
+    return theta0, omega0, th0, om0, ref
+
+
+def max_diff(got, ref):
+    return max(float(np.max(np.abs(got[0] - ref[0]))),
+               float(np.max(np.abs(got[1] - ref[1]))))
+
+
+def test_alternatives_agree_with_sweep(run_all, states):
+    _, _, th0, om0, ref = states
+    args = (STEPS, run_all.G_OVER_L, run_all.DAMPING, run_all.AMPLITUDE,
+            run_all.FREQUENCY, run_all.PHASE, run_all.DT)
+    assert max_diff(run_all.numpy_rk4(th0, om0, STEPS), ref) < 1e-12
+    assert max_diff(run_all.numba_naive(th0, om0, *args), ref) < 1e-12
+    pick = [0, 37, 99]
+    sub = [r[pick] for r in ref]
+    assert max_diff(run_all.python_rk4(th0[pick], om0[pick], STEPS), sub) < 1e-12
+    # DOP853 differs by RK4's error (dt = 0.01: ~1e-10 over 0.6 s) and its own
+    assert max_diff(run_all.scipy_dop853(th0[pick[:2]], om0[pick[:2]], STEPS),
+                    [r[:2] for r in sub]) < 1e-7
+
+
+def test_timed_returns_the_result(run_all):
+    seconds, value = run_all.timed(lambda: 42, repeats=2)
+    assert value == 42 and 0.0 <= seconds < 1.0
+
+
+def test_grid_axes_has_about_n_trajectories(run_all):
+    for n in (1, 10, 1000, 2**17):
+        theta0, omega0 = run_all.grid_axes(n)
+        assert 0.9 * n <= theta0.size * omega0.size <= n
+
+
+def test_machine_description(run_all):
+    d = run_all.machine_details()
+    assert d["cores"] >= 1 and isinstance(d["avx512f"], bool)
+    assert {"cpu_model", "simd", "compiler", "numba", "numba_threads"} <= set(d)
+    lines = run_all.machine_lines({"machine_details": d})
+    assert len(lines) == 3 and lines[0].startswith("- CPU:")
+
+
+def test_limit_search_options(run_all):
+    for avx512 in (True, False):
+        candidates = run_all.c_limit_candidates(avx512)
+        assert len(candidates) == len(run_all.C_BLOCKS)
+        for flags in candidates.values():
+            assert (run_all.WIDE in flags) == avx512
+            assert "-ffp-contract=fast" in flags and "-ffast-math" not in flags
+        variations = run_all.c_limit_variations(next(iter(candidates.values())), avx512)
+        assert all("-DBLOCK=64" in flags for flags in variations.values())
+        assert len(variations) == (3 if avx512 else 2)
+
+
+@needs_gcc
+def test_every_c_build_agrees_with_sweep(run_all, states, tmp_path):
+    """The named rows and the limit's candidates (two block sizes, one variation each)
+    give sweep's final state to rounding: the check run_all applies to every build."""
+    theta0, omega0, th0, om0, ref = states
+    avx512 = run_all.machine_details()["avx512f"]
+    variants = {k: v for k, v in run_all.C_FIXED.items() if avx512 or run_all.WIDE not in v}
+    candidates = run_all.c_limit_candidates(avx512, blocks=(8, 64))
+    variants.update(candidates)
+    variants.update(run_all.c_limit_variations(next(iter(candidates.values())), avx512))
+    built = run_all.build_c(tmp_path, variants)
+    linear = run_all.run_sweep(run_all.scene_of("linear"), theta0, omega0, STEPS)
+    linear = linear.theta_final.values.ravel(), linear.omega_final.values.ravel()
+    for name, fn in built.items():
+        assert not isinstance(fn, str), f"{name}: {fn}"
+        expected = linear if "-DLINEAR" in variants[name] else ref
+        diff = max_diff(run_all.call_c(fn, th0, om0, STEPS), expected)
+        assert diff <= run_all.C_CHECK_TOL, f"{name}: {diff:.1e}"
+
+
+@needs_gcc
+def test_c_build_failure_is_reported(run_all, tmp_path):
+    fn = run_all.build_c_one(tmp_path, "broken", ["-DSIN_VARIANT=2", "-DBLOCK=(", ])
+    assert isinstance(fn, str) and fn.startswith("build failed")
+
+
+def test_stop_early_script(tmp_path):
+    stop_early = importlib.import_module("stop_early")
+    assert stop_early.main(["--size", "6", "--out", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "stop_early.json").read_text())
+    assert result["size"] == 6 and len(result["runs"]) == 2
+    assert all(run["full_s"] > 0 and run["stop_early_s"] > 0 for run in result["runs"])
+    assert (tmp_path / "stop_early.md").read_text().startswith("# Stop early")
+
+
+def test_forced_basins_script(tmp_path):
+    forced_basins = importlib.import_module("forced_basins")
+    assert forced_basins.main(["--size", "8", "--rows", "2", "--out", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "forced_basins.json").read_text())
+    assert result["grid"] == [2, 8] and result["full_grid"] == [8, 8]
+    assert result["full"]["attractors"] >= 1
+    assert 0.0 <= result["stop_early"]["unresolved_fraction"] <= 1.0
+    assert 0 <= result["labels_differing"] <= 16
+    assert (tmp_path / "forced_basins.md").exists()
