@@ -606,6 +606,18 @@ def main(argv=None) -> int:
     result["agreement"][per_lane] = max(float(np.max(np.abs(got[0] - reference[0]))),
                                         float(np.max(np.abs(got[1] - reference[1]))))
 
+    # one trajectory: the narrow path sweep.run takes for a handful (a block of one lane),
+    # against the same trajectory in a block of 64 lanes (63 of them padding)
+    one_steps = 10**4 if args.quick else 10**6
+    for label, block in (("one trajectory alone (the narrow path sweep.run takes)", 1),
+                         ("one trajectory in a block of 64 lanes (63 padding)", 64)):
+        spec = _kernels.KernelSpec("nonlinear", ("damping", "forcing"), ("final",),
+                                   shared_forcing=True, block=block)
+        run_kernel(spec, scene_of(), [0.1], [0.0], 1)  # compile: not timed
+        seconds, _ = timed(lambda s=spec: run_kernel(s, scene_of(), [0.1], [0.0], one_steps))
+        record(f"sweep: {label}", seconds, trajectories=1, n_steps=one_steps, group="sweep",
+               model="nonlinear", damping=True, forcing=True)
+
     # the fast-math flags of the kernels (sweep._config.FASTMATH), each measured here
     print("fast-math flags of sweep's kernels (full scene):", flush=True)
     default = _config.FASTMATH
