@@ -30,9 +30,9 @@ BLOCK = 128
 SMALL_BLOCK = 64
 
 #: Grids of fewer trajectories than this run one trajectory per block (no padding
-#: lanes): one trajectory x 10^6 RK4 steps of the full scene ran at 2.4 M useful steps/s
-#: in a block of 64 (63 lanes of padding) and 19-25 M/s alone, while 16 trajectories
-#: run faster in blocks of 8-64 (24-27 M/s against 19 M/s), measured on 2 busy cores.
+#: lanes): one trajectory x 10^6 RK4 steps of the full scene ran at 21 M useful steps/s
+#: alone, 3.5 M/s in a block of 8 and 2.1 M/s in a block of 64 (quiet machine), while
+#: 16 trajectories run faster in blocks of 8-64 (24-27 M/s against 19 M/s, busy cores).
 NARROW_BELOW = 8
 
 #: numba ``boundscheck``: off in production; tests index-check through the oracle.
