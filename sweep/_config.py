@@ -29,6 +29,17 @@ BLOCK = 128
 #: slowest lane is settled, so smaller blocks stop sooner).
 SMALL_BLOCK = 64
 
+#: Early-stopped runs refill lanes (`sweep.kernels.refill`): a lane whose trajectory
+#: settled takes the next waiting one instead of idling until its block's slowest
+#: trajectory is done. Results do not depend on it; ``benchmarks/stop_early.py`` turns
+#: it off to measure what it saves.
+REFILL = True
+
+#: Longest run (in steps) for which an early-stopped run with refill reads a shared
+#: drive's sines from a table over the steps (8 bytes per step and sine: 2^21 steps of
+#: RK4 forcing take 32 MiB); longer runs evaluate them per lane.
+SINE_TABLE_STEPS = 1 << 21
+
 #: Grids of fewer trajectories than this run one trajectory per block (no padding
 #: lanes): one trajectory x 10^6 RK4 steps of the full scene ran at 21 M useful steps/s
 #: alone, 3.5 M/s in a block of 8 and 2.1 M/s in a block of 64 (quiet machine), while

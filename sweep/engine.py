@@ -331,6 +331,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     if not specialize:  # every registered effect the method can integrate, fed zeros
         effects = tuple(cls.declaration for cls in EFFECTS.values()
                         if cls.declaration.conservative or not integrator.conservative_only)
+    refill = bool(stop_early) and _config.REFILL
     spec = KernelSpec(
         model=scene.model,
         effects=effects,
@@ -339,10 +340,13 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         stop_early=bool(stop_early),
         method=integrator,
         block=_block(grid.size, stop_early),
+        # a settled trajectory's lane takes the next waiting one (no idle lanes)
+        refill=refill,
         # one sine per drive and step for a whole block when no trajectory differs in it
         shared_forcing=not any(grid.axes.get(name, np.zeros(1)).size > 1
                                for effect in effects if effect.drive is not None
-                               for name in _drive_axes(effect)),
+                               for name in _drive_axes(effect))
+        and not (refill and settings.n_steps > _config.SINE_TABLE_STEPS),
     )
     return settings, spec, int(chunk_size)
 

@@ -55,8 +55,10 @@ def build(spec: KernelSpec):
 
     Returns
     -------
-    numba.core.registry.CPUDispatcher
-        The ``kernel`` of the generated module; compiled on first call.
+    callable
+        The ``kernel`` of the generated module, compiled on first call: a numba
+        dispatcher, or for a refill kernel (`sweep.kernels.refill`) a Python function
+        that reads the thread count and calls one.
     """
     text = source(spec)
     digest = hashlib.sha1(text.encode()).hexdigest()[:16]

@@ -85,10 +85,11 @@ def _load(spec: KernelSpec, symbol: str, row: str) -> str:
 
 
 def _first_lines(spec: KernelSpec, parts: dict, per_lane: list[str], lane_sines: list[str],
-                 update: str) -> list[str]:
-    """Once per lane: parameters, initial state, observables' init, first save."""
-    first = ["i = min(base + j, n - 1)  # padding lanes repeat the last trajectory",
-             _load(spec, "th0", "i"), _load(spec, "om0", "i")] + \
+                 update: str, index: str = "i = min(base + j, n - 1)  # padding lanes "
+                                            "repeat the last trajectory") -> list[str]:
+    """Once per lane: trajectory ``i`` (from the line ``index``): parameters, initial
+    state, observables' init, first save."""
+    first = ([index] if index else []) + [_load(spec, "th0", "i"), _load(spec, "om0", "i")] + \
         [_load(spec, p, "i") for p in per_lane] + \
         ["th = th0", "om = om0", lane_snippet(snippets(spec, "init"))]
     if update:
@@ -132,13 +133,15 @@ _FAIL_SAVED = textwrap.dedent("""\
                 saved[i, q, k_save] = math.nan""")
 
 
-def _finish(spec: KernelSpec) -> str:
-    """Per real lane: status, observables' final values, copy to ``out``."""
+def _finish(spec: KernelSpec, index: str = "i = base + j\n", frozen: bool | None = None) -> str:
+    """Per real lane: status, observables' final values, copy to ``out`` (row ``i``, set
+    by the line ``index``); ``frozen``: a settled lane's state was kept in th_stop,
+    om_stop (default: with early stop)."""
     width = n_columns(spec)
     final = lane_snippet(snippets(spec, "final"))
-    stop_state = "if done:\n    th = th_stop\n    om = om_stop\n" if spec.stop_early else ""
-    return f"""i = base + j
-{stop_state}if math.isfinite(th) and math.isfinite(om):
+    frozen = spec.stop_early if frozen is None else frozen
+    stop_state = "if done:\n    th = th_stop\n    om = om_stop\n" if frozen else ""
+    return f"""{index}{stop_state}if math.isfinite(th) and math.isfinite(om):
     status[i] = {int(Status.OK)}
 {indent(final, 1) or "    pass"}
 else:

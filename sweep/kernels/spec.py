@@ -118,6 +118,14 @@ class KernelSpec:
         for a whole block instead of once per lane (the same arithmetic, so the same
         results; a test checks it). False (the default) is right for any parameter
         table; `sweep.run` sets it when its grid has no drive frequency or phase axis.
+    refill : bool
+        With ``stop_early``: a lane whose trajectory has settled takes the next waiting
+        one (`sweep.kernels.refill`), so no lane idles until its block's slowest
+        trajectory is done. Lanes are then at different steps, so a shared drive's
+        sines come from a table over the steps, computed once per call (``n_steps`` x 8
+        bytes per sine; `sweep.run` shares them only up to
+        `sweep._config.SINE_TABLE_STEPS`), and other drives' sines are per lane.
+        Bit-identical to ``refill=False`` (a test checks it).
     block : int
         Trajectories per block of the fixed-step kernel (SIMD lanes; a multiple of 8, or
         1 for a few trajectories, each alone). Results do not depend on it (a test checks
@@ -132,6 +140,7 @@ class KernelSpec:
     stop_early: bool = False
     shared_forcing: bool = False
     block: int = None
+    refill: bool = False
 
     def __post_init__(self) -> None:
         method = self.method
@@ -139,6 +148,7 @@ class KernelSpec:
                 _methods.METHODS.get(getattr(method, "name", None)) == method:
             object.__setattr__(self, "method", method.name)
         object.__setattr__(self, "effects", declarations(self.effects))
+        object.__setattr__(self, "refill", bool(self.refill and self.stop_early))
         object.__setattr__(self, "shared_forcing", bool(self.shared_forcing and self.drives))
         block = _config.BLOCK if self.block is None else self.block
         if not isinstance(block, int) or not (block == 1 or (block >= 8 and block % 8 == 0)):
@@ -159,7 +169,8 @@ class KernelSpec:
         """A one-line description for the generated module's docstring."""
         return (f"model={self.model!r}, effects={self.names!r}, observe={self.observe!r}, "
                 f"save={self.save!r}, method={self.method!r}, stop_early={self.stop_early!r}, "
-                f"shared_forcing={self.shared_forcing!r}, block={self.block!r}")
+                f"shared_forcing={self.shared_forcing!r}, block={self.block!r}, "
+                f"refill={self.refill!r}")
 
 
 def n_columns(spec: KernelSpec) -> int:

@@ -1,0 +1,150 @@
+"""The early-stop kernel with lane refill: a lane whose trajectory has settled (or reached
+``t_end``) writes its outputs and takes the next waiting trajectory, so no SIMD lane
+idles while its block's slowest trajectory finishes.
+
+There is one group per thread (``prange`` iteration ``b`` of ``G``); group ``b`` takes
+the trajectories ``b, b + G, b + 2 G, ...`` in turn, so every group draws on the whole
+chunk and the threads finish together whatever the order of slow and fast starts. A
+group advances ``BLOCK`` lanes at a time; each lane keeps its own step index
+``lane_ks[j]`` (time ``t0 + k dt``), so the drives' sines are per lane (or read from a
+table over the steps when every trajectory has the same drive). A trajectory's
+arithmetic is the same operations whatever lane it runs in and whenever it starts, so
+the results are bit-identical to the kernel without refill (``tests/test_refill.py``)
+and independent of the number of threads and of ``BLOCK``. When the group's queue is
+empty the lanes that finish go idle (they keep stepping a copy of a valid trajectory,
+whose results are never written) until the last one is done.
+"""
+
+from __future__ import annotations
+
+from .fixed import NL, _drives, _finish, _first_lines, _lane_dtypes, _load, _parameters
+from .lanes import IDENTIFIER, indent, lane_loop, lane_snippet
+from .snippets import snippets, stop_source
+from .spec import KernelSpec, n_columns
+from .steppers import STEPPERS
+
+__all__ = ["refill_kernel"]
+
+
+def _sine_table(spec: KernelSpec, drives, shared: list[str]) -> tuple[str, list[str]]:
+    """The code that tabulates the drives' sines over the steps (before the groups;
+    "" without shared drives) and the lane lines that read them at step ``ks``."""
+    if not shared:
+        return "", [line.replace("step", "ks") for line in drives.step]
+    names = [line.split("=")[0].strip() for line in drives.step]
+    # an idle lane's step never passes n_steps - 1 while another lane is live; the
+    # bound keeps every read inside the table anyway
+    lines = [f"{name} = tab_{name}[min(ks, n_steps - 1)]" for name in names]
+    table = NL.join(
+        [f"tab_{name} = np.empty(max(n_steps, 1))" for name in names] +
+        ["for step in range(n_steps if n > 0 else 0):"] +
+        [f"    {_load(spec, p, '0')}" for p in shared] +
+        [f"    {line}" for line in drives.step] +
+        [f"    tab_{name}[step] = {name}" for name in names])
+    return table, lines
+
+
+def refill_kernel(spec: KernelSpec, method) -> str:
+    """Kernel body of a fixed-step method with early stop and lane refill (see the
+    module docstring); same contract as `sweep.kernels.fixed`.
+
+    Every step runs four lane loops: the drives' sines at each lane's own step, the
+    method's step (the same straight-line code as the fixed kernel's, vectorised), the
+    sines' carry, and the observables (only lanes past the transient load their
+    state). A lane that finishes is only flagged there; a fifth loop, entered only in a
+    step where some lane finished, writes its outputs and loads the next trajectory.
+    """
+    parts = STEPPERS[method.kind](spec, method)
+    per_lane, shared = _parameters(spec)
+    drives = _drives(parts)
+    update = lane_snippet(snippets(spec, "update"))
+    # loading trajectory i into lane j: parameters, state, observables, first sines
+    load = ["k_state = 0"] + _first_lines(spec, parts, per_lane, drives.init, update,
+                                          index="") + ["ks = 0"]
+    # the drives' sines at this lane's own step: the same expressions as the fixed
+    # kernel's at its block step (so the same bits), per lane, or read from a table
+    # over the steps when every trajectory has the same drive frequency and phase
+    table, sines = _sine_table(spec, drives, shared)
+    step_body = drives.values + parts["step"]
+    settle = lane_snippet(stop_source(spec, action="done = True"))
+    # the lane's step count was advanced in the loop's head
+    observe = f"""k_state = ks
+if k_state >= n_transient:
+{indent(update, 1)}
+{indent(settle, 1)}
+if done or k_state >= n_steps:
+    lane_finished[j] = True
+    n_finished += 1"""
+    finish = _finish(spec, index="", frozen=False)  # a lane finishes as it settles
+    refill = f"""{finish}
+if first + taken * n_groups < n:
+    i = first + taken * n_groups
+    taken += 1
+else:
+    i = first  # idle: a copy of a valid trajectory, never written
+    live = False
+    n_live -= 1
+{NL.join(load)}
+finished = False"""
+    lane = _lane_dtypes(spec, parts, per_lane, drives.names)
+    lane.update({"i": "int64", "ks": "int64", "live": "bool_", "finished": "bool_"})
+    later = set(IDENTIFIER.findall(NL.join(step_body + sines + drives.carry +
+                                           [observe, refill])))
+    lane = {name: dtype for name, dtype in lane.items() if name in later or name == "live"}
+    first = ["if first + taken * n_groups < n:", "    i = first + taken * n_groups",
+             "    taken += 1", "    live = True",
+             "    n_live += 1", "else:", "    i = first", "    live = False"] + load + \
+        ["finished = False"]
+    init_loop = lane_loop(NL.join(first), lane, level=2, load=False)
+    sine_loop = lane_loop(NL.join(sines), lane, level=3) if sines else ""
+    step_loop = lane_loop(NL.join(step_body), lane, level=3,
+                          stores=[name for name in lane if name in ["th", "om"] +
+                                  parts["carried"]])
+    carry_loop = lane_loop(NL.join(drives.carry), lane, level=3) if drives.carry else ""
+    counted = {name: dtype for name, dtype in lane.items() if name != "ks"}
+    observe_loop = lane_loop(
+        observe, counted, level=3,
+        head="    ks = lane_ks[j] + 1\n    lane_ks[j] = ks\n"
+             "    if not lane_live[j] or (ks < n_transient and ks < n_steps):\n"
+             "        continue\n")
+    refill_loop = lane_loop(refill, lane, level=4,
+                            head="    if not lane_finished[j]:\n        continue\n")
+    allocate = [f"lane_{name} = np.empty(BLOCK, dtype=np.{dtype})"
+                for name, dtype in lane.items()]
+    return f'''
+BLOCK = {spec.block}
+
+
+def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
+    """One group of lanes per thread (never one of fewer than BLOCK trajectories); the
+    thread count is read here, as a cached kernel cannot read it."""
+    n = params.shape[0]
+    grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
+            min(max(n // BLOCK, 1), n, get_num_threads()))
+
+
+@njit(parallel=True, **JIT)
+def grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
+            n_groups):
+    TWO_PI = 2.0 * math.pi
+    n = params.shape[0]
+{indent(NL.join(parts["preamble"]), 1)}
+{indent(table, 1)}
+    for b in prange(n_groups):
+        first = np.int64(b)  # group b's first trajectory (the prange index may be unsigned)
+{indent(NL.join(_load(spec, p, "first") for p in shared), 2)}
+{indent(NL.join(allocate), 2)}
+        obuf = np.empty((BLOCK, {n_columns(spec)}))
+        taken = 0  # trajectories first, first + n_groups, ... taken so far
+        n_live = 0
+        n_finished = 0
+{init_loop}
+        while n_live > 0:
+{sine_loop}
+{step_loop}
+{carry_loop}
+{observe_loop}
+            if n_finished > 0:
+{refill_loop}
+                n_finished = 0
+'''
