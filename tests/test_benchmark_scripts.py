@@ -128,7 +128,8 @@ def test_stop_early_script(tmp_path):
 
 def test_forced_basins_script(tmp_path):
     forced_basins = importlib.import_module("forced_basins")
-    assert forced_basins.main(["--size", "8", "--rows", "2", "--out", str(tmp_path)]) == 0
+    assert forced_basins.main(["--size", "8", "--rows", "2", "--no-c-limit",
+                              "--out", str(tmp_path)]) == 0
     result = json.loads((tmp_path / "forced_basins.json").read_text())
     assert result["grid"] == [2, 8] and result["full_grid"] == [8, 8]
     assert result["full"]["attractors"] >= 1

@@ -22,6 +22,7 @@ import xarray as xr
 from ..kernels import Status
 from .._timesteps import transient_steps
 from .._validate import check_real
+from . import _strobe
 
 __all__ = ["motion", "well", "basins", "amplitude", "inverted", "natural_frequency_squared",
            "UNRESOLVED"]
@@ -297,43 +298,6 @@ def amplitude(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
 
 
 # ------------------------------------------------------------------ forced attractors
-def _periods(theta: np.ndarray, omega: np.ndarray, max_period: int, tol: float):
-    """Smallest stroboscopic period of each trajectory.
-
-    Parameters
-    ----------
-    theta, omega : ndarray, shape (n, P)
-        The last P stroboscopic samples (unwrapped angle [rad], velocity [rad/s]).
-    max_period : int
-        Largest period p tried; needs ``P >= 2 p``.
-    tol : float
-        Closeness in rad and rad/s for a sample to count as repeating.
-
-    Returns
-    -------
-    period : ndarray, shape (n,), int64
-        Smallest p with ``x[j + p] == x[j]`` (angle modulo 2 pi, within ``tol``) for all
-        available j, or 0 where none up to ``max_period``.
-    turns : ndarray, shape (n,), int64
-        Net full turns per ``period`` forcing periods (0 where unresolved).
-    """
-    n, samples = theta.shape
-    period = np.zeros(n, dtype=np.int64)
-    turns = np.zeros(n, dtype=np.int64)
-    finite = np.isfinite(theta).all(axis=1) & np.isfinite(omega).all(axis=1)
-    for p in range(1, max_period + 1):
-        if samples < 2 * p:
-            break
-        d_theta = theta[:, p:] - theta[:, :-p]
-        q = np.round(d_theta[:, -1] / (2 * np.pi))
-        ok = (np.abs(d_theta - 2 * np.pi * q[:, None]) < tol).all(axis=1)
-        ok &= (np.abs(omega[:, p:] - omega[:, :-p]) < tol).all(axis=1)
-        new = ok & finite & (period == 0)
-        period[new] = p
-        turns[new] = q[new].astype(np.int64)
-    return period, turns
-
-
 def _orbit(theta_row, omega_row, p):
     """The p orbit points (angle wrapped to [0, 2 pi), velocity), shape (p, 2)."""
     return np.stack([np.mod(theta_row[-p:], 2 * np.pi), omega_row[-p:]], axis=1)
@@ -379,7 +343,9 @@ def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int
     wrapped angle), then buckets whose orbits coincide up to a cyclic shift within
     ``tol`` are merged, so quantisation edges do not split an attractor.
     """
-    period, turns = _periods(theta, omega, max_period, tol)
+    theta = np.ascontiguousarray(theta, dtype=np.float64)
+    omega = np.ascontiguousarray(omega, dtype=np.float64)
+    period, turns = _strobe.periods(theta, omega, int(max_period), float(tol))
     n = theta.shape[0]
     labels = np.full(n, UNRESOLVED, dtype=np.int32)
     resolved = np.flatnonzero(period > 0)
@@ -387,21 +353,14 @@ def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int
         empty = np.zeros(0)
         return labels, {"theta": empty, "omega": empty, "period": empty.astype(int),
                         "turns_per_period": empty, "size": empty.astype(int)}
-    keys = np.empty((resolved.size, 4), dtype=np.int64)
-    for p in np.unique(period[resolved]):
-        rows = resolved[period[resolved] == p]
-        wrapped = np.mod(theta[rows, -p:], 2 * np.pi)
-        pick = np.argmin(wrapped, axis=1)
-        where = np.searchsorted(resolved, rows)
-        keys[where, 0] = p
-        keys[where, 1] = turns[rows]
-        keys[where, 2] = np.round(wrapped[np.arange(rows.size), pick] / (10 * tol))
-        keys[where, 3] = np.round(omega[rows, -p:][np.arange(rows.size), pick] / (10 * tol))
-    buckets, bucket_of = np.unique(keys, axis=0, return_inverse=True)
-    bucket_of = bucket_of.ravel()
-    first = np.full(len(buckets), -1)
-    for k in range(resolved.size - 1, -1, -1):
-        first[bucket_of[k]] = resolved[k]
+    bucket_of, buckets, first = _strobe.bucket_keys(theta, omega, period, turns, resolved,
+                                                    10 * tol)
+    # buckets in lexicographic order of their keys (the merge below and the order of
+    # equal-sized basins depend on it)
+    order = np.lexsort(buckets.T[::-1])
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    buckets, first, bucket_of = buckets[order], first[order], rank[bucket_of]
     # merge buckets holding the same orbit (few buckets: quadratic is fine)
     parent = np.arange(len(buckets))
     orbits = [_orbit(theta[r], omega[r], int(buckets[b, 0])) for b, r in enumerate(first)]
