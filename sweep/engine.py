@@ -238,9 +238,9 @@ def _extremes(values: dict[str, np.ndarray]) -> list[dict[str, float]]:
     return corners
 
 
-def _speed_bound(scene: Scene, grid: Grid, p: dict) -> float:
+def _energy_speed_bound(scene: Scene, grid: Grid, p: dict) -> float:
     """A bound on ``|theta'|`` from the starts' energy [rad/s]: exact for a pendulum
-    without driving (torque, forcing and a moving pivot can exceed it)."""
+    without forces (torque, forcing and a moving pivot can exceed it)."""
     def largest(name, default):
         return float(np.max(np.abs(grid.axes.get(name, [default]))))
 
@@ -251,21 +251,42 @@ def _speed_bound(scene: Scene, grid: Grid, p: dict) -> float:
     return math.sqrt(omega0 ** 2 + potential)
 
 
+def _speed_bound(scene: Scene, grid: Grid, effects, corner: dict, energy: float) -> float:
+    """A bound on ``|theta'|`` over the run at one corner of the parameter ranges
+    [rad/s] (see `EffectDeclaration`'s ``speed_bound``): the energy bound, or a
+    speed-capping effect's terminal speed under every force the effects declare."""
+    values = [{q.symbol: corner[q.axis] for q in effect.parameters} |
+              {"L": corner["length"], "g": corner["gravity"]} for effect in effects]
+    forces = [f for effect, known in zip(effects, values)
+              if (f := effect.bound("force_bound", known)) is not None]
+    force_max = abs(corner["gravity"] / corner["length"]) + sum(forces)
+    caps = [c for effect, known in zip(effects, values)
+            if (c := effect.bound("speed_bound", known | {"force_max": force_max}))
+            is not None and math.isfinite(c)]
+    if not caps or scene.model != "nonlinear":
+        return energy
+    omega0 = float(np.max(np.abs(grid.axes.get("omega0", [0.0]))))
+    terminal = max(omega0, min(caps))
+    return terminal if forces else min(energy, terminal)
+
+
 def _check_stable_step(scene: Scene, grid: Grid, settings, effects) -> None:
     """Refuse a fixed step beyond the method's linear stability limit (see
     `sweep.stability`). The linearisation at the bottom is ``theta'' + C theta' + K
     theta``, ``K = g/L`` plus each effect's declared ``linear_stiffness`` (its largest
     value) and ``C`` the sum of their ``linear_damping``; both are checked at every
     corner of the grid's parameter ranges (exact for the declared terms, which are
-    monotone in each parameter). ``omega_max`` in a declaration is `_speed_bound`."""
+    monotone in each parameter). ``omega_max`` in a declaration is `_speed_bound` at
+    that corner."""
     p = scene.parameters()
     names = ["gravity", "length"] + [a for effect in effects for a in effect.axes]
     values = {name: np.asarray(grid.axes.get(name, [p[name]]), dtype=np.float64)
               for name in names}
-    omega_max = _speed_bound(scene, grid, p)
+    energy = _energy_speed_bound(scene, grid, p)
     dampings, stiffnesses = set(), set()
     for corner in _extremes(values):
         c, k = 0.0, corner["gravity"] / corner["length"]
+        omega_max = _speed_bound(scene, grid, effects, corner, energy)
         for effect in effects:
             known = {q.symbol: corner[q.axis] for q in effect.parameters}
             dc, dk = effect.linearisation(dict(known, L=corner["length"], g=corner["gravity"],

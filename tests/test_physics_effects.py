@@ -385,6 +385,27 @@ def test_a_drag_axis_alone_switches_drag_on():
     assert abs(lost[0]) < 1e-7 and lost[1] > 0.5 * float(ds.energy_initial.values.ravel()[1])
 
 
+def test_stability_guard_bounds_the_speed_by_drag_under_torque():
+    """Drag's stiffness 2 k |theta'| needs a bound on the speed over the run. Under a
+    torque the starts' energy is no bound: tau = 100, k = 1 drive the pendulum to the
+    terminal speed sqrt(tau / k) = 10 rad/s (the energy bound from rest says 6.3), where
+    RK4's real stability limit 2.785 / (2 k 10) is 0.14 s. dt = 0.2 passed the old
+    guard; it is now refused, and integrating anyway gives a finite but wrong rotation
+    (the oracle: the mean speed sqrt(tau / k) up to the gravity term's second-order
+    effect, ((g/L) / tau)^2 ~ 1 %, hence the 2 % tolerance); the accepted step gets it."""
+    scene = sweep.Scene(effects=(sweep.Torque(100.0), sweep.QuadraticDrag(1.0)))
+    grid = sweep.Grid(theta0=[0.0, 1.0])
+    kwargs = dict(t_end=24.0, t_transient=12.0, observe=("omega_mean",))
+    with pytest.raises(ValueError, match=r"dt = 0\.2 exceeds RK4's stability limit 0\.13"):
+        sweep.run(scene, grid, dt=0.2, **kwargs)
+    wrong = sweep.run(scene, grid, dt=0.2, check_stability=False, **kwargs)
+    right = sweep.run(scene, grid, dt=0.1, **kwargs)
+    np.testing.assert_allclose(right.omega_mean, 10.0, rtol=0.02)
+    assert (abs(wrong.omega_mean - 10.0) > 1.0).all()
+    # without a force the energy bound (smaller than the terminal speed) still holds
+    sweep.run(sweep.Scene(effects=(sweep.QuadraticDrag(1.0),)), grid, dt=0.2, **kwargs)
+
+
 # ================================================================== bad input
 NAN, INF = float("nan"), float("inf")
 

@@ -155,9 +155,22 @@ class EffectDeclaration:
     drive : Drive, optional
     linear_damping, linear_stiffness : str
         Expressions in its symbols (and ``L``, ``g``, ``omega_max``: a bound on
-        ``|theta'|`` from the starts' energy) added to ``C`` and the largest ``K`` of
-        the linearisation ``theta'' + C theta' + K theta = ...`` at the bottom ("" for
-        none); the stability guard reads them.
+        ``|theta'|`` over the run, see ``speed_bound``) added to ``C`` and the largest
+        ``K`` of the linearisation ``theta'' + C theta' + K theta = ...`` at the bottom
+        ("" for none); the stability guard reads them.
+    force_bound : str
+        For an effect that can feed energy in (a torque, a drive): a bound on the
+        magnitude of its term over every state and time of the nonlinear model, an
+        expression in its symbols, ``L`` and ``g`` ("" for none).
+    speed_bound : str
+        For an effect that caps the speed (drag): a bound on ``|theta'|`` it enforces
+        once ``|theta'|`` is above the starts', an expression in its symbols and
+        ``force_max`` (``g/L`` plus every effect's ``force_bound``); ``math.inf`` where
+        it caps nothing. The guard's ``omega_max`` is the starts' energy bound without
+        forces (exact for an undriven pendulum), the smaller of that and
+        ``max(|omega0|, speed_bound)`` with none, and ``max(|omega0|, speed_bound)``
+        with forces (the nonlinear model; otherwise the energy bound, which forces can
+        exceed).
     tension : str
         Source added to the rod tension per unit mass ``T/m`` ("" for none); may read
         ``th``, ``om``, ``L``, ``g``, its symbols and ``TIME`` (the time of the state).
@@ -176,6 +189,8 @@ class EffectDeclaration:
     linear_stiffness: str = ""
     tension: str = ""
     switched_on_by_grid: bool = False
+    force_bound: str = ""
+    speed_bound: str = ""
 
     @property
     def symbols(self) -> tuple[str, ...]:
@@ -190,12 +205,22 @@ class EffectDeclaration:
     def linearisation(self, values: dict[str, float]) -> tuple[float, float]:
         """``(C, K)`` it adds to the linearisation, for values by symbol (its own, and
         ``L``, ``g``, ``omega_max``)."""
-        def value(expression: str) -> float:
-            if not expression:
-                return 0.0
-            return float(eval(expression, {"__builtins__": {}, "math": math}, dict(values)))
+        return (_evaluate(self.linear_damping, values, 0.0),
+                _evaluate(self.linear_stiffness, values, 0.0))
 
-        return value(self.linear_damping), value(self.linear_stiffness)
+    def bound(self, which: str, values: dict[str, float]) -> float | None:
+        """Its ``force_bound`` or ``speed_bound`` (``which``) for values by symbol;
+        None where it declares none."""
+        return _evaluate(getattr(self, which), values, None)
+
+
+def _evaluate(expression: str, values: dict[str, float], empty):
+    """A declared expression's value (``empty`` for ""): only ``math``, ``abs`` and the
+    given names are in scope."""
+    if not expression:
+        return empty
+    return float(eval(expression, {"__builtins__": {}, "math": math, "abs": abs},
+                      dict(values)))
 
 
 class Effect:

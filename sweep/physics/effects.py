@@ -75,6 +75,7 @@ class Forcing(Effect):
         equation="+ A sin(W t + phase)",
         conservative=False,
         drive=Drive(value="f", amplitude="A", frequency="W", phase="phi"),
+        force_bound="abs(A)",
     )
 
 
@@ -104,6 +105,7 @@ class Torque(Effect):
         term="+ tau",
         equation="+ tau",
         conservative=True,  # the potential -tau theta: energy is conserved without damping
+        force_bound="abs(tau)",  # conservative, but its potential has no floor
     )
 
 
@@ -129,6 +131,8 @@ class QuadraticDrag(Effect):
         conservative=False,
         # d/d(theta') of -k theta'|theta'| is -2 k |theta'|: stiff for fast motion
         linear_damping="2.0 * kd * omega_max",
+        # faster than the terminal speed, drag beats every force: theta'' opposes theta'
+        speed_bound="math.sqrt(force_max / kd) if kd > 0 else math.inf",
         switched_on_by_grid=True,  # like damping: a drag axis alone switches it on
     )
 
@@ -175,6 +179,7 @@ class PivotDrive(Effect):
                     function="cos"),
         # the stiffness g/L - (a nu^2/L) cos(...) reaches g/L + a nu^2/L
         linear_stiffness="a * nu * nu / L",
+        force_bound="a * nu * nu / L",  # times |sin theta| <= 1
         # the pivot's acceleration y'' = -a nu^2 cos(nu t + psi) adds to gravity
         tension="- a * nu * nu * vcos(nu * TIME + psi) * vcos(th)",
     )
