@@ -37,14 +37,14 @@ except ImportError:  # pragma: no cover - run from elsewhere
 def _timed(scene, grid, refill=True, **kwargs):
     """One timed run (after compiling or loading its kernel); ``refill=False``: early
     stop with lanes that wait for their block's slowest trajectory."""
-    sweep._config.REFILL = refill
+    before, sweep._config.REFILL = sweep._config.REFILL, refill
     try:
         sweep.engine.warm_up(scene, grid, **kwargs)  # compile or load first
         start = time.perf_counter()
         ds = sweep.run(scene, grid, **kwargs)
         return ds, time.perf_counter() - start
     finally:
-        sweep._config.REFILL = True
+        sweep._config.REFILL = before
 
 
 def main(argv=None) -> int:

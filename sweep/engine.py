@@ -267,7 +267,7 @@ def _speed_bound(scene: Scene, grid: Grid, effects, corner: dict, energy: float)
         return energy
     omega0 = float(np.max(np.abs(grid.axes.get("omega0", [0.0]))))
     terminal = max(omega0, min(caps))
-    return terminal if forces else min(energy, terminal)
+    return terminal if any(f > 0 for f in forces) else min(energy, terminal)
 
 
 def _check_stable_step(scene: Scene, grid: Grid, settings, effects) -> None:

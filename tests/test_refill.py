@@ -43,7 +43,7 @@ def _call(spec, params, n_transient=150 * 20):
 def test_refill_gives_the_same_bits_as_blocks_that_wait(block, shared):
     """Per-lane drive sines, and (shared) a table of the sines over the steps against
     the waiting kernel's sine per block."""
-    params = _table(1500)  # not a multiple of a group: the last group is partial
+    params = _table(1500)  # not a multiple of the block: some lanes idle at the end
     kwargs = dict(stop_early=True, block=block, shared_forcing=shared)
     waiting = _call(KernelSpec("nonlinear", ("damping", "forcing"), ("strobe",), **kwargs),
                     params)
@@ -57,21 +57,33 @@ def test_refill_gives_the_same_bits_as_blocks_that_wait(block, shared):
     assert (waiting[1] == Status.NONFINITE).sum() == 1
 
 
-def test_refill_does_not_depend_on_the_number_of_threads():
-    """One group per thread: one thread takes every trajectory in a single group."""
-    import numba
+@pytest.mark.parametrize("groups", [1, 3, 7])
+def test_refill_does_not_depend_on_the_number_of_groups(groups):
+    """The wrapper makes one group per thread; any number of groups (strided over the
+    trajectories) must give the same bits as the waiting kernel, on any machine."""
     params = _table(700, seed=11)
-    spec = KernelSpec("nonlinear", ("damping", "forcing"), ("strobe",), stop_early=True,
-                      block=64, refill=True)
-    both = _call(spec, params)
-    threads = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
-        one = _call(spec, params)
-    finally:
-        numba.set_num_threads(threads)
-    np.testing.assert_array_equal(one[1], both[1])
-    assert one[0].tobytes() == both[0].tobytes()
+    kwargs = dict(stop_early=True, block=64)
+    waiting = _call(KernelSpec("nonlinear", ("damping", "forcing"), ("strobe",), **kwargs),
+                    params)
+    spec = KernelSpec("nonlinear", ("damping", "forcing"), ("strobe",), refill=True, **kwargs)
+    grouped = kernels.build(spec).__globals__["grouped"]  # the compiled kernel itself
+    out = np.full((params.shape[0], kernels.n_columns(spec)), -7.0)
+    status = np.full(params.shape[0], 99, dtype=np.int8)
+    grouped(params, 0.0, DT, N_STEPS, 150 * 20, 1, out, status, np.empty((0, 2, 0)), groups)
+    np.testing.assert_array_equal(status, waiting[1])
+    assert out.tobytes() == waiting[0].tobytes()
+
+
+def test_refill_refuses_a_run_without_steps_and_runs_without_saving():
+    """Every refill lane steps before its first stop test, so zero steps is refused (the
+    engine never asks for it); and a spec that saves gets the waiting kernel."""
+    spec = KernelSpec("nonlinear", ("damping",), ("capture",), stop_early=True, refill=True)
+    with pytest.raises(ValueError, match="n_steps must be >= 1"):
+        kernels.build(spec)(_table(10), 0.0, DT, 0, 0, 1, np.empty((10, 2)),
+                            np.empty(10, np.int8), np.empty((0, 2, 0)))
+    saving = KernelSpec("nonlinear", ("damping",), ("capture",), stop_early=True,
+                        refill=True, save=True)
+    assert not saving.refill
 
 
 def test_refill_of_captured_wells_and_a_single_trajectory():

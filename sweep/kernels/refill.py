@@ -17,6 +17,8 @@ whose results are never written) until the last one is done.
 
 from __future__ import annotations
 
+import re
+
 from .fixed import NL, _drives, _finish, _first_lines, _lane_dtypes, _load, _parameters
 from .lanes import IDENTIFIER, indent, lane_loop, lane_snippet
 from .snippets import snippets, stop_source
@@ -25,12 +27,14 @@ from .steppers import STEPPERS
 
 __all__ = ["refill_kernel"]
 
+_STEP = re.compile(r"\bstep\b")  # the fixed kernel's block step, in a drive's expression
+
 
 def _sine_table(spec: KernelSpec, drives, shared: list[str]) -> tuple[str, list[str]]:
     """The code that tabulates the drives' sines over the steps (before the groups;
     "" without shared drives) and the lane lines that read them at step ``ks``."""
     if not shared:
-        return "", [line.replace("step", "ks") for line in drives.step]
+        return "", [_STEP.sub("ks", line) for line in drives.step]
     names = [line.split("=")[0].strip() for line in drives.step]
     # an idle lane's step never passes n_steps - 1 while another lane is live; the
     # bound keeps every read inside the table anyway
@@ -116,8 +120,11 @@ BLOCK = {spec.block}
 
 
 def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
-    """One group of lanes per thread (never one of fewer than BLOCK trajectories); the
-    thread count is read here, as a cached kernel cannot read it."""
+    """One group of lanes per thread, but no more groups than n // BLOCK (one group
+    when n < BLOCK); the thread count is read here, as a cached kernel cannot read it
+    (numba's get_num_threads is a dynamic global, which turns the disk cache off)."""
+    if n_steps < 1:  # every lane steps before its first stop test
+        raise ValueError(f"n_steps must be >= 1 for a refill kernel, got {{n_steps!r}}")
     n = params.shape[0]
     grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
             min(max(n // BLOCK, 1), n, get_num_threads()))

@@ -148,7 +148,9 @@ class KernelSpec:
                 _methods.METHODS.get(getattr(method, "name", None)) == method:
             object.__setattr__(self, "method", method.name)
         object.__setattr__(self, "effects", declarations(self.effects))
-        object.__setattr__(self, "refill", bool(self.refill and self.stop_early))
+        # refill has no per-step save (early stop refuses saving anyway)
+        object.__setattr__(self, "refill", bool(self.refill and self.stop_early
+                                                and not self.save))
         object.__setattr__(self, "shared_forcing", bool(self.shared_forcing and self.drives))
         block = _config.BLOCK if self.block is None else self.block
         if not isinstance(block, int) or not (block == 1 or (block >= 8 and block % 8 == 0)):

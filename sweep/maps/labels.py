@@ -345,6 +345,9 @@ def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int
     """
     theta = np.ascontiguousarray(theta, dtype=np.float64)
     omega = np.ascontiguousarray(omega, dtype=np.float64)
+    if theta.ndim != 2 or theta.shape != omega.shape:
+        raise ValueError(f"theta and omega must be 2-D arrays of the same shape (n, P), "
+                         f"got {theta.shape} and {omega.shape}")
     period, turns = _strobe.periods(theta, omega, int(max_period), float(tol))
     n = theta.shape[0]
     labels = np.full(n, UNRESOLVED, dtype=np.int32)

@@ -166,17 +166,11 @@ class EffectDeclaration:
         For an effect that caps the speed (drag): a bound on ``|theta'|`` it enforces
         once ``|theta'|`` is above the starts', an expression in its symbols and
         ``force_max`` (``g/L`` plus every effect's ``force_bound``); ``math.inf`` where
-        it caps nothing. The guard's ``omega_max`` is the starts' energy bound without
-        forces (exact for an undriven pendulum), the smaller of that and
-        ``max(|omega0|, speed_bound)`` with none, and ``max(|omega0|, speed_bound)``
-        with forces (the nonlinear model; otherwise the energy bound, which forces can
-        exceed).
-    tension : str
-        Source added to the rod tension per unit mass ``T/m`` ("" for none); may read
-        ``th``, ``om``, ``L``, ``g``, its symbols and ``TIME`` (the time of the state).
-    switched_on_by_grid : bool
-        Whether a grid axis of its parameters switches it on in a scene without it
-        (damping); otherwise such an axis needs the effect in the scene.
+        it caps nothing. The guard's ``omega_max``: without a speed-capping effect, the
+        bound from the starts' energy (exact for an undriven pendulum); with one and no
+        nonzero force, the smaller of that and ``max(|omega0|, speed_bound)``; with
+        forces, ``max(|omega0|, speed_bound)`` (nonlinear model; the linear model keeps
+        the energy bound, which forces can exceed).
     """
 
     name: str
