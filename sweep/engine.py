@@ -300,11 +300,14 @@ def _check_stable_step(scene: Scene, grid: Grid, settings, effects) -> None:
 
 def _block(n: int, stop_early: bool) -> int:
     """Trajectories per block for a run of ``n`` (see `sweep._config`): one each for a
-    handful, small blocks for small grids and early stop, else `_config.BLOCK`."""
+    handful, small blocks for small grids and early stop (no wider than the grid), else
+    `_config.BLOCK`."""
     if n < _config.NARROW_BELOW:
         return 1
     if stop_early or n < 16 * _config.BLOCK:
-        return _config.SMALL_BLOCK
+        # no more lanes than trajectories (rounded up to 8), but at least 16: LLVM
+        # leaves a loop of 8 unvectorised
+        return min(_config.SMALL_BLOCK, max(16, -(-n // 8) * 8))
     return _config.BLOCK
 
 

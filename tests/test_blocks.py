@@ -117,11 +117,51 @@ def test_early_stop_is_the_same_for_any_blocking(observe, forcing):
 def test_every_fixed_step_method_is_the_same_for_any_blocking(method):
     conservative = METHODS[method].conservative_only
     params = _table(30, damping=0.0 if conservative else 0.5)
-    if conservative:
-        params[5, 2] = 0.0
+    if conservative:  # no damping at all, not even row 5's overflowing one
+        params[5, sweep.physics.parameter_names().index("damping")] = 0.0
     spec = [KernelSpec("nonlinear", () if conservative else ("damping", "forcing"), ("final", "energy"),
                        method=method, block=block) for block in (1, 8, 128)]
-    _assert_same(_call(spec[0], params), _call(spec[1], params))
+    first = _call(spec[0], params)
+    for other in spec[1:]:
+        _assert_same(first, _call(other, params))
+
+
+def _adaptive(spec, params, t_transient=5.0):
+    """The adaptive kernel over 30 s (chaotic: a last-bit change would show)."""
+    n = params.shape[0]
+    out = np.full((n, _kernels.n_columns(spec)), -7.0)
+    status = np.full(n, 99, dtype=np.int8)
+    stats = np.full((n, 2), -1, dtype=np.int64)
+    _kernels.build(spec)(params, 0.0, 30.0, 0.1, t_transient, 1e-8, 1e-10, out, status,
+                         stats)
+    return out, status, stats
+
+
+def test_adaptive_lanes_are_the_same_for_any_blocking_and_threads():
+    """dopri5 in SIMD lanes: each lane accepts or rejects its own step, so lanes drift
+    apart in time; whatever the block, the padding (30 rows: partial blocks) and the
+    thread count, each trajectory gets the bits and step counts of a block of one.
+    Row 5 (c = 1e300) is stiff beyond any step: its step collapses and it is flagged."""
+    params = _table(30)
+    params[5, sweep.physics.parameter_names().index("damping")] = 1e300  # stable only
+    # for h < ~3e-300: the step underflows
+    observe = ("final", "theta_max", "tension", "energy", "winding")
+    specs = [KernelSpec("nonlinear", ("damping", "forcing"), observe, method="dopri5",
+                        block=block) for block in (1, 8, 64)]
+    first = _adaptive(specs[0], params)
+    assert first[1][5] == Status.STEP_UNDERFLOW and (np.delete(first[1], 5) == 0).all()
+    assert (first[2].sum(axis=1) > 0).all()  # every lane tried steps
+    for spec in specs[1:]:
+        _assert_same(first, _adaptive(spec, params))
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = _adaptive(specs[2], _table(300))
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+        many = _adaptive(specs[2], _table(300))
+    finally:
+        numba.set_num_threads(before)
+    _assert_same(one, many)
 
 
 def test_thread_count_does_not_matter_within_a_call():

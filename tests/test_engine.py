@@ -87,9 +87,9 @@ def test_compiled_kernels_have_the_scene_terms_only_and_vectorised_lanes(tmp_pat
         for model in ("linear", "nonlinear"):
             sweep.run(sweep.Scene(model=model), sweep.Grid(theta0=[0.1 * k for k in range(1, 11)]),
                       t_end=1.0, dt=0.1, observe=("final",))
-            # the spec sweep.run compiled (a ten-trajectory grid runs in small blocks)
+            # the spec sweep.run compiled (a ten-trajectory grid runs in a small block)
             kernel = _kernels.build(_kernels.KernelSpec(model, (), ("final",),
-                                                        block=sweep._config.SMALL_BLOCK))
+                                                        block=sweep.engine._block(10, False)))
             ir = "".join(kernel.inspect_llvm().values())
             assert ir, "not compiled in this process"
             print(model, re.search(r"@(llvm\\.sin\\.[fv]|sin)\\(", ir) is not None,

@@ -1,5 +1,14 @@
 """The adaptive kernel: an embedded Runge-Kutta pair, each trajectory controlling its own
-step (one trajectory per ``prange`` iteration).
+step, trajectories in blocks of SIMD lanes.
+
+A block's lanes try a step together (straight-line arithmetic, vectorised by LLVM like
+the fixed-step kernels, each lane with its own time ``t`` and step ``h``); then each
+lane, one after the other, accepts or rejects its own attempt and sets its next step,
+and a lane whose trajectory is done writes its results and goes idle (it keeps trying
+steps whose results are never used) until the block's last lane is done. A lane's
+arithmetic is the same operations whatever the block, so the results are those of one
+trajectory at a time, bit for bit (``tests/test_effects.py`` compares them with the
+scalar kernel of sweep 0.1; ``tests/test_blocks.py`` across blocks).
 
 Each trajectory advances its own time ``t`` (a sum of accepted steps) and clips its
 last step so that it ends at ``t_end`` exactly. A trajectory whose step would have to
@@ -10,7 +19,8 @@ shrinks the step, so a blow-up ends there too (its state stays finite).
 
 from __future__ import annotations
 
-from .lanes import indent
+from ..observables import OBSERVABLES
+from .lanes import IDENTIFIER, indent, lane_loop, lane_snippet
 from .snippets import snippets
 from .spec import KernelSpec, Status, n_columns
 from .steppers import at_node, combination, rk_stages
@@ -53,74 +63,106 @@ def adaptive_kernel(spec: KernelSpec, tableau) -> str:
         attempt = f_lines + rk_stages(spec, tableau, "h", None, drives) + new_state
     err = [f"et = {combination(tableau.error_weights, kt, 'h', None)}",
            f"eo = {combination(tableau.error_weights, ko, 'h', None)}"]
-    update = snippets(spec, "update", time="t")
+    update = lane_snippet(snippets(spec, "update", time="t"))
     exponent = -1.0 / (tableau.embedded_order + 1)
     nl = chr(10)
+    init = ["i = min(base + j, n - 1)  # padding lanes repeat the last trajectory"] + \
+        load_lines(spec, "i") + [
+        "th = th0", "om = om0", "t = t0", lane_snippet(snippets(spec, "init", time="t")),
+        ("if t_transient <= 0.0:" + nl + indent(update, 1)) if update else "",
+        "h = dt"] + f_first + first + [
+        "accepted = 0", "rejected = 0", "after_reject = False", "ok = True",
+        "active = j < n_real", "thn = th", "omn = om", "err = 0.0", "last = False"]
+    try_step = ["last = t + h >= t_end", "if last:", "    h = t_end - t"] + attempt + err + [
+        "sct = atol + rtol * max(abs(th), abs(thn))",
+        "sco = atol + rtol * max(abs(om), abs(omn))",
+        "err = math.sqrt(0.5 * ((et / sct) ** 2 + (eo / sco) ** 2))"]
+    # accept or reject, lane by lane (the controller's power is a libm call, which
+    # LLVM cannot vectorise: a branch per lane costs less than selects over all lanes,
+    # measured); a lane that is done writes its results and goes idle
+    control = f"""if err <= 1.0 and math.isfinite(thn) and math.isfinite(omn):
+    t = t_end if last else t + h
+    th = thn
+    om = omn
+{indent(nl.join(accept_carry), 1)}
+    accepted += 1
+{indent(("if t >= t_obs:" + nl + indent(update, 1)) if update else "", 1)}
+    if err == 0.0:
+        fac = {_FACMAX!r}
+    else:
+        fac = min({_FACMAX!r}, max({_FACMIN!r}, {_SAFETY!r} * err ** {exponent!r}))
+    if after_reject:
+        fac = min(fac, 1.0)
+    after_reject = False
+    h = min(h * fac, dt)
+else:
+    rejected += 1
+    if math.isfinite(err):
+        h = h * max({_FACMIN!r}, {_SAFETY!r} * err ** {exponent!r})
+    else:
+        h = h * {_FACMIN!r}
+    after_reject = True
+    if h < h_min:
+        ok = False
+if not ok or t >= t_end:
+    active = False
+    n_active -= 1
+{indent(_finish(spec), 1)}"""
+    # per-lane variables (name -> dtype): those the loops after the first one read
+    lane = {name: "float64" for name in ["th", "om", "t", "h", "thn", "omn", "err"]}
+    lane.update({line.split("=")[0].strip(): "float64" for line in load_lines(spec)})
+    lane.update({name: "float64" for name in (first and
+                                              ["k1t", "k1o", f"k{s}t", f"k{s}o"])})
+    for name in spec.observe:
+        lane.update(dict(OBSERVABLES[name].state))
+    lane.update({"accepted": "int64", "rejected": "int64", "after_reject": "bool_",
+                 "ok": "bool_", "active": "bool_", "last": "bool_"})
+    later = set(IDENTIFIER.findall(nl.join(try_step + [control])))
+    lane = {name: dtype for name, dtype in lane.items() if name in later}
+    init_loop = lane_loop(nl.join(init), lane, level=2, load=False)
+    try_loop = lane_loop(nl.join(try_step), lane, level=3,
+                         stores=[name for name in lane if name in
+                                 {"h", "last", "thn", "omn", "err", f"k{s}t", f"k{s}o"}])
+    control_loop = lane_loop(control, lane, level=3,
+                             head="    if not lane_active[j]:\n        continue\n")
+    allocate = [f"lane_{name} = np.empty(BLOCK, dtype=np.{dtype})"
+                for name, dtype in lane.items()]
     return f'''
+BLOCK = {spec.block}
+
+
 @njit(parallel=True, **JIT)
 def kernel(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats):
     TWO_PI = 2.0 * math.pi
     t_obs = t0 + t_transient
     h_min = 16.0 * 2.220446049250313e-16 * max(abs(t0), abs(t_end))
-    for i in prange(params.shape[0]):
-{indent(nl.join(load_lines(spec)), 2)}
-        th = th0
-        om = om0
-        t = t0
-{indent(snippets(spec, "init", time="t"), 2)}
-{indent(("if t_transient <= 0.0:" + nl + indent(update, 1)) if update else "", 2)}
-        h = dt
-{indent(nl.join(f_first + first), 2)}
-        accepted = 0
-        rejected = 0
-        after_reject = False
-        ok = True
-        while t < t_end:
-            last = t + h >= t_end
-            if last:
-                h = t_end - t
-{indent(nl.join(attempt), 3)}
-{indent(nl.join(err), 3)}
-            sct = atol + rtol * max(abs(th), abs(thn))
-            sco = atol + rtol * max(abs(om), abs(omn))
-            err = math.sqrt(0.5 * ((et / sct) ** 2 + (eo / sco) ** 2))
-            if err <= 1.0 and math.isfinite(thn) and math.isfinite(omn):
-                t = t_end if last else t + h
-                th = thn
-                om = omn
-{indent(nl.join(accept_carry), 4)}
-                accepted += 1
-{indent(("if t >= t_obs:" + nl + indent(update, 1)) if update else "", 4)}
-                if err == 0.0:
-                    fac = {_FACMAX!r}
-                else:
-                    fac = min({_FACMAX!r}, max({_FACMIN!r}, {_SAFETY!r} * err ** {exponent!r}))
-                if after_reject:
-                    fac = min(fac, 1.0)
-                after_reject = False
-                h = min(h * fac, dt)
-            else:
-                rejected += 1
-                if math.isfinite(err):
-                    h = h * max({_FACMIN!r}, {_SAFETY!r} * err ** {exponent!r})
-                else:
-                    h = h * {_FACMIN!r}
-                after_reject = True
-                if h < h_min:
-                    ok = False
-                    break
-        stats[i, 0] = accepted
-        stats[i, 1] = rejected
-{_final_block(spec)}'''
-
-
-def _final_block(spec: KernelSpec) -> str:
-    return f'''\
-        if ok:
-            status[i] = {int(Status.OK)}
-{indent(snippets(spec, "final"), 3) or "            pass"}
-        else:
-            status[i] = {int(Status.STEP_UNDERFLOW)}
-            for col in range({n_columns(spec)}):
-                out[i, col] = math.nan
+    n = params.shape[0]
+    for b in prange((n + BLOCK - 1) // BLOCK):
+        base = b * BLOCK
+        n_real = min(BLOCK, n - base)
+{indent(nl.join(allocate), 2)}
+        obuf = np.empty((BLOCK, {n_columns(spec)}))
+{init_loop}
+        n_active = n_real
+        while n_active > 0:
+{try_loop}
+{control_loop}
 '''
+
+
+def _finish(spec: KernelSpec) -> str:
+    """A lane's trajectory is done (or its step underflowed): statistics, status,
+    observables' final values, copy to ``out``."""
+    width = n_columns(spec)
+    return f"""i = base + j
+stats[i, 0] = accepted
+stats[i, 1] = rejected
+if ok:
+    status[i] = {int(Status.OK)}
+{indent(lane_snippet(snippets(spec, "final")), 1) or "    pass"}
+else:
+    status[i] = {int(Status.STEP_UNDERFLOW)}
+    for col in range({width}):
+        obuf[j, col] = math.nan
+for col in range({width}):
+    out[i, col] = obuf[j, col]"""
