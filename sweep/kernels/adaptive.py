@@ -6,9 +6,16 @@ the fixed-step kernels, each lane with its own time ``t`` and step ``h``); then 
 lane, one after the other, accepts or rejects its own attempt and sets its next step,
 and a lane whose trajectory is done writes its results and goes idle (it keeps trying
 steps whose results are never used) until the block's last lane is done. A lane's
-arithmetic is the same operations whatever the block, so the results are those of one
-trajectory at a time, bit for bit (``tests/test_effects.py`` compares them with the
-scalar kernel of sweep 0.1; ``tests/test_blocks.py`` across blocks).
+arithmetic is the same operations whatever the block, so the results do not depend on
+the block or the thread count, bit for bit (``tests/test_blocks.py``). Against the
+one-trajectory kernel of sweep 0.1 the step counts are the same and the states agree to
+rounding (LLVM contracts the error norm into FMAs differently; ``tests/test_effects.py``).
+
+Measured (20,000 forced trajectories, 30 s, rtol 1e-8, this 2-core AVX-512 machine):
+blocks of 16-64 lanes try 3.2x the steps per second of one trajectory at a time; a
+block of 8 is not vectorised by LLVM. What is left per step is mostly scalar: the
+controller's ``err ** -0.2`` (a libm call, about 30 % of the time) and the
+accept/reject bookkeeping of each lane.
 
 Each trajectory advances its own time ``t`` (a sum of accepted steps) and clips its
 last step so that it ends at ``t_end`` exactly. A trajectory whose step would have to
