@@ -146,16 +146,16 @@ def main(argv=None) -> int:
 
 
 def dopri5_lanes(n: int, repeats: int, tolerances=(1e-6, 1e-9)):
-    """dopri5 in SIMD lanes against one trajectory at a time (a block of one lane, the
-    layout of sweep 0.2's adaptive kernel, measured as fast as it), side by side in
-    this process at the same rtol, so at equal error (the results agree to rounding):
-    best of ``repeats`` alternating calls per scene and tolerance."""
+    """dopri5 in SIMD lanes against one trajectory at a time (the same kernel with a
+    block of one lane, as the adaptive kernel ran before it had lanes), side by side
+    in this process at the same rtol, so at equal error (the results are the same
+    bits): best of ``repeats`` alternating calls per scene and tolerance."""
     rows, table = [], ["## dopri5 in SIMD lanes against one trajectory at a time", "",
                        f"{n} trajectories, the same rtol (so the same error), best of "
                        f"{repeats} alternating calls.", "",
                        "| scene | rtol | one at a time | in lanes | speed-up |",
                        "|---|---|---|---|---|"]
-    engine_block = sweep.engine._block
+    lanes_block = sweep._config.ADAPTIVE_BLOCK
     for key, title, scene, sample, t_end in scenes(n):
         for rtol in tolerances:
             kwargs = dict(t_end=t_end, dt=0.25, method="dopri5", rtol=rtol,
@@ -164,14 +164,14 @@ def dopri5_lanes(n: int, repeats: int, tolerances=(1e-6, 1e-9)):
             for _ in range(repeats):
                 for label in best:
                     if label == "one":
-                        sweep.engine._block = lambda size, stop_early: 1
+                        sweep._config.ADAPTIVE_BLOCK = 1
                     try:
                         sweep.engine.warm_up(scene, sample, **kwargs)
                         start = time.perf_counter()
                         sweep.run(scene, sample, **kwargs)
                         best[label] = min(best[label], time.perf_counter() - start)
                     finally:
-                        sweep.engine._block = engine_block
+                        sweep._config.ADAPTIVE_BLOCK = lanes_block
             rows.append({"scene": key, "rtol": rtol, "one_at_a_time_s": best["one"],
                          "lanes_s": best["lanes"], "speedup": best["one"] / best["lanes"]})
             table.append(f"| {title} | {rtol:g} | {best['one'] * 1e3:.1f} ms | "

@@ -299,15 +299,13 @@ def _check_stable_step(scene: Scene, grid: Grid, settings, effects) -> None:
 
 
 def _block(n: int, stop_early: bool) -> int:
-    """Trajectories per block for a run of ``n`` (see `sweep._config`): one each for a
-    handful, small blocks for small grids and early stop (no wider than the grid), else
+    """Trajectories per block of a fixed-step run of ``n`` (see `sweep._config`): one
+    each for a handful, small blocks for small grids and early stop, else
     `_config.BLOCK`."""
     if n < _config.NARROW_BELOW:
         return 1
     if stop_early or n < 16 * _config.BLOCK:
-        # no more lanes than trajectories (rounded up to 8), but at least 16: LLVM
-        # leaves a loop of 8 unvectorised
-        return min(_config.SMALL_BLOCK, max(16, -(-n // 8) * 8))
+        return _config.SMALL_BLOCK
     return _config.BLOCK
 
 
@@ -363,7 +361,8 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         save=save_every is not None,
         stop_early=bool(stop_early),
         method=integrator,
-        block=_block(grid.size, stop_early),
+        block=(1 if grid.size < _config.NARROW_BELOW else _config.ADAPTIVE_BLOCK)
+        if integrator.adaptive else _block(grid.size, stop_early),
         # a settled trajectory's lane takes the next waiting one (no idle lanes)
         refill=refill,
         # one sine per drive and step for a whole block when no trajectory differs in it

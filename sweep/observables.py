@@ -17,8 +17,9 @@ declare (nothing for damping and forcing). Snippets are per trajectory: ``out[i,
 
 Every variable that lives from one snippet to the next (set in ``init``, read in
 ``update``, ``settled`` or ``final``) is declared in ``state`` with its dtype: the
-fixed-step kernel integrates trajectories in blocks of SIMD lanes with the time loop
-outside the lane loop, so such a variable becomes one array element per lane.
+kernels (fixed-step, refill and adaptive) integrate trajectories in blocks of SIMD
+lanes with the time loop outside the lane loop, so such a variable becomes one array
+element per lane.
 
 Memory is O(number of trajectories): one row of ``out`` per trajectory, whatever the
 number of steps.

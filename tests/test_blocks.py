@@ -178,6 +178,35 @@ def test_thread_count_does_not_matter_within_a_call():
     _assert_same(one, many)
 
 
+def test_adaptive_lanes_with_every_effect_and_observable():
+    """The five effects (the pivot's tension reads each lane's own time) and every
+    observable dopri5 takes, updated from the start (t_transient = 0): blocks of 1, 16
+    and 64 give the same bits; with t_end = t0 nothing is integrated and the start is
+    the result."""
+    column = {name: k for k, name in enumerate(sweep.physics.parameter_names())}
+    params = _table(40)
+    params[:, column["torque"]] = 0.3
+    params[:, column["drag"]] = 0.2
+    params[:, column["pivot_amplitude"]] = 0.05
+    params[:, column["pivot_frequency"]] = np.linspace(5.0, 30.0, 40)
+    params[:, column["pivot_phase"]] = 0.1
+    observe = ("final", "winding", "theta_max", "amplitude", "tension", "energy",
+               "top_distance")
+    effects = ("damping", "forcing", "torque", "drag", "pivot")
+    specs = [KernelSpec("nonlinear", effects, observe, method="dopri5", block=block)
+             for block in (1, 16, 64)]
+    first = _adaptive(specs[0], params, t_transient=0.0)
+    assert (first[1] == 0).sum() >= 39 and np.isfinite(first[0][first[1] == 0]).all()
+    for spec in specs[1:]:
+        _assert_same(first, _adaptive(spec, params, t_transient=0.0))
+    n = params.shape[0]
+    out, status = np.full((n, _kernels.n_columns(specs[1])), -7.0), np.full(n, 9, np.int8)
+    stats = np.full((n, 2), -1, dtype=np.int64)
+    _kernels.build(specs[1])(params, 0.0, 0.0, 0.1, 0.0, 1e-8, 1e-10, out, status, stats)
+    assert (stats == 0).all() and (status == 0).all()
+    np.testing.assert_array_equal(out[:, :2], params[:, :2])  # final = the start
+
+
 def test_lane_code_never_writes_a_row_of_out_directly():
     """Padding lanes repeat the last trajectory's row index; only the final copy of
     real lanes may touch ``out`` (snippets write the block's row buffer)."""

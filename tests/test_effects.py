@@ -85,7 +85,7 @@ def test_generated_kernels_are_bit_identical_to_those_before_the_declarations(na
     model, damping, forcing, observe, kwargs = _before_specs()[name]
     effects = ("damping",) * damping + ("forcing",) * forcing
     spec = kernels.KernelSpec(model, effects, observe, **kwargs)
-    values = _values(70, seed=sum(map(ord, name)))  # 70: a partial block of 64 lanes
+    values = _values(70, seed=sum(map(ord, name)))  # 70: a partial block
     method = kwargs["method"]
     new = _outputs(kernels.build(spec), spec, _table(values, parameter_names()), method)
     old = _outputs(_load_before(name), spec, _table(values, OLD_COLUMNS), method)

@@ -11,11 +11,11 @@ the block or the thread count, bit for bit (``tests/test_blocks.py``). Against t
 one-trajectory kernel of sweep 0.1 the step counts are the same and the states agree to
 rounding (LLVM contracts the error norm into FMAs differently; ``tests/test_effects.py``).
 
-Measured (20,000 forced trajectories, 30 s, rtol 1e-8, this 2-core AVX-512 machine):
-blocks of 16-64 lanes try 3.2x the steps per second of one trajectory at a time; a
-block of 8 is not vectorised by LLVM. What is left per step is mostly scalar: the
-controller's ``err ** -0.2`` (a libm call, about 30 % of the time) and the
-accept/reject bookkeeping of each lane.
+A block costs BLOCK times the most step attempts of its trajectories, so blocks are
+small (`sweep._config.ADAPTIVE_BLOCK`). Measured by ``benchmarks/work_precision.py``
+(its last table): 2-3x the speed of one trajectory per block at the same tolerance.
+What is left per step is mostly scalar: the controller's ``err ** -0.2`` (a libm call
+LLVM cannot vectorise) and the accept/reject bookkeeping of each lane.
 
 Each trajectory advances its own time ``t`` (a sum of accepted steps) and clips its
 last step so that it ends at ``t_end`` exactly. A trajectory whose step would have to
@@ -79,7 +79,11 @@ def adaptive_kernel(spec: KernelSpec, tableau) -> str:
         ("if t_transient <= 0.0:" + nl + indent(update, 1)) if update else "",
         "h = dt"] + f_first + first + [
         "accepted = 0", "rejected = 0", "after_reject = False", "ok = True",
-        "active = j < n_real", "thn = th", "omn = om", "err = 0.0", "last = False"]
+        "active = j < n_real and t < t_end", "thn = th", "omn = om", "err = 0.0",
+        "last = False"] + [f"k{s}t = 0.0", f"k{s}o = 0.0"] * bool(first) + [
+        # nothing to integrate (t0 >= t_end): the start is the result, as one
+        # trajectory at a time would give
+        "if j < n_real and not active:", indent(_finish(spec), 1)]
     try_step = ["last = t + h >= t_end", "if last:", "    h = t_end - t"] + attempt + err + [
         "sct = atol + rtol * max(abs(th), abs(thn))",
         "sco = atol + rtol * max(abs(om), abs(omn))",
@@ -150,7 +154,9 @@ def kernel(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats):
 {indent(nl.join(allocate), 2)}
         obuf = np.empty((BLOCK, {n_columns(spec)}))
 {init_loop}
-        n_active = n_real
+        n_active = 0
+        for j in range(n_real):
+            n_active += lane_active[j]
         while n_active > 0:
 {try_loop}
 {control_loop}

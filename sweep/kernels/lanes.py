@@ -1,5 +1,6 @@
-"""Lanes of a block: per-trajectory code inside the fixed-step kernel's blocks of SIMD
-lanes, with per-lane state in small arrays ``lane_<name>``."""
+"""Lanes of a block: per-trajectory code inside the kernels' blocks of SIMD lanes
+(fixed-step, refill and adaptive), with per-lane state in small arrays
+``lane_<name>``."""
 
 from __future__ import annotations
 

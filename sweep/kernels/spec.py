@@ -127,8 +127,8 @@ class KernelSpec:
         `sweep._config.SINE_TABLE_STEPS`), and other drives' sines are per lane.
         Bit-identical to ``refill=False`` (a test checks it).
     block : int
-        Trajectories per block of the fixed-step kernel (SIMD lanes; a multiple of 8, or
-        1 for a few trajectories, each alone). Results do not depend on it (a test checks
+        Trajectories per block of the fixed-step, refill and adaptive kernels (SIMD
+        lanes; a multiple of 8, or 1 for a few trajectories, each alone). Results do not depend on it (a test checks
         it); `_config.BLOCK` by default.
     """
 
