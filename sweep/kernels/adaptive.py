@@ -27,7 +27,7 @@ shrinks the step, so a blow-up ends there too (its state stays finite).
 from __future__ import annotations
 
 from ..observables import OBSERVABLES
-from .lanes import IDENTIFIER, indent, lane_loop, lane_snippet
+from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet, skip_unless
 from .snippets import snippets
 from .spec import KernelSpec, Status, n_columns
 from .steppers import at_node, combination, rk_stages
@@ -135,9 +135,7 @@ if not ok or t >= t_end:
                          stores=[name for name in lane if name in
                                  {"h", "last", "thn", "omn", "err", f"k{s}t", f"k{s}o"}])
     control_loop = lane_loop(control, lane, level=3,
-                             head="    if not lane_active[j]:\n        continue\n")
-    allocate = [f"lane_{name} = np.empty(BLOCK, dtype=np.{dtype})"
-                for name, dtype in lane.items()]
+                             head=skip_unless("active"))
     return f'''
 BLOCK = {spec.block}
 
@@ -151,7 +149,7 @@ def kernel(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats):
     for b in prange((n + BLOCK - 1) // BLOCK):
         base = b * BLOCK
         n_real = min(BLOCK, n - base)
-{indent(nl.join(allocate), 2)}
+{indent(nl.join(allocate(lane)), 2)}
         obuf = np.empty((BLOCK, {n_columns(spec)}))
 {init_loop}
         n_active = 0

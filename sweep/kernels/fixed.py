@@ -21,7 +21,7 @@ import textwrap
 from dataclasses import dataclass, field
 
 from ..observables import OBSERVABLES
-from .lanes import IDENTIFIER, indent, lane_loop, lane_snippet
+from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet
 from .snippets import snippets, stop_source
 from .spec import KernelSpec, Status, n_columns
 from .steppers import STEPPERS
@@ -198,8 +198,6 @@ def fixed_kernel(spec: KernelSpec, method) -> str:
         observe_block = observe_block.format(loop=lane_loop(observe_body, lane, level=1,
                                                             head=observe_head))
     finish_loop = lane_loop(finish, lane, level=2, stores=[], count="n_real")
-    allocate = [f"lane_{name} = np.empty(BLOCK, dtype=np.{dtype})"
-                for name, dtype in lane.items()]
     return f'''
 BLOCK = {spec.block}
 
@@ -213,7 +211,7 @@ def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
         base = b * BLOCK
         n_real = min(BLOCK, n - base)
 {indent(NL.join(_load(spec, p, "base") for p in shared), 2)}
-{indent(NL.join(allocate), 2)}
+{indent(NL.join(allocate(lane)), 2)}
         obuf = np.empty((BLOCK, {n_columns(spec)}))
         k_state = 0
         n_done = 0

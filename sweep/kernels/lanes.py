@@ -7,7 +7,8 @@ from __future__ import annotations
 import re
 import textwrap
 
-__all__ = ["ASSIGNED", "IDENTIFIER", "indent", "lane_loop", "lane_snippet"]
+__all__ = ["ASSIGNED", "IDENTIFIER", "allocate", "indent", "lane_loop", "lane_snippet",
+           "skip_unless"]
 
 IDENTIFIER = re.compile(r"\b[A-Za-z_]\w*\b")
 ASSIGNED = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:[-+*/]?=)(?!=)", re.MULTILINE)
@@ -37,3 +38,13 @@ def lane_loop(body: str, lane: dict[str, str], *, level: int, head: str = "",
 def indent(code: str, level: int) -> str:
     """``code`` indented by ``level`` levels of four spaces ("" stays "")."""
     return textwrap.indent(code, "    " * level) if code else ""
+
+
+def allocate(lane: dict[str, str]) -> list[str]:
+    """The lines that make each lane variable's array ``lane_<name>`` (name -> dtype)."""
+    return [f"lane_{name} = np.empty(BLOCK, dtype=np.{dtype})" for name, dtype in lane.items()]
+
+
+def skip_unless(flag: str) -> str:
+    """A `lane_loop` head that skips the lanes whose boolean ``lane_<flag>`` is False."""
+    return f"    if not lane_{flag}[j]:\n        continue\n"

@@ -20,7 +20,7 @@ from __future__ import annotations
 import re
 
 from .fixed import NL, _drives, _finish, _first_lines, _lane_dtypes, _load, _parameters
-from .lanes import IDENTIFIER, indent, lane_loop, lane_snippet
+from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet, skip_unless
 from .snippets import snippets, stop_source
 from .spec import KernelSpec, n_columns
 from .steppers import STEPPERS
@@ -112,9 +112,7 @@ finished = False"""
              "    if not lane_live[j] or (ks < n_transient and ks < n_steps):\n"
              "        continue\n")
     refill_loop = lane_loop(refill, lane, level=4,
-                            head="    if not lane_finished[j]:\n        continue\n")
-    allocate = [f"lane_{name} = np.empty(BLOCK, dtype=np.{dtype})"
-                for name, dtype in lane.items()]
+                            head=skip_unless("finished"))
     return f'''
 BLOCK = {spec.block}
 
@@ -140,7 +138,7 @@ def grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved
     for b in prange(n_groups):
         first = np.int64(b)  # group b's first trajectory (the prange index may be unsigned)
 {indent(NL.join(_load(spec, p, "first") for p in shared), 2)}
-{indent(NL.join(allocate), 2)}
+{indent(NL.join(allocate(lane)), 2)}
         obuf = np.empty((BLOCK, {n_columns(spec)}))
         taken = 0  # trajectories first, first + n_groups, ... taken so far
         n_live = 0
