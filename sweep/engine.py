@@ -25,8 +25,9 @@ from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
 from .execution.progress import progress_bar
 from .grid import Grid
-from .kernels import (KernelSpec, build, check_method_fits, check_observables_fit, declarations,
-                      failure_summary, n_columns, status_counts)
+from .kernels import (KernelSpec, build, check_method_fits, check_observables_fit,
+                      check_tangent_fits, declarations, failure_summary, n_columns,
+                      status_counts)
 from .methods import METHODS
 from .observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
 from .physics import EFFECTS, Scene
@@ -342,6 +343,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     integrator = settings.integrator
     effects = declarations(grid.effects(scene))
     check_method_fits(integrator, effects)
+    check_tangent_fits(integrator, effects, names)
     check_observables_fit(integrator, names)
     _check_stroboscopic(names, scene, grid, settings)
     _check_stop_early(names, scene, grid, stop_early, save_every)
@@ -353,6 +355,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     if not specialize:  # every registered effect the method can integrate, fed zeros
         effects = tuple(cls.declaration for cls in EFFECTS.values()
                         if cls.declaration.conservative or not integrator.conservative_only)
+        check_tangent_fits(integrator, effects, names)
     refill = bool(stop_early) and _config.REFILL
     spec = KernelSpec(
         model=scene.model,

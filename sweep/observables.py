@@ -67,6 +67,22 @@ class Observable:
         Variables kept per trajectory between snippets (numpy dtype names:
         ``"float64"``, ``"int64"``, ``"bool_"``); every name assigned in ``init``
         (other than loop variables) must be here.
+    tangent : bool
+        True if it reads the tangent dynamics: the fixed-step explicit kernels then
+        integrate two tangent vectors ``(ly_u1, ly_v1)``, ``(ly_u2, ly_v2)`` beside
+        the state, with the same method (`sweep.kernels.steppers.rk_stages`), from
+        the Jacobian terms the effects declare; set them in ``init``.
+    renormalise : str
+        Snippet run every ``renormalise_every`` steps from the start (the transient
+        included), at the first step of the steady window and at the last step; the
+        name ``keep`` is True when the segment since the last run lies in the steady
+        window (``t >= t0 + t_transient``).
+    renormalise_every : int
+        Steps between runs of ``renormalise``.
+    finite : str
+        An expression that must be True for the trajectory's outputs to count as
+        finite (beside the state being finite); a False makes its status
+        ``NONFINITE``.
     """
 
     name: str
@@ -82,6 +98,10 @@ class Observable:
     settled: str = ""
     unforced_only: bool = False
     state: tuple[tuple[str, str], ...] = ()
+    tangent: bool = False
+    renormalise: str = ""
+    renormalise_every: int = 0
+    finite: str = ""
 
     @property
     def n_columns(self) -> int:
@@ -101,6 +121,14 @@ STROBE_SAMPLES = 16
 #: orbit (contracting geometrically) needs only a few more periods to get there
 #: (`benchmarks/forced_basins.py`: about 32 s -> 45 s for the whole map).
 STROBE_TOL = 1e-8
+
+#: Steps between renormalisations of the ``lyapunov`` observable's tangent vectors. A
+#: stable RK4 step (|z| <= 2.83) grows a tangent vector by at most ~14 (the stability
+#: polynomial's modulus there), so 64 steps stay below 14**64 ~ 1e73, far from
+#: overflow (1e308); and a renormalisation (a square root, two logarithms per lane)
+#: every 64 steps costs little beside 64 steps of four stages. The result does not
+#: depend on it beyond rounding (the product of the step Jacobians is the same).
+LYAPUNOV_EVERY = 64
 
 OBSERVABLES: dict[str, Observable] = {
     o.name: o
@@ -309,6 +337,46 @@ OBSERVABLES: dict[str, Observable] = {
             final="out[i, COL] = acc_top",
             steady=True,
             state=(("acc_top", "float64"),),
+        ),
+        Observable(
+            name="lyapunov",
+            variables=(
+                ("lyapunov_max", "s-1",
+                 "largest Lyapunov exponent over t >= t0 + t_transient (finite-time, "
+                 "of the integrator's step map; Gram-Schmidt every "
+                 f"{LYAPUNOV_EVERY} steps)"),
+                ("lyapunov_min", "s-1",
+                 "smallest Lyapunov exponent over t >= t0 + t_transient (finite-time, "
+                 "of the integrator's step map; Gram-Schmidt every "
+                 f"{LYAPUNOV_EVERY} steps)"),
+            ),
+            # two tangent vectors from the identity; Gram-Schmidt every
+            # LYAPUNOV_EVERY steps: the first vector's growth gives the largest
+            # exponent, the area's growth (the determinant) the sum of both
+            init=("ly_u1 = 1.0\nly_v1 = 0.0\nly_u2 = 0.0\nly_v2 = 1.0\n"
+                  "acc_ly1 = 0.0\nacc_ly2 = 0.0"),
+            renormalise=(
+                "ly_n1 = math.sqrt(ly_u1 * ly_u1 + ly_v1 * ly_v1)\n"
+                "ly_r22 = (ly_u1 * ly_v2 - ly_v1 * ly_u2) / ly_n1\n"
+                "if keep:\n"
+                "    acc_ly1 += math.log(ly_n1)\n"
+                "    acc_ly2 += math.log(abs(ly_r22))\n"
+                "ly_u1 = ly_u1 / ly_n1\n"
+                "ly_v1 = ly_v1 / ly_n1\n"
+                "ly_u2 = -ly_v1\n"
+                "ly_v2 = ly_u1"
+            ),
+            renormalise_every=LYAPUNOV_EVERY,
+            # over a finite time the first vector's rate need not be the larger (both
+            # tend to -c/2 on an attractor with complex Floquet multipliers): sorted
+            final=("ly_window = (n_steps - max(n_transient, 0)) * dt\n"
+                   "out[i, COL] = max(acc_ly1, acc_ly2) / ly_window\n"
+                   "out[i, COL + 1] = min(acc_ly1, acc_ly2) / ly_window"),
+            finite="math.isfinite(acc_ly1) and math.isfinite(acc_ly2)",
+            steady=True,
+            tangent=True,
+            state=(("ly_u1", "float64"), ("ly_v1", "float64"), ("ly_u2", "float64"),
+                   ("ly_v2", "float64"), ("acc_ly1", "float64"), ("acc_ly2", "float64")),
         ),
     )
 }

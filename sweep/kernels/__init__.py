@@ -14,9 +14,10 @@ the engine, the execution back ends or the maps.
 
 from .cache import build
 from .source import source
-from .spec import (KernelSpec, Status, check_method_fits, check_observables_fit, declarations,
-                   failure_summary, method_of, n_columns, status_counts)
+from .spec import (KernelSpec, Status, check_method_fits, check_observables_fit,
+                   check_tangent_fits, declarations, failure_summary, method_of, n_columns,
+                   status_counts)
 
 __all__ = ["KernelSpec", "Status", "build", "check_method_fits", "check_observables_fit",
-           "declarations", "failure_summary", "method_of", "n_columns", "source",
+           "check_tangent_fits", "declarations", "failure_summary", "method_of", "n_columns", "source",
            "status_counts"]

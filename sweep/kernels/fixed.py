@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 from ..observables import OBSERVABLES
 from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet
-from .snippets import snippets, stop_source
+from .snippets import finite_test, renormalisations, snippets, stop_source
 from .spec import KernelSpec, Status, n_columns
 from .steppers import STEPPERS
 from .terms import column_of, drive_sine
@@ -141,7 +141,7 @@ def _finish(spec: KernelSpec, index: str = "i = base + j\n", frozen: bool | None
     final = lane_snippet(snippets(spec, "final"))
     frozen = spec.stop_early if frozen is None else frozen
     stop_state = "if done:\n    th = th_stop\n    om = om_stop\n" if frozen else ""
-    return f"""{index}{stop_state}if math.isfinite(th) and math.isfinite(om):
+    return f"""{index}{stop_state}if {finite_test(spec)}:
     status[i] = {int(Status.OK)}
 {indent(final, 1) or "    pass"}
 else:
@@ -168,6 +168,12 @@ def _lane_dtypes(spec: KernelSpec, parts: dict, per_lane: list[str],
     return lane
 
 
+_RENORMALISE = """\
+if k_state % {every} == 0 or k_state == n_transient or k_state == n_steps:
+    keep = k_state > n_transient
+{{loop}}"""
+
+
 def fixed_kernel(spec: KernelSpec, method) -> str:
     """Kernel body of a fixed-step method (see the module docstring)."""
     parts = STEPPERS[method.kind](spec, method)
@@ -183,9 +189,11 @@ def fixed_kernel(spec: KernelSpec, method) -> str:
     observe_block, observe_head, observe_body = _observe_parts(spec, update)
     finish = _finish(spec)
     lane = _lane_dtypes(spec, parts, per_lane, [] if shared_sine else drives.names)
+    renormalise = renormalisations(spec)
     # lane arrays only for what the loops after the first one read
     later = set(IDENTIFIER.findall(NL.join(step_body + drives.step + drives.carry +
-                                           [observe_head, observe_body, finish])))
+                                           [observe_head, observe_body, finish] +
+                                           [code for _, code in renormalise])))
     lane = {name: dtype for name, dtype in lane.items() if name in later}
     init_loop = lane_loop(NL.join(first), lane, level=2, load=False)
     step_loop = lane_loop(NL.join(step_body), lane, level=3,
@@ -197,6 +205,9 @@ def fixed_kernel(spec: KernelSpec, method) -> str:
     if observe_block:
         observe_block = observe_block.format(loop=lane_loop(observe_body, lane, level=1,
                                                             head=observe_head))
+    renormalise_blocks = NL.join(
+        _RENORMALISE.format(every=every).format(loop=lane_loop(code, lane, level=1))
+        for every, code in renormalise)
     finish_loop = lane_loop(finish, lane, level=2, stores=[], count="n_real")
     return f'''
 BLOCK = {spec.block}
@@ -222,6 +233,7 @@ def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
 {step_loop}
 {indent(NL.join(block_after), 3)}
             k_state = step + 1
+{indent(renormalise_blocks, 3)}
 {indent(observe_block, 3)}
 {indent(_SAVE_BLOCK if spec.save else "", 3)}
 {finish_loop}

@@ -7,7 +7,7 @@ from .lanes import indent
 from .spec import KernelSpec
 from .terms import tension_terms
 
-__all__ = ["snippets", "stop_source"]
+__all__ = ["finite_test", "renormalisations", "snippets", "stop_source"]
 
 
 def snippets(spec: KernelSpec, part: str, time: str = "(t0 + k_state * dt)") -> str:
@@ -46,3 +46,18 @@ def stop_source(spec: KernelSpec, action: str = "break") -> str:
         col += obs.n_columns
     lines.append(f"if {' and '.join(flags)}:\n" + indent(action, 1))
     return "\n".join(lines)
+
+
+def renormalisations(spec: KernelSpec) -> list[tuple[int, str]]:
+    """``(every, snippet)`` of each observed observable with a ``renormalise`` snippet
+    (see `sweep.observables.Observable`)."""
+    return [(OBSERVABLES[name].renormalise_every, f"# {name}\n" + OBSERVABLES[name].renormalise)
+            for name in spec.observe if OBSERVABLES[name].renormalise]
+
+
+def finite_test(spec: KernelSpec) -> str:
+    """The condition for a trajectory's outputs to be finite: the state, and what each
+    observed observable adds (its ``finite`` expression)."""
+    tests = ["math.isfinite(th)", "math.isfinite(om)"]
+    tests += [OBSERVABLES[name].finite for name in spec.observe if OBSERVABLES[name].finite]
+    return " and ".join(tests)

@@ -40,8 +40,9 @@ from ..observables import OBSERVABLES
 from .adaptive import adaptive_kernel
 from .fixed import fixed_kernel
 from .refill import refill_kernel
-from .spec import KernelSpec, check_method_fits, check_observables_fit, method_of
-from .terms import accel_source, energy_source
+from .spec import (KernelSpec, check_method_fits, check_observables_fit, check_tangent_fits,
+                   method_of, tangent)
+from .terms import accel_jacobian_source, accel_source, energy_source
 
 __all__ = ["source"]
 
@@ -73,6 +74,7 @@ def source(spec: KernelSpec) -> str:
     if method.adaptive and spec.save:
         raise ValueError(f"method {method.name!r} is adaptive: its steps are not on a fixed "
                          "grid, so it cannot save every k-th step; accepted: save=False")
+    check_tangent_fits(method, spec.effects, spec.observe)
     check_observables_fit(method, spec.observe)
     fastmath = _config.FASTMATH
     if not isinstance(fastmath, bool):  # a set, written in a fixed order (stable hash)
@@ -88,12 +90,12 @@ def source(spec: KernelSpec) -> str:
 import math
 import numpy as np
 from numba import get_num_threads, njit, prange
-from sweep.kernels.vecmath import cos as vcos, sin as vsin
+from sweep.kernels.vecmath import cos as vcos, sin as vsin, sincos as vsincos
 
 JIT = {jit}
 
 
-{accel_source(spec)}
+{accel_jacobian_source(spec) if tangent(spec) else accel_source(spec)}
 
 {energy_source(spec) if uses_energy else ""}
 '''

@@ -13,7 +13,8 @@ from ..observables import OBSERVABLES
 from ..physics import EFFECTS, EffectDeclaration
 
 __all__ = ["KernelSpec", "Status", "check_method_fits", "check_observables_fit",
-           "declarations", "failure_summary", "method_of", "n_columns", "status_counts"]
+           "check_tangent_fits", "declarations", "failure_summary", "method_of", "n_columns",
+           "status_counts", "tangent"]
 
 
 class Status(enum.IntEnum):
@@ -179,6 +180,43 @@ def n_columns(spec: KernelSpec) -> int:
     """Width of ``out``: every column of every observed observable, in observe order
     (an observable with samples > 1 fills ``samples`` columns per variable)."""
     return sum(OBSERVABLES[name].n_columns for name in spec.observe)
+
+
+def tangent(spec: KernelSpec) -> bool:
+    """True if an observed observable needs the tangent dynamics (``lyapunov``): only
+    then are the Jacobian terms generated."""
+    return any(OBSERVABLES[name].tangent for name in spec.observe)
+
+
+def check_tangent_fits(method, effects, observe) -> None:
+    """Refuse tangent dynamics (``lyapunov``) where they are not generated: adaptive
+    and symplectic methods, and effects without a declared Jacobian.
+
+    Raises
+    ------
+    ValueError
+        Naming the observable, the method or effect, and what is accepted.
+    """
+    names = [n for n in observe if OBSERVABLES[n].tangent]
+    if not names:
+        return
+    name = names[0]
+    if method.adaptive or method.kind != "explicit":
+        accepted = ", ".join(repr(n) for n, m in _methods.METHODS.items()
+                             if not m.adaptive and m.kind == "explicit")
+        what = "adaptive" if method.adaptive else "symplectic"
+        raise ValueError(
+            f"observable {name!r} integrates the tangent dynamics with a fixed-step "
+            f"explicit Runge-Kutta method; method {method.name!r} is {what}; accepted: "
+            f"{accepted}")
+    for effect in declarations(effects):
+        missing = effect.jacobian_missing()
+        if missing:
+            raise ValueError(
+                f"observable {name!r} needs the Jacobian of every effect's term, but effect "
+                f"{effect.name!r} declares no derivative of {effect.term!r} with respect to "
+                f"{' and '.join(missing)}; accepted: a scene without {effect.name!r}, or its "
+                "declaration with jacobian_theta/jacobian_omega")
 
 
 def method_of(spec: KernelSpec):

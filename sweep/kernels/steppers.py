@@ -11,11 +11,15 @@ from __future__ import annotations
 from fractions import Fraction
 from math import lcm
 
-from .spec import KernelSpec, check_method_fits
-from .terms import accel_call, drive_nodes, float_literal
+from .spec import KernelSpec, check_method_fits, tangent
+from .terms import accel_call, accel_jacobian_call, drive_nodes, float_literal
 
-__all__ = ["STEPPERS", "at_node", "combination", "explicit_stepper", "rk_stages",
+__all__ = ["STEPPERS", "TANGENT", "at_node", "combination", "explicit_stepper", "rk_stages",
            "symplectic_stepper"]
+
+#: Lane variables of the tangent dynamics (``spec`` observing ``lyapunov``): two
+#: tangent vectors (theta and theta' components), integrated beside the state.
+TANGENT = ("ly_u1", "ly_v1", "ly_u2", "ly_v2")
 
 
 def at_node(drives: dict, c) -> dict[str, str]:
@@ -69,8 +73,17 @@ def combination(coeffs, names, scale: str, constants: dict[str, str] | None):
 
 
 def rk_stages(spec: KernelSpec, tableau, scale: str, constants, drives: dict) -> list[str]:
-    """Stage lines k_it, k_io (k_it = omega at stage i, since theta' = omega)."""
+    """Stage lines k_it, k_io (k_it = omega at stage i, since theta' = omega).
+
+    With tangent dynamics (`sweep.kernels.spec.tangent`), every stage also gives the
+    Jacobian entries ``j_it = d theta''/d theta``, ``j_io = d theta''/d theta'`` at the
+    stage state, and the stages ``q_iu<m>, q_iv<m>`` of each tangent vector m (the same
+    tableau applied to the variational equations ``u' = v, v' = j_t u + j_o v``: for an
+    explicit Runge-Kutta method that is exactly the derivative of its step map, so the
+    exponents measured are those of the map the kernel iterates).
+    """
     lines = []
+    with_tangent = tangent(spec)
     for i in range(tableau.stages):
         row = tableau.a[i][:i]
         kt = [f"k{j + 1}t" for j in range(i)]
@@ -78,8 +91,20 @@ def rk_stages(spec: KernelSpec, tableau, scale: str, constants, drives: dict) ->
         dth = combination(row, kt, scale, constants)
         dom = combination(row, ko, scale, constants)
         lines.append(f"k{i + 1}t = " + (f"om + {dom}" if dom else "om"))
-        lines.append(f"k{i + 1}o = " + accel_call(
-            spec, f"th + {dth}" if dth else "th", f"k{i + 1}t", at_node(drives, tableau.c[i])))
+        th_stage = f"th + {dth}" if dth else "th"
+        if not with_tangent:
+            lines.append(f"k{i + 1}o = " + accel_call(
+                spec, th_stage, f"k{i + 1}t", at_node(drives, tableau.c[i])))
+            continue
+        lines.append(f"k{i + 1}o, j{i + 1}t, j{i + 1}o = " + accel_jacobian_call(
+            spec, th_stage, f"k{i + 1}t", at_node(drives, tableau.c[i])))
+        for m in (1, 2):
+            du = combination(row, [f"q{j + 1}u{m}" for j in range(i)], scale, constants)
+            dv = combination(row, [f"q{j + 1}v{m}" for j in range(i)], scale, constants)
+            lines.append(f"q{i + 1}u{m} = ly_v{m}" + (f" + {dv}" if dv else ""))
+            lines.append(f"q{i + 1}v{m} = j{i + 1}t * ("
+                         + (f"ly_u{m} + {du}" if du else f"ly_u{m}")
+                         + f") + j{i + 1}o * q{i + 1}u{m}")
     return lines
 
 
@@ -109,9 +134,15 @@ def explicit_stepper(spec: KernelSpec, tableau) -> dict[str, list]:
     ko = [f"k{j + 1}o" for j in range(tableau.stages)]
     step.append(f"th = th + {combination(tableau.b, kt, 'dt', constants)}")
     step.append(f"om = om + {combination(tableau.b, ko, 'dt', constants)}")
+    if tangent(spec):
+        for m in (1, 2):
+            for x, q in (("u", "u"), ("v", "v")):
+                names = [f"q{j + 1}{q}{m}" for j in range(tableau.stages)]
+                step.append(f"ly_{x}{m} = ly_{x}{m} + "
+                            f"{combination(tableau.b, names, 'dt', constants)}")
     return {"preamble": list(constants.values()), "drive_init": init,
             "drive_step": nodes, "drive_carry": pairs, "before": [], "step": step,
-            "carried": []}
+            "carried": list(TANGENT) if tangent(spec) else []}
 
 
 def symplectic_stepper(spec: KernelSpec, method) -> dict[str, list[str]]:

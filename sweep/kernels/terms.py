@@ -8,7 +8,7 @@ from ..physics import BASE_PARAMETERS, EffectDeclaration, parameter_names
 from .lanes import IDENTIFIER
 from .spec import KernelSpec
 
-__all__ = ["accel_call", "accel_source", "column_of", "drive_line", "drive_nodes",
+__all__ = ["accel_call", "accel_jacobian_call", "accel_jacobian_source", "accel_source", "column_of", "drive_line", "drive_nodes",
            "drive_sine", "energy_source", "float_literal", "load_lines", "symbols",
            "tension_terms"]
 
@@ -51,6 +51,54 @@ def accel_source(spec: KernelSpec) -> str:
         f"def accel({', '.join(args)}):\n"
         f"    return {' '.join(terms)}\n"
     )
+
+
+def _jacobian_args(effect: EffectDeclaration) -> list[str]:
+    """The names its term and its Jacobian read: symbols, then its drive value."""
+    used = set(IDENTIFIER.findall(" ".join(
+        [effect.term, effect.jacobian("th"), effect.jacobian("om")])))
+    args = [s for s in effect.symbols if s in used]
+    if effect.drive is not None and effect.drive.value in used:
+        args.append(effect.drive.value)
+    return args
+
+
+def accel_jacobian_source(spec: KernelSpec) -> str:
+    """``accel_jac(th, om, w0sq, ...)``: theta'' and its derivatives with respect to
+    theta and theta' (the tangent dynamics' coefficients), with the sine and cosine of
+    theta from one argument reduction (`sweep.kernels.vecmath.sincos`).
+
+    Raises
+    ------
+    ValueError
+        If an effect's term reads a state variable without a declared derivative.
+    """
+    args = ["th", "om", "w0sq"] + [a for e in spec.effects for a in _jacobian_args(e)]
+    nonlinear = spec.model == "nonlinear"
+    f_theta, df_theta = ("sin_th", "cos_th") if nonlinear else ("th", "1.0")
+    accel = ["-w0sq * " + f_theta] + [e.term.replace("FTH", f_theta) for e in spec.effects]
+    d_theta = ["-w0sq * " + df_theta] + [e.jacobian("th").replace("DFTH", df_theta)
+                                        .replace("FTH", f_theta) for e in spec.effects
+                                        if e.jacobian("th")]
+    d_omega = [e.jacobian("om").replace("DFTH", df_theta).replace("FTH", f_theta)
+               for e in spec.effects if e.jacobian("om")]
+    d_omega = " ".join(d_omega) if d_omega else "0.0"
+    return (
+        "@njit(**JIT)\n"
+        f"def accel_jac({', '.join(args)}):\n"
+        + ("    sin_th, cos_th = vsincos(th)\n" if nonlinear else "")
+        + f"    return ({' '.join(accel)}), ({' '.join(d_theta)}), ({d_omega})\n"
+    )
+
+
+def accel_jacobian_call(spec: KernelSpec, th: str, om: str, values: dict[str, str]) -> str:
+    """``accel_jac(...)`` on state ``th, om`` (see `accel_call` for ``values``)."""
+    args = [th, om, "w0sq"]
+    for effect in spec.effects:
+        for arg in _jacobian_args(effect):
+            args.append(values.get(effect.name) if effect.drive is not None
+                        and arg == effect.drive.value else arg)
+    return f"accel_jac({', '.join(args)})"
 
 
 def accel_call(spec: KernelSpec, th: str, om: str, values: dict[str, str]) -> str:

@@ -14,6 +14,9 @@ class attribute ``declaration`` says, once, everything the rest of sweep needs:
 - what it adds to the linearisation at the bottom (``theta'' + C theta' + K theta``:
   ``linear_damping`` adds to C, ``linear_stiffness`` to K; the stability guard reads
   them) and to the rod tension per unit mass (``tension``);
+- its Jacobian: the derivatives of its term with respect to ``theta`` and ``theta'``
+  (``jacobian_theta``, ``jacobian_omega``), which the tangent dynamics of the
+  ``lyapunov`` observable read;
 - whether it is conservative (symplectic methods accept only conservative effects).
 
 `register` adds an effect to `EFFECTS`; the kernel generator (`sweep.kernels`), the
@@ -32,13 +35,15 @@ For developers: a new effect is a subclass plus `register`::
             name="spring", term="- kappa * th", equation="- kappa theta",
             parameters=(Parameter("spring_stiffness", "stiffness", "kappa", "s-2", "1/s^2",
                                   "torsion spring stiffness", minimum=0.0),),
-            conservative=True, linear_stiffness="kappa", switched_on_by_grid=True)
+            conservative=True, linear_stiffness="kappa", switched_on_by_grid=True,
+            jacobian_theta="- kappa")
 """
 
 from __future__ import annotations
 
 import keyword
 import math
+import re
 from dataclasses import dataclass, fields
 from typing import Any, ClassVar
 
@@ -47,13 +52,16 @@ from .._validate import check_real
 __all__ = ["Drive", "Effect", "EffectDeclaration", "EFFECTS", "Parameter", "RESERVED_SYMBOLS",
            "register", "unregister"]
 
+_IDENTIFIER = re.compile(r"\b[A-Za-z_]\w*\b")
+
 #: Kernel names an effect's symbols must not take (state, base parameters, loop and
 #: kernel variables).
 RESERVED_SYMBOLS = frozenset({
     "th", "om", "th0", "om0", "L", "g", "w0sq", "t", "t0", "dt", "h", "i", "j", "b", "n",
     "step", "base", "params", "out", "status", "saved", "stats", "math", "np", "vsin",
     "vcos", "accel", "energy", "kernel", "prange", "njit", "JIT", "BLOCK", "TWO_PI",
-    "acc", "tension", "done", "FTH", "TIME", "omega_max", "k", "p0", "f0",
+    "acc", "tension", "done", "FTH", "TIME", "omega_max", "k", "p0", "f0", "DFTH",
+    "vsincos", "accel_jac",
 })
 
 
@@ -152,6 +160,14 @@ class EffectDeclaration:
         The term as printed in the dataset's ``equation`` attribute (``"- c theta'"``).
     conservative : bool
         True if it derives from a potential (energy is conserved without others).
+    jacobian_theta, jacobian_omega : str or None
+        Source of the derivative of ``term`` with respect to ``th`` and to ``om``,
+        with its sign (``"- c"``; ``"+ p * DFTH"``, where ``DFTH`` is the model's
+        ``f'(theta)``: ``cos(theta)``, or 1 for the linear model); the ``lyapunov``
+        observable integrates the tangent dynamics with them. ``""`` where the term
+        does not read that variable (its derivative is zero); None (the default)
+        where the term reads it: undeclared, and ``lyapunov`` is refused for a scene
+        with this effect. `jacobian_missing` says which are missing.
     drive : Drive, optional
     linear_damping, linear_stiffness : str
         Expressions in its symbols (and ``L``, ``g``, ``omega_max``: a bound on
@@ -185,6 +201,44 @@ class EffectDeclaration:
     switched_on_by_grid: bool = False
     force_bound: str = ""
     speed_bound: str = ""
+    jacobian_theta: str | None = None
+    jacobian_omega: str | None = None
+
+    def jacobian(self, variable: str) -> str:
+        """Source of d(term)/d(``variable``) (``"th"`` or ``"om"``), ``""`` for zero.
+
+        Raises
+        ------
+        ValueError
+            Where the term reads the variable and the declaration gives no derivative.
+        """
+        declared = self.jacobian_theta if variable == "th" else self.jacobian_omega
+        if declared is None:
+            if variable not in self.reads:
+                return ""
+            raise ValueError(f"effect {self.name!r} declares no jacobian_"
+                             f"{'theta' if variable == 'th' else 'omega'} (the derivative of "
+                             f"its term {self.term!r}), so its tangent dynamics are unknown")
+        return declared
+
+    @property
+    def reads(self) -> frozenset[str]:
+        """Which of the state variables ``th``, ``om`` its term reads (``FTH`` is f(th))."""
+        names = set(_IDENTIFIER.findall(self.term))
+        if "FTH" in names:
+            names.add("th")
+        return frozenset(names & {"th", "om"})
+
+    def jacobian_missing(self) -> tuple[str, ...]:
+        """The state variables (``"theta"``, ``"omega"``) its term reads without a
+        declared derivative (empty when its tangent dynamics are known)."""
+        missing = []
+        for variable, word in (("th", "theta"), ("om", "omega")):
+            try:
+                self.jacobian(variable)
+            except ValueError:
+                missing.append(word)
+        return tuple(missing)
 
     @property
     def symbols(self) -> tuple[str, ...]:

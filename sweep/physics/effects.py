@@ -39,6 +39,7 @@ class Damping(Effect):
         conservative=False,
         linear_damping="c",
         switched_on_by_grid=True,
+        jacobian_omega="- c",
     )
 
 
@@ -131,6 +132,7 @@ class QuadraticDrag(Effect):
         conservative=False,
         # d/d(theta') of -k theta'|theta'| is -2 k |theta'|: stiff for fast motion
         linear_damping="2.0 * kd * omega_max",
+        jacobian_omega="- 2.0 * kd * abs(om)",
         # faster than the terminal speed, drag beats every force: theta'' opposes theta'
         speed_bound="math.sqrt(force_max / kd) if kd > 0 else math.inf",
         switched_on_by_grid=True,  # like damping: a drag axis alone switches it on
@@ -179,6 +181,7 @@ class PivotDrive(Effect):
                     function="cos"),
         # the stiffness g/L - (a nu^2/L) cos(...) reaches g/L + a nu^2/L
         linear_stiffness="a * nu * nu / L",
+        jacobian_theta="+ p * DFTH",
         force_bound="a * nu * nu / L",  # times |sin theta| <= 1
         # the pivot's acceleration y'' = -a nu^2 cos(nu t + psi) adds to gravity
         tension="- a * nu * nu * vcos(nu * TIME + psi) * vcos(th)",
