@@ -136,3 +136,15 @@ def test_forced_basins_script(tmp_path):
     assert 0.0 <= result["stop_early"]["unresolved_fraction"] <= 1.0
     assert 0 <= result["labels_differing"] <= 16
     assert (tmp_path / "forced_basins.md").exists()
+
+
+def test_lyapunov_script(tmp_path):
+    """Tiny sizes: the script runs, checks its NumPy baseline against sweep (the same
+    step map, to rounding) and writes both result files."""
+    lyapunov = importlib.import_module("lyapunov")
+    assert lyapunov.main(["--size", "4", "--periods", "1", "--repeat", "1",
+                          "--out", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "lyapunov.json").read_text())
+    assert [run["cost"] > 0 for run in result["runs"]] == [True, True]
+    assert result["numpy"]["max_difference_to_sweep"] < 1e-8
+    assert (tmp_path / "lyapunov.md").read_text().startswith("# Lyapunov exponents")

@@ -4,6 +4,7 @@ import importlib.util
 import pathlib
 
 import matplotlib.image
+import numpy as np
 import pytest
 
 EXAMPLES = pathlib.Path(__file__).resolve().parents[1] / "examples"
@@ -78,3 +79,16 @@ def test_mathieu_chart(tmp_path, capsys):
     _assert_png(tmp_path / "mathieu_chart.png")
     share = float(capsys.readouterr().out.split("share ")[1].split(";")[0])
     assert 0.1 < share < 0.9  # the first tongue and the stable region are both on it
+
+
+def test_lyapunov_map(tmp_path, capsys):
+    example = _load("lyapunov_map")
+    assert example.main(["--size", "11", "--out", str(tmp_path)]) == 0
+    _assert_png(tmp_path / "lyapunov_map.png")
+    assert "chaotic (lambda_max > 0.01 /s)" in capsys.readouterr().out
+    # the line's exponents sum to the mean divergence -2 beta (to RK4's O(dt^4), ~1e-6
+    # relative at w0 dt = 0.047), and gamma = 1.1 is chaotic (Taylor, fig. 12.12 ff.)
+    line = example.taylor([1.05, 1.1])
+    total = (line["lyapunov_max"] + line["lyapunov_min"]).values.ravel()
+    np.testing.assert_allclose(total, -2 * example.BETA, rtol=1e-5)
+    assert line["lyapunov_max"].values.ravel()[1] > 0.02  # measured 0.09 /s
