@@ -423,7 +423,9 @@ def run(
     observe : sequence of str, default ("final", "winding")
         Any of ``final`` (theta_final, omega_final), ``winding``, ``theta_max``,
         ``amplitude``, ``tension`` (tension_min, tension_max), ``energy``
-        (energy_initial, energy_final). Only these are computed and stored.
+        (energy_initial, energy_final), ``lyapunov`` (lyapunov_max, lyapunov_min [1/s],
+        fixed-step Runge-Kutta methods), and the others of `sweep.observables`. Only
+        these are computed and stored.
     save_every : int, optional
         Also store ``theta`` and ``omega`` at every ``save_every``-th step (a ``time``
         dimension). Refused if it would need more than half the available memory, and

@@ -30,9 +30,12 @@ def column_of(spec: KernelSpec, symbol: str) -> int:
     return parameter_names().index(symbols(spec)[symbol])
 
 
-def _accel_args(effect: EffectDeclaration) -> list[str]:
-    """The names its term reads: its symbols (declaration order), then its drive value."""
-    used = set(IDENTIFIER.findall(effect.term))
+def _accel_args(effect: EffectDeclaration, jacobian: bool = False) -> list[str]:
+    """The names its term reads (with ``jacobian``: or its derivatives): its symbols
+    (declaration order), then its drive value."""
+    texts = [effect.term] + ([effect.jacobian("th"), effect.jacobian("om")] if jacobian
+                             else [])
+    used = set(IDENTIFIER.findall(" ".join(texts)))
     args = [s for s in effect.symbols if s in used]
     if effect.drive is not None and effect.drive.value in used:
         args.append(effect.drive.value)
@@ -53,16 +56,6 @@ def accel_source(spec: KernelSpec) -> str:
     )
 
 
-def _jacobian_args(effect: EffectDeclaration) -> list[str]:
-    """The names its term and its Jacobian read: symbols, then its drive value."""
-    used = set(IDENTIFIER.findall(" ".join(
-        [effect.term, effect.jacobian("th"), effect.jacobian("om")])))
-    args = [s for s in effect.symbols if s in used]
-    if effect.drive is not None and effect.drive.value in used:
-        args.append(effect.drive.value)
-    return args
-
-
 def accel_jacobian_source(spec: KernelSpec) -> str:
     """``accel_jac(th, om, w0sq, ...)``: theta'' and its derivatives with respect to
     theta and theta' (the tangent dynamics' coefficients), with the sine and cosine of
@@ -73,7 +66,8 @@ def accel_jacobian_source(spec: KernelSpec) -> str:
     ValueError
         If an effect's term reads a state variable without a declared derivative.
     """
-    args = ["th", "om", "w0sq"] + [a for e in spec.effects for a in _jacobian_args(e)]
+    args = ["th", "om", "w0sq"] + [a for e in spec.effects
+                                   for a in _accel_args(e, jacobian=True)]
     nonlinear = spec.model == "nonlinear"
     f_theta, df_theta = ("sin_th", "cos_th") if nonlinear else ("th", "1.0")
     accel = ["-w0sq * " + f_theta] + [e.term.replace("FTH", f_theta) for e in spec.effects]
@@ -93,23 +87,20 @@ def accel_jacobian_source(spec: KernelSpec) -> str:
 
 def accel_jacobian_call(spec: KernelSpec, th: str, om: str, values: dict[str, str]) -> str:
     """``accel_jac(...)`` on state ``th, om`` (see `accel_call` for ``values``)."""
-    args = [th, om, "w0sq"]
-    for effect in spec.effects:
-        for arg in _jacobian_args(effect):
-            args.append(values.get(effect.name) if effect.drive is not None
-                        and arg == effect.drive.value else arg)
-    return f"accel_jac({', '.join(args)})"
+    return accel_call(spec, th, om, values, jacobian=True)
 
 
-def accel_call(spec: KernelSpec, th: str, om: str, values: dict[str, str]) -> str:
-    """``accel(...)`` on state ``th, om``; ``values`` maps a drive effect's name to the
-    variable holding its drive value at this stage."""
+def accel_call(spec: KernelSpec, th: str, om: str, values: dict[str, str],
+               jacobian: bool = False) -> str:
+    """``accel(...)`` (with ``jacobian``: ``accel_jac(...)``) on state ``th, om``;
+    ``values`` maps a drive effect's name to the variable holding its drive value at
+    this stage."""
     args = [th, om, "w0sq"]
     for effect in spec.effects:
-        for arg in _accel_args(effect):
+        for arg in _accel_args(effect, jacobian):
             args.append(values.get(effect.name) if effect.drive is not None
                         and arg == effect.drive.value else arg)
-    return f"accel({', '.join(args)})"
+    return f"{'accel_jac' if jacobian else 'accel'}({', '.join(args)})"
 
 
 def energy_source(spec: KernelSpec) -> str:
