@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ._version import __version__
+from .kernels.spec import DEVICES
 
 __all__ = ["DEMO", "build_parser", "main"]
 
@@ -77,6 +78,9 @@ def build_parser() -> argparse.ArgumentParser:
                      "(tcp://HOST:8786; overrides [run] scheduler); needs the dask extra. "
                      "Results are bit-identical to a local run; --checkpoint/--resume work "
                      "the same")
+    run.add_argument("--device", choices=DEVICES,
+                     help="where to run: the CPU (default) or an NVIDIA GPU (needs the cuda "
+                     "extra); overrides [run] device")
     _progress_option(run)
     run.set_defaults(handler=_command_run)
 
@@ -212,6 +216,8 @@ def _command_run(args: argparse.Namespace) -> int:
         folder = Path(args.checkpoint) if args.checkpoint is not None else \
             default_checkpoint(output)
         kwargs.update(checkpoint=folder, resume=args.resume, keep_checkpoint=True)
+    if args.device is not None:
+        kwargs["device"] = args.device
     scheduler = args.scheduler if args.scheduler is not None else options.get("scheduler")
     client = _connect(scheduler) if scheduler is not None else None
     try:

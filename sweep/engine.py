@@ -25,7 +25,7 @@ from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
 from .execution.progress import progress_bar
 from .grid import Grid
-from .kernels import (KernelSpec, build, check_method_fits, check_observables_fit,
+from .kernels import (DEVICES, KernelSpec, build, check_method_fits, check_observables_fit,
                       check_tangent_fits, declarations, failure_summary, n_columns,
                       status_counts)
 from .methods import METHODS
@@ -299,6 +299,32 @@ def _check_stable_step(scene: Scene, grid: Grid, settings, effects) -> None:
                      sorted({min(stiffnesses), max(stiffnesses)}))
 
 
+#: Default trajectories per chunk on a GPU (2^20: ~8 threads per CUDA core of an
+#: H100; the chunk's arrays are a few tens of MB).
+CUDA_CHUNK = 2 ** 20
+
+
+def _check_device(device, integrator) -> None:
+    """Refuse an unknown device, an adaptive method on the GPU, and ``"cuda"`` where no
+    GPU (or numba's CUDA simulator) is available -- before any compute."""
+    if not isinstance(device, str) or device not in DEVICES:
+        raise ValueError(f"device must be one of {', '.join(map(repr, DEVICES))}, got "
+                         f"{device!r}")
+    if device != "cuda":
+        return
+    if integrator.adaptive:
+        fixed = ", ".join(repr(n) for n, m in METHODS.items() if not m.adaptive)
+        raise ValueError(f"device='cuda' runs fixed-step methods; method "
+                         f"{integrator.name!r} is adaptive; accepted: one of {fixed}, "
+                         "or device='cpu'")
+    from .kernels.cuda import available
+
+    reason = available()
+    if reason is not None:
+        raise ValueError(f"device='cuda' cannot run here: {reason}; accepted: "
+                         "device='cpu'")
+
+
 def _block(n: int, stop_early: bool) -> int:
     """Trajectories per block of a fixed-step run of ``n`` (see `sweep._config`): one
     each for a handful, small blocks for small grids and early stop, else
@@ -318,7 +344,7 @@ def _drive_axes(effect) -> tuple[str, str]:
 
 def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, method,
              rtol, atol, chunk_size, specialize, check_stability, estimate_error,
-             stop_early):
+             stop_early, device="cpu"):
     """Validate the arguments of `run` (before any compute); return the time
     settings, the kernel spec and the chunk size. Raises ValueError/TypeError."""
     if not isinstance(scene, Scene):
@@ -336,11 +362,12 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     if estimate_error is not None:
         check_positive_int("estimate_error", estimate_error,
                            "None or an int >= 1 (trajectories)")
-    if chunk_size is None:
-        chunk_size = default_chunk_size(settings)
+    if chunk_size is None:  # a GPU needs ~10^5-10^6 threads in flight to be busy
+        chunk_size = default_chunk_size(settings) if device != "cuda" else CUDA_CHUNK
     check_positive_int("chunk_size", chunk_size)
 
     integrator = settings.integrator
+    _check_device(device, integrator)
     effects = declarations(grid.effects(scene))
     check_method_fits(integrator, effects)
     check_tangent_fits(integrator, effects, names)
@@ -373,6 +400,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
                                for effect in effects if effect.drive is not None
                                for name in _drive_axes(effect))
         and not (refill and settings.n_steps > _config.SINE_TABLE_STEPS),
+        device=device,
     )
     return settings, spec, int(chunk_size)
 
@@ -400,6 +428,7 @@ def run(
     keep_checkpoint: bool = False,
     stop_early: bool = False,
     client=None,
+    device: str = "cpu",
 ):
     """Integrate every trajectory of ``grid`` under ``scene``; return a labelled Dataset.
 
@@ -489,6 +518,13 @@ def run(
         ``dask`` extra) and gather the chunks as they finish; the dataset is
         bit-identical to a local run. A lost worker's chunks are rerun elsewhere;
         ``chunk_size`` is the task size. Works with ``checkpoint``/``resume``.
+    device : {"cpu", "cuda"}, default "cpu"
+        ``"cuda"``: run on an NVIDIA GPU, one CUDA thread per trajectory, from the same
+        generated pieces (`sweep.kernels.cuda`; needs the ``cuda`` extra and a GPU,
+        refused before any compute otherwise). Every fixed-step method and observable
+        the CPU kernels support; chunks are copied to the GPU and back, so memory
+        stays O(chunk_size); results agree with the CPU's to rounding (the GPU's
+        sine is not `sweep.kernels.vecmath`'s).
 
     Returns
     -------
@@ -514,7 +550,7 @@ def run(
         scene, grid, t_end=t_end, dt=dt, t0=t0, t_transient=t_transient, observe=observe,
         save_every=save_every, method=method, rtol=rtol, atol=atol, chunk_size=chunk_size,
         specialize=specialize, check_stability=check_stability,
-        estimate_error=estimate_error, stop_early=stop_early)
+        estimate_error=estimate_error, stop_early=stop_early, device=device)
     n = grid.size
     _check_memory(n, spec, settings)
     if client is not None:

@@ -122,6 +122,8 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     }
     if settings.save_every is not None:
         attrs["save_every"] = settings.save_every
+    if spec.device != "cpu":  # where it ran, when not the default
+        attrs["device"] = spec.device
     return xr.Dataset(data_vars, coords, attrs)
 
 

@@ -48,6 +48,7 @@ import numpy as np
 from ._validate import check_flag, check_positive_int
 from .engine import validate_settings
 from .grid import Grid, from_degrees
+from .kernels.spec import DEVICES
 from .observables import resolve
 from .physics import Scene, parameter_names, parameters
 
@@ -60,7 +61,7 @@ TABLES = ("scene", "grid", "run")
 #: Keys of the ``[run]`` table (keyword arguments of `sweep.run`).
 RUN_KEYS = ("t_end", "dt", "t0", "t_transient", "observe", "save_every", "method", "rtol",
             "atol", "chunk_size", "stop_early", "check_stability", "estimate_error",
-            "scheduler")
+            "scheduler", "device")
 
 #: Keys of ``[run]`` that say where the run executes, not what it computes: returned
 #: in ``options`` by `load_run`, never among the keyword arguments of `sweep.run`.
@@ -341,6 +342,9 @@ def _run(source: str, table: dict) -> dict[str, Any]:
                 check_flag(flag, kwargs[flag])
         if "scheduler" in kwargs:
             check_scheduler("scheduler", kwargs["scheduler"])
+        if "device" in kwargs and kwargs["device"] not in DEVICES:
+            raise ValueError(f"device must be one of {', '.join(map(repr, DEVICES))}, got "
+                             f"{kwargs['device']!r}")
         if "estimate_error" in kwargs:
             check_positive_int("estimate_error", kwargs["estimate_error"],
                                "an int >= 1 (trajectories)")

@@ -1,6 +1,19 @@
-"""Shared fixtures. Every test is float64 and seeded."""
+"""Shared fixtures. Every test is float64 and seeded.
+
+``device="cuda"`` is tested under numba's CUDA simulator (CI has no GPU): it is
+switched on here, before numba is imported, unless ``SWEEP_REAL_CUDA=1`` asks for
+the real GPU (``SWEEP_REAL_CUDA=1 pytest tests/test_cuda.py`` on a machine with one).
+"""
 
 import os
+
+if os.environ.get("SWEEP_REAL_CUDA") != "1":
+    os.environ.setdefault("NUMBA_ENABLE_CUDASIM", "1")
+    # pytest's filterwarnings setting (pyproject) has imported numba already: re-read
+    # its environment before numba.cuda is first imported
+    from numba.core import config as _numba_config
+
+    _numba_config.reload_config()
 
 import matplotlib
 import numpy as np

@@ -6,7 +6,8 @@ Modules, each one concern: `spec` (what a kernel is built for, status codes, fit
 checks), `terms` (the physics as source, from `sweep.physics`), `steppers` (one step of
 a method, from `sweep.methods`), `snippets` (observables), `lanes` (per-lane code of a
 block), `fixed` and `adaptive` (the two kernel bodies), `source` (the module text),
-`cache` (build, memo, disk cache), `vecmath` (vectorisable sin/cos).
+`cache` (build, memo, disk cache), `vecmath` (vectorisable sin/cos), `cuda` (the
+same pieces as one CUDA thread per trajectory).
 
 Reads `sweep.physics`, `sweep.methods` and `sweep.observables`; nothing here imports
 the engine, the execution back ends or the maps.
@@ -14,10 +15,10 @@ the engine, the execution back ends or the maps.
 
 from .cache import build
 from .source import source
-from .spec import (KernelSpec, Status, check_method_fits, check_observables_fit,
+from .spec import (DEVICES, KernelSpec, Status, check_method_fits, check_observables_fit,
                    check_tangent_fits, declarations, failure_summary, method_of, n_columns,
                    status_counts)
 
-__all__ = ["KernelSpec", "Status", "build", "check_method_fits", "check_observables_fit",
-           "check_tangent_fits", "declarations", "failure_summary", "method_of", "n_columns", "source",
-           "status_counts"]
+__all__ = ["DEVICES", "KernelSpec", "Status", "build", "check_method_fits",
+           "check_observables_fit", "check_tangent_fits", "declarations", "failure_summary",
+           "method_of", "n_columns", "source", "status_counts"]

@@ -12,9 +12,13 @@ from .. import methods as _methods
 from ..observables import OBSERVABLES
 from ..physics import EFFECTS, EffectDeclaration
 
-__all__ = ["KernelSpec", "Status", "check_method_fits", "check_observables_fit",
+__all__ = ["DEVICES", "KernelSpec", "Status", "check_method_fits", "check_observables_fit",
            "check_tangent_fits", "declarations", "failure_summary", "method_of", "n_columns",
            "status_counts", "tangent"]
+
+
+#: Where kernels run (`KernelSpec.device`).
+DEVICES = ("cpu", "cuda")
 
 
 class Status(enum.IntEnum):
@@ -127,6 +131,10 @@ class KernelSpec:
         bytes per sine; `sweep.run` shares them only up to
         `sweep._config.SINE_TABLE_STEPS`), and other drives' sines are per lane.
         Bit-identical to ``refill=False`` (a test checks it).
+    device : {"cpu", "cuda"}
+        Where the kernel runs: the CPU's SIMD lanes and threads, or an NVIDIA GPU with
+        one CUDA thread per trajectory (`sweep.kernels.cuda`; fixed-step methods only,
+        no refill or shared drive sines there).
     block : int
         Trajectories per block of the fixed-step, refill and adaptive kernels (SIMD
         lanes; a multiple of 8, or 1 for a few trajectories, each alone). Results do not depend on it (a test checks
@@ -142,8 +150,15 @@ class KernelSpec:
     shared_forcing: bool = False
     block: int = None
     refill: bool = False
+    device: str = "cpu"
 
     def __post_init__(self) -> None:
+        if self.device not in DEVICES:
+            raise ValueError(f"device must be one of {', '.join(map(repr, DEVICES))}, got "
+                             f"{self.device!r}")
+        if self.device == "cuda":  # one thread per trajectory: no lanes to refill or share
+            object.__setattr__(self, "refill", False)
+            object.__setattr__(self, "shared_forcing", False)
         method = self.method
         if not isinstance(method, str) and \
                 _methods.METHODS.get(getattr(method, "name", None)) == method:
@@ -173,7 +188,7 @@ class KernelSpec:
         return (f"model={self.model!r}, effects={self.names!r}, observe={self.observe!r}, "
                 f"save={self.save!r}, method={self.method!r}, stop_early={self.stop_early!r}, "
                 f"shared_forcing={self.shared_forcing!r}, block={self.block!r}, "
-                f"refill={self.refill!r}")
+                f"refill={self.refill!r}, device={self.device!r}")
 
 
 def n_columns(spec: KernelSpec) -> int:

@@ -1,0 +1,154 @@
+"""The fixed-step kernel for an NVIDIA GPU (``device="cuda"``): one CUDA thread per
+trajectory, from the same generated pieces as the CPU kernels.
+
+The method's step (`sweep.kernels.steppers`: the same lines the CPU lanes run), the
+effects' terms (`sweep.kernels.terms`, as device functions), the drives and the
+observables' snippets are pasted into a ``numba.cuda`` kernel in which thread ``i``
+integrates trajectory ``i`` from its row of the parameter table to ``t_end`` (or, with
+early stop, until its observables are settled: that thread leaves the loop while the
+others of its warp go on). There is no second hand-written physics.
+
+The generated module defines ``kernel`` with the CPU kernels' contract (see
+`sweep.kernels.source`): a Python function that copies the chunk's parameter rows to
+the GPU, launches the CUDA kernel and copies the outputs back, so memory stays
+O(chunk) on both sides, and checkpoints, Dask and progress work as on the CPU.
+
+On the GPU, ``vsin``/``vcos`` are CUDA's ``sin``/``cos`` (libdevice, correctly rounded
+to within an ulp or two), not `sweep.kernels.vecmath`'s polynomials, so results agree
+with the CPU kernels to rounding, not bit for bit.
+
+`numba.cuda` is imported only by the generated module and by `available`: ``import
+sweep`` never needs CUDA. Without a GPU, `numba.cuda`'s simulator
+(``NUMBA_ENABLE_CUDASIM=1``) runs the same kernels in Python threads, which is how the
+test suite checks them.
+"""
+
+from __future__ import annotations
+
+import re
+
+from .fixed import _FAIL_SAVED, NL, _drives
+from .lanes import indent
+from .snippets import finite_test, renormalisations, snippets, stop_source
+from .spec import KernelSpec, Status, n_columns
+from .steppers import STEPPERS
+from .terms import column_of, load_lines
+
+__all__ = ["THREADS_PER_BLOCK", "available", "cuda_kernel", "device_functions"]
+
+#: CUDA threads per block: a multiple of the warp (32); 128 keeps several blocks per
+#: multiprocessor with the kernels' register use.
+THREADS_PER_BLOCK = 128
+
+
+def available() -> str | None:
+    """None if a CUDA device can run the kernels (or numba's CUDA simulator is on),
+    else the reason, for the error message."""
+    try:
+        from numba import cuda
+    except Exception as exc:  # pragma: no cover - numba without its CUDA target
+        return f"numba's CUDA target cannot be imported ({exc})"
+    try:
+        if cuda.is_available():
+            return None
+    except Exception as exc:  # pragma: no cover - broken driver or toolkit
+        return f"numba.cuda could not reach a GPU ({exc})"
+    return ("no CUDA GPU was found (numba.cuda.is_available() is False: no NVIDIA GPU, "
+            "driver or CUDA toolkit; install with pip install 'sweep[cuda]')")
+
+
+_DEVICE_MATH = '''\
+@cuda.jit(device=True)
+def vsin(x):
+    return math.sin(x)
+
+
+@cuda.jit(device=True)
+def vcos(x):
+    return math.cos(x)
+
+
+@cuda.jit(device=True)
+def vsincos(x):
+    return math.sin(x), math.cos(x)
+'''
+
+
+def device_functions(text: str) -> str:
+    """CPU physics functions (``@njit(**JIT)``) as CUDA device functions, after the
+    device's ``vsin``, ``vcos`` and ``vsincos``."""
+    return _DEVICE_MATH + "\n\n" + text.replace("@njit(**JIT)", "@cuda.jit(device=True)")
+
+
+_NP_FLOOR = re.compile(r"\bnp\.floor\(")
+
+
+def _device(code: str) -> str:
+    """A CPU snippet for a CUDA thread: ``np.floor`` becomes ``math.floor``."""
+    return _NP_FLOOR.sub("math.floor(", code)
+
+
+def cuda_kernel(spec: KernelSpec, method) -> str:
+    """Module body for ``spec`` on a CUDA device: the ``_thread`` kernel and the
+    ``kernel`` launcher with the CPU contract (see the module docstring)."""
+    parts = STEPPERS[method.kind](spec, method)
+    drives = _drives(parts)
+    width = n_columns(spec)
+    update = snippets(spec, "update")
+    stop = stop_source(spec, action="break")
+    loop = drives.step + drives.values + parts["step"] + drives.carry + ["k_state = step + 1"]
+    for every, code in renormalisations(spec):
+        loop += [f"if k_state % {every} == 0 or k_state == n_transient or "
+                 "k_state == n_steps:", "    keep = k_state > n_transient",
+                 indent(code, 1)]
+    if update or stop:
+        loop += ["if step + 1 >= n_transient:", indent(update, 1) or "    pass"]
+        if stop:
+            loop += [indent(stop, 1)]
+    if spec.save:
+        loop += ["if (step + 1) % save_every == 0:",
+                 "    saved[i, 0, (step + 1) // save_every] = th",
+                 "    saved[i, 1, (step + 1) // save_every] = om"]
+    first = load_lines(spec) + ["th = th0", "om = om0", snippets(spec, "init")]
+    if update:
+        first += ["if n_transient <= 0:", indent(update, 1)]
+    if spec.save:
+        first += ["saved[i, 0, 0] = th", "saved[i, 1, 0] = om"]
+    first += parts["before"] + drives.init
+    finish = [f"if {finite_test(spec)}:", f"    status[i] = {int(Status.OK)}",
+              indent(snippets(spec, "final"), 1), "else:",
+              f"    status[i] = {int(Status.NONFINITE)}", f"    for col in range({width}):",
+              "        out[i, col] = math.nan"]
+    if spec.save:
+        finish += [indent(_FAIL_SAVED, 1)]
+    body = NL.join(["i = cuda.grid(1)", "if i >= params.shape[0]:", "    return",
+                    "TWO_PI = 2.0 * math.pi", "k_state = 0"] + parts["preamble"] + first +
+                   ["for step in range(n_steps):", indent(NL.join(loop), 1)]
+                   + finish)
+    return f'''
+THREADS = {THREADS_PER_BLOCK}
+
+
+@cuda.jit
+def _thread(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
+{indent(_device(body), 1)}
+
+
+def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
+    """Copy the chunk to the GPU, run one thread per trajectory, copy the outputs
+    back (the CPU kernels' contract)."""
+    n = params.shape[0]
+    if n == 0:
+        return
+    d_params = cuda.to_device(np.ascontiguousarray(params))
+    d_out = cuda.device_array(out.shape, dtype=out.dtype)
+    d_status = cuda.device_array(status.shape, dtype=status.dtype)
+    d_saved = cuda.to_device(np.ascontiguousarray(saved))
+    _thread[(n + THREADS - 1) // THREADS, THREADS](
+        d_params, t0, dt, n_steps, n_transient, save_every, d_out, d_status, d_saved)
+    out[...] = d_out.copy_to_host()
+    status[...] = d_status.copy_to_host()
+    if saved.size:
+        saved[...] = d_saved.copy_to_host()
+'''
+
