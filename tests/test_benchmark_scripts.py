@@ -148,3 +148,16 @@ def test_lyapunov_script(tmp_path):
     assert [run["cost"] > 0 for run in result["runs"]] == [True, True]
     assert result["numpy"]["max_difference_to_sweep"] < 1e-8
     assert (tmp_path / "lyapunov.md").read_text().startswith("# Lyapunov exponents")
+
+
+def test_gpu_script_under_the_simulator(tmp_path):
+    """Tiny workloads under numba's CUDA simulator (conftest): the script runs, checks
+    the GPU's answer against the CPU's and writes both files; its rates mean nothing
+    here (the README says the GPU numbers are not yet measured)."""
+    gpu = importlib.import_module("gpu")
+    assert gpu.main(["--size-scale", "1e-6", "--steps", "40", "--skip-map",
+                     "--out", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "gpu.json").read_text())
+    assert result["gpu"].startswith("numba CUDA simulator")
+    assert result["float64"][0]["max_difference_rad"] < 1e-12
+    assert (tmp_path / "gpu.md").read_text().startswith("# sweep on a GPU")
