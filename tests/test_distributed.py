@@ -251,3 +251,15 @@ def test_cluster_benchmark_runs_at_a_small_size(tmp_path):
     table = (tmp_path / "cluster.md").read_text()
     assert "| Dask, chunk_size = 16 | 8 |" in table and "| NO |" not in table
     assert (tmp_path / "cluster.json").is_file()
+
+
+def test_cuda_device_on_the_cluster_is_identical(client):
+    """device="cuda" through Dask: each worker launches the chunk on its GPU (here
+    numba's CUDA simulator, inherited from conftest's environment); the gathered dataset
+    is the local GPU run's, bit for bit."""
+    pytest.importorskip("numba.cuda")
+    grid = sweep.Grid(theta0=np.linspace(-3.0, 3.0, 5), omega0=[0.0, 1.0])
+    local, remote = _both(client, FORCED, grid, t_end=1.0, dt=0.02, device="cuda",
+                          observe=("final", "amplitude"), chunk_size=4)
+    _same(local, remote)
+    assert remote.attrs["device"] == "cuda"
