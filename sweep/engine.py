@@ -29,7 +29,8 @@ from .kernels import (DEVICES, KernelSpec, build, check_method_fits, check_obser
                       check_tangent_fits, declarations, failure_summary, n_columns,
                       status_counts)
 from .methods import METHODS
-from .observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
+from .observables import (DEFAULT_OBSERVE, OBSERVABLES, STROBE_SAMPLES, STROBE_SAMPLES_RANGE,
+                          resolve)
 from .physics import EFFECTS, Scene
 
 __all__ = ["run", "warm_up", "estimate_error", "default_chunk_size", "RunSettings", "METHODS"]
@@ -299,6 +300,22 @@ def _check_stable_step(scene: Scene, grid: Grid, settings, effects) -> None:
                      sorted({min(stiffnesses), max(stiffnesses)}))
 
 
+def _check_strobe_samples(strobe_samples, names) -> None:
+    """Refuse a number of stroboscopic samples out of range, or one given without the
+    ``strobe`` observable (it would change nothing)."""
+    low, high = STROBE_SAMPLES_RANGE
+    accepted = f"an int from {low} to {high} (samples, one per forcing period)"
+    if isinstance(strobe_samples, (bool, np.bool_)) or not isinstance(
+            strobe_samples, (int, np.integer)):
+        raise TypeError(f"strobe_samples must be {accepted}, got {strobe_samples!r}")
+    if not low <= strobe_samples <= high:
+        raise ValueError(f"strobe_samples must be {accepted}, got {strobe_samples!r}")
+    if strobe_samples != STROBE_SAMPLES and "strobe" not in names:
+        raise ValueError(f"strobe_samples = {strobe_samples!r} is read only by the 'strobe' "
+                         "observable, which this run does not observe; accepted: "
+                         "observe=(..., 'strobe'), or no strobe_samples")
+
+
 #: Default trajectories per chunk on a GPU (2^20: ~8 threads per CUDA core of an
 #: H100; the chunk's arrays are a few tens of MB).
 CUDA_CHUNK = 2 ** 20
@@ -344,7 +361,7 @@ def _drive_axes(effect) -> tuple[str, str]:
 
 def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, method,
              rtol, atol, chunk_size, specialize, check_stability, estimate_error,
-             stop_early, device="cpu"):
+             stop_early, device="cpu", strobe_samples=STROBE_SAMPLES):
     """Validate the arguments of `run` (before any compute); return the time
     settings, the kernel spec and the chunk size. Raises ValueError/TypeError."""
     if not isinstance(scene, Scene):
@@ -359,6 +376,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         raise ValueError("observe is empty and save_every is None -- nothing would be "
                          "computed; accepted: at least one of final, winding, theta_max, "
                          "amplitude, tension, energy, or a save_every")
+    _check_strobe_samples(strobe_samples, names)
     if estimate_error is not None:
         check_positive_int("estimate_error", estimate_error,
                            "None or an int >= 1 (trajectories)")
@@ -401,6 +419,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
                                for name in _drive_axes(effect))
         and not (refill and settings.n_steps > _config.SINE_TABLE_STEPS),
         device=device,
+        strobe_samples=int(strobe_samples),
     )
     return settings, spec, int(chunk_size)
 
@@ -429,6 +448,7 @@ def run(
     stop_early: bool = False,
     client=None,
     device: str = "cpu",
+    strobe_samples: int = STROBE_SAMPLES,
 ):
     """Integrate every trajectory of ``grid`` under ``scene``; return a labelled Dataset.
 
@@ -518,6 +538,11 @@ def run(
         ``dask`` extra) and gather the chunks as they finish; the dataset is
         bit-identical to a local run. A lost worker's chunks are rerun elsewhere;
         ``chunk_size`` is the task size. Works with ``checkpoint``/``resume``.
+    strobe_samples : int, default 16
+        Stroboscopic samples the ``strobe`` observable keeps per trajectory (the last
+        ones, one per forcing period): 16 recognise periods up to 8; hundreds draw an
+        orbit diagram (`sweep.plot.orbit_diagram`). Between 2 and 4096; only with
+        ``strobe`` observed.
     device : {"cpu", "cuda"}, default "cpu"
         ``"cuda"``: run on an NVIDIA GPU, one CUDA thread per trajectory, from the same
         generated pieces (`sweep.kernels.cuda`; needs the ``cuda`` extra and a GPU,
@@ -550,7 +575,8 @@ def run(
         scene, grid, t_end=t_end, dt=dt, t0=t0, t_transient=t_transient, observe=observe,
         save_every=save_every, method=method, rtol=rtol, atol=atol, chunk_size=chunk_size,
         specialize=specialize, check_stability=check_stability,
-        estimate_error=estimate_error, stop_early=stop_early, device=device)
+        estimate_error=estimate_error, stop_early=stop_early, device=device,
+        strobe_samples=strobe_samples)
     n = grid.size
     _check_memory(n, spec, settings)
     if client is not None:

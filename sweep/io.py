@@ -58,7 +58,7 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     data_vars = {}
     col = 0
     for observable in (OBSERVABLES[name] for name in spec.observe):
-        width = observable.samples
+        width = observable.n_samples(spec)
         for name, units, long_name in observable.variables:
             attrs = {"units": units, "long_name": long_name}
             if observable.sample_dim is None:
@@ -122,6 +122,8 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     }
     if settings.save_every is not None:
         attrs["save_every"] = settings.save_every
+    if "strobe" in spec.observe:
+        attrs["strobe_samples"] = spec.strobe_samples
     if spec.device != "cpu":  # where it ran, when not the default
         attrs["device"] = spec.device
     return xr.Dataset(data_vars, coords, attrs)
@@ -152,6 +154,8 @@ def run_arguments(ds: xr.Dataset) -> dict:
               "observe": tuple(str(a["observe"]).split())}
     if "save_every" in a:
         kwargs["save_every"] = int(a["save_every"])
+    if "strobe_samples" in a:
+        kwargs["strobe_samples"] = int(a["strobe_samples"])
     for tolerance in ("rtol", "atol"):  # adaptive methods
         if tolerance in a:
             kwargs[tolerance] = float(a[tolerance])

@@ -51,7 +51,11 @@ class Observable:
         True if a snippet calls ``energy(th, om, w0sq)``.
     samples : int
         Columns per variable: 1 for a scalar, more for a variable with an extra
-        dimension ``sample_dim`` (variable k occupies ``COL + k*samples ...``).
+        dimension ``sample_dim`` (variable k occupies ``COL + k*samples ...``); the
+        default when ``sample_option`` is set.
+    sample_option : str or None
+        The `sweep.kernels.KernelSpec` field (and `sweep.run` argument) that sets the
+        number of samples; the snippets read it as ``NSTROBE``.
     sample_dim : str or None
         Name of that extra dimension.
     requires_forcing : bool
@@ -93,6 +97,7 @@ class Observable:
     steady: bool = False
     uses_energy: bool = False
     samples: int = 1
+    sample_option: str | None = None
     sample_dim: str | None = None
     requires_forcing: bool = False
     settled: str = ""
@@ -103,15 +108,30 @@ class Observable:
     renormalise_every: int = 0
     finite: str = ""
 
-    @property
-    def n_columns(self) -> int:
+    def n_samples(self, spec=None) -> int:
+        """Columns per variable for a kernel spec (its ``sample_option`` field), or
+        the default without one."""
+        if self.sample_option is None or spec is None:
+            return self.samples
+        return getattr(spec, self.sample_option)
+
+    def n_columns(self, spec=None) -> int:
         """Columns of the kernel's ``out`` array this observable fills."""
-        return len(self.variables) * self.samples
+        return len(self.variables) * self.n_samples(spec)
 
 
-#: Stroboscopic samples kept per trajectory by the ``strobe`` observable: enough to
-#: recognise periods up to STROBE_SAMPLES // 2 forcing periods.
+#: Stroboscopic samples kept per trajectory by the ``strobe`` observable by default
+#: (``sweep.run(..., strobe_samples=N)`` changes it): enough to recognise periods up to
+#: STROBE_SAMPLES // 2 forcing periods. The snippets read the count as ``NSTROBE``.
 STROBE_SAMPLES = 16
+
+#: Bounds of ``strobe_samples``: two samples are the least that show a period, and
+#: 4096 x 2 columns (64 KiB per trajectory) the most a run keeps.
+STROBE_SAMPLES_RANGE = (2, 4096)
+
+#: Longest period (forcing periods) the ``strobe`` early-stop test looks for: a longer
+#: one is rare and the test costs O(N p) per forcing period.
+STROBE_MAX_PERIOD = 8
 
 #: Periodicity tolerance [rad, rad/s] of the strobe observable's early-stop test.
 #: Tight on purpose: a start near the stable manifold of an *unstable* periodic orbit
@@ -191,28 +211,28 @@ OBSERVABLES: dict[str, Observable] = {
             name="strobe",
             variables=(
                 ("strobe_theta", "rad",
-                 f"angle (unwrapped) at the last {STROBE_SAMPLES} forcing periods "
+                 "angle (unwrapped) at the last strobe_samples forcing periods "
                  "(oldest first): stroboscopic samples at t0 + n_transient dt + m 2 pi / W"),
                 ("strobe_omega", "rad s-1",
-                 f"angular velocity at the last {STROBE_SAMPLES} forcing periods "
+                 "angular velocity at the last strobe_samples forcing periods "
                  "(oldest first)"),
             ),
-            # a ring of the last STROBE_SAMPLES samples; `final` rotates it oldest-first
+            # a ring of the last NSTROBE samples; `final` rotates it oldest-first
             init=(
                 "acc_sb_S = round(TWO_PI / (W * dt))\n"
                 "acc_sb_k = 0\n"
                 "acc_sb_m = 0\n"
                 "acc_sb_new = False\n"
-                f"for acc_sb_q in range({2 * STROBE_SAMPLES}):\n"
+                "for acc_sb_q in range(2 * NSTROBE):\n"
                 "    out[i, COL + acc_sb_q] = math.nan"
             ),
             update=(
                 # acc_sb_k counts steps modulo acc_sb_S (no integer division per step)
                 "acc_sb_new = acc_sb_k == 0\n"
                 "if acc_sb_new:\n"
-                f"    acc_sb_col = acc_sb_m % {STROBE_SAMPLES}\n"
+                "    acc_sb_col = acc_sb_m % NSTROBE\n"
                 "    out[i, COL + acc_sb_col] = th\n"
-                f"    out[i, COL + {STROBE_SAMPLES} + acc_sb_col] = om\n"
+                "    out[i, COL + NSTROBE + acc_sb_col] = om\n"
                 "    acc_sb_m += 1\n"
                 "acc_sb_k += 1\n"
                 "if acc_sb_k == acc_sb_S:\n"
@@ -220,41 +240,42 @@ OBSERVABLES: dict[str, Observable] = {
             ),
             final=(
                 # rotate each block left by r = m mod N (three reversals, in place)
-                f"acc_sb_r = acc_sb_m % {STROBE_SAMPLES}\n"
+                "acc_sb_r = acc_sb_m % NSTROBE\n"
                 "if acc_sb_r:\n"
                 "    for acc_sb_b in range(2):\n"
-                f"        acc_sb_o = COL + {STROBE_SAMPLES} * acc_sb_b\n"
+                "        acc_sb_o = COL + NSTROBE * acc_sb_b\n"
                 "        for acc_sb_j in range(acc_sb_r // 2):\n"
                 "            acc_sb_x = acc_sb_o + acc_sb_j\n"
                 "            acc_sb_y = acc_sb_o + acc_sb_r - 1 - acc_sb_j\n"
                 "            out[i, acc_sb_x], out[i, acc_sb_y] = out[i, acc_sb_y], out[i, acc_sb_x]\n"
-                f"        for acc_sb_j in range(({STROBE_SAMPLES} - acc_sb_r) // 2):\n"
+                "        for acc_sb_j in range((NSTROBE - acc_sb_r) // 2):\n"
                 "            acc_sb_x = acc_sb_o + acc_sb_r + acc_sb_j\n"
-                f"            acc_sb_y = acc_sb_o + {STROBE_SAMPLES - 1} - acc_sb_j\n"
+                "            acc_sb_y = acc_sb_o + NSTROBE - 1 - acc_sb_j\n"
                 "            out[i, acc_sb_x], out[i, acc_sb_y] = out[i, acc_sb_y], out[i, acc_sb_x]\n"
-                f"        for acc_sb_j in range({STROBE_SAMPLES // 2}):\n"
+                "        for acc_sb_j in range(NSTROBE // 2):\n"
                 "            acc_sb_x = acc_sb_o + acc_sb_j\n"
-                f"            acc_sb_y = acc_sb_o + {STROBE_SAMPLES - 1} - acc_sb_j\n"
+                "            acc_sb_y = acc_sb_o + NSTROBE - 1 - acc_sb_j\n"
                 "            out[i, acc_sb_x], out[i, acc_sb_y] = out[i, acc_sb_y], out[i, acc_sb_x]"
             ),
-            # settled: the ring is full and periodic with some p <= N/2 within STROBE_TOL
+            # settled: the ring is full and periodic with some p <= min(N/2, STROBE_MAX_PERIOD)
+            # within STROBE_TOL
             # (far tighter than the maps' default tolerance, so a stopped trajectory is
             # classified as it would be after a full run; see STROBE_TOL)
             settled=(
                 "SETTLED = False\n"
-                f"if acc_sb_new and acc_sb_m >= {STROBE_SAMPLES}:\n"
-                f"    for acc_sb_p in range(1, {STROBE_SAMPLES // 2 + 1}):\n"
-                f"        acc_sb_a = (acc_sb_m - 1) % {STROBE_SAMPLES}\n"
-                f"        acc_sb_z = (acc_sb_m - 1 - acc_sb_p) % {STROBE_SAMPLES}\n"
+                "if acc_sb_new and acc_sb_m >= NSTROBE:\n"
+                f"    for acc_sb_p in range(1, min(NSTROBE // 2, {STROBE_MAX_PERIOD}) + 1):\n"
+                "        acc_sb_a = (acc_sb_m - 1) % NSTROBE\n"
+                "        acc_sb_z = (acc_sb_m - 1 - acc_sb_p) % NSTROBE\n"
                 "        acc_sb_turns = round((out[i, COL + acc_sb_a] - out[i, COL + acc_sb_z])"
                 " / TWO_PI)\n"
                 "        acc_sb_periodic = True\n"
-                f"        for acc_sb_j in range({STROBE_SAMPLES} - acc_sb_p):\n"
-                f"            acc_sb_x = (acc_sb_m + acc_sb_j) % {STROBE_SAMPLES}\n"
-                f"            acc_sb_y = (acc_sb_m + acc_sb_j + acc_sb_p) % {STROBE_SAMPLES}\n"
+                "        for acc_sb_j in range(NSTROBE - acc_sb_p):\n"
+                "            acc_sb_x = (acc_sb_m + acc_sb_j) % NSTROBE\n"
+                "            acc_sb_y = (acc_sb_m + acc_sb_j + acc_sb_p) % NSTROBE\n"
                 "            if abs(out[i, COL + acc_sb_y] - out[i, COL + acc_sb_x] - TWO_PI * "
-                f"acc_sb_turns) >= {STROBE_TOL!r} or abs(out[i, COL + {STROBE_SAMPLES} + "
-                f"acc_sb_y] - out[i, COL + {STROBE_SAMPLES} + acc_sb_x]) >= {STROBE_TOL!r}:\n"
+                f"acc_sb_turns) >= {STROBE_TOL!r} or abs(out[i, COL + NSTROBE + "
+                f"acc_sb_y] - out[i, COL + NSTROBE + acc_sb_x]) >= {STROBE_TOL!r}:\n"
                 "                acc_sb_periodic = False\n"
                 "                break\n"
                 "        if acc_sb_periodic:\n"
@@ -263,6 +284,7 @@ OBSERVABLES: dict[str, Observable] = {
             ),
             steady=True,
             samples=STROBE_SAMPLES,
+            sample_option="strobe_samples",
             sample_dim="strobe",
             requires_forcing=True,
             state=(("acc_sb_S", "int64"), ("acc_sb_k", "int64"), ("acc_sb_m", "int64"),

@@ -24,7 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["basins", "map", "save_figure", "select", "trajectory"]
+__all__ = ["basins", "map", "orbit_diagram", "period_map", "save_figure", "select",
+           "trajectory"]
 
 #: Coordinates converted to degrees (and deg/s) when ``degrees=True``.
 ANGLE_COORDS = ("theta0", "omega0", "forcing_phase")
@@ -445,6 +446,144 @@ def basins(labels, ax=None, degrees=True, cmap="tab20", title=None):
                 label="attractor")
         if inside.any():
             ax.legend(loc="upper right", fontsize="small")
+    return fig
+
+
+def orbit_diagram(ds, along="forcing_amplitude", variable="theta", ax=None, degrees=False,
+                  title=None, markersize=0.6):
+    """Draw an orbit (bifurcation) diagram: the stroboscopic samples against a grid axis.
+
+    Every trajectory's stroboscopic samples (one per forcing period after the
+    transient; ``sweep.run(..., observe=("strobe",), strobe_samples=N)``) are plotted
+    as points above its value of ``along``: one point per value on a period-1 orbit,
+    p points on a period-p orbit, a cloud where the motion is chaotic. Trajectories
+    that differ in other grid axes (several starts) are all drawn, overplotted.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A run observing ``strobe`` whose grid has the axis ``along``.
+    along : str, default "forcing_amplitude"
+        The grid axis on the horizontal axis.
+    variable : {"theta", "omega"}
+        The angle, wrapped to [-pi, pi) [rad] (or deg with ``degrees``), or the
+        angular velocity [rad/s].
+    ax : matplotlib.axes.Axes, optional
+    degrees : bool, default False
+        Angles (and an angle axis ``along``) in degrees.
+    title : str, optional
+    markersize : float, default 0.6
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        With one point per finite stroboscopic sample.
+
+    Raises
+    ------
+    ValueError
+        Without stroboscopic samples, for an ``along`` that is not a grid axis of
+        ``ds`` (the message lists them), or an unknown ``variable``.
+    """
+    import matplotlib.pyplot as plt
+
+    if "strobe_theta" not in ds or "strobe_omega" not in ds:
+        raise ValueError("an orbit diagram needs stroboscopic samples; accepted: a dataset "
+                         "from sweep.run(..., observe=('strobe',))")
+    axes = [d for d in ds["strobe_theta"].dims if d != "strobe"]
+    if along not in axes:
+        raise ValueError(f"along = {along!r} is not a grid axis of this dataset; accepted: "
+                         f"{', '.join(repr(a) for a in axes)}")
+    if variable not in ("theta", "omega"):
+        raise ValueError(f"variable must be 'theta' or 'omega', got {variable!r}")
+    samples = ds[f"strobe_{variable}"]
+    values = samples.values
+    if variable == "theta":
+        values = np.mod(values + np.pi, 2 * np.pi) - np.pi
+        if degrees:
+            values = np.degrees(values)
+    x_values, xlabel = _coordinate(samples, along, degrees)
+    x = np.broadcast_to(
+        x_values.reshape([-1 if d == along else 1 for d in samples.dims]), values.shape)
+    finite = np.isfinite(values)
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(8.0, 5.0), layout="constrained")
+    else:
+        fig = ax.figure
+    ax.plot(x[finite], values[finite], linestyle="none", marker=".", markersize=markersize,
+            color="black", alpha=0.6)
+    ax.set_xlabel(xlabel)
+    if variable == "theta":
+        ax.set_ylabel("theta at the strobe times, wrapped [" + ("deg" if degrees else "rad")
+                      + "]")
+    else:
+        ax.set_ylabel("angular velocity at the strobe times [rad/s]")
+    ax.set_title(title if title is not None else "orbit diagram")
+    return fig
+
+
+def period_map(periods, lyapunov=None, ax=None, degrees=True, threshold=0.0, title=None):
+    """Draw a periodicity map: one colour per period, grey where none is found, and a
+    chaos colour where the largest Lyapunov exponent is positive.
+
+    Parameters
+    ----------
+    periods : xarray.DataArray, int
+        From `sweep.maps.period` (two dimensions after size-1 ones are dropped).
+    lyapunov : xarray.DataArray, optional
+        ``lyapunov_max`` [1/s] of the same run (``observe=("strobe", "lyapunov")``):
+        cells where it exceeds ``threshold`` are drawn as chaotic, whatever their
+        period.
+    ax : matplotlib.axes.Axes, optional
+    degrees : bool, default True
+        As in `map`.
+    threshold : float, default 0
+        Exponent [1/s] above which a cell counts as chaotic.
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The map; the colour bar names each category ("period 1", ..., "none",
+        "chaotic").
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    periods = _as_2d(periods)
+    xdim, ydim = periods.dims
+    codes = np.asarray(periods.transpose(ydim, xdim).values, dtype=np.int64)
+    chaotic = np.zeros(codes.shape, dtype=bool)
+    if lyapunov is not None:
+        exponent = _as_2d(lyapunov).transpose(ydim, xdim).values
+        if exponent.shape != codes.shape:
+            raise ValueError(f"lyapunov has shape {exponent.shape}, the periods "
+                             f"{codes.shape}; accepted: lyapunov_max of the same run")
+        chaotic = np.asarray(exponent > threshold)
+    found = sorted(int(p) for p in np.unique(codes[(codes > 0) & ~chaotic]))
+    names = [f"period {p}" for p in found] + ["none"] + (["chaotic"] if chaotic.any() else [])
+    index = np.full(codes.shape, len(found), dtype=np.int64)  # "none"
+    for k, p in enumerate(found):
+        index[(codes == p) & ~chaotic] = k
+    index[chaotic] = len(found) + 1
+    palette = _colormap("tab10")
+    colours = [palette(k % 10) for k in range(len(found))] + ["#d9d9d9", "#000000"]
+    cmap = ListedColormap(colours[:len(names)])
+    norm = BoundaryNorm(np.arange(len(names) + 1) - 0.5, cmap.N)
+    x, xlabel = _coordinate(periods, xdim, degrees)
+    y, ylabel = _coordinate(periods, ydim, degrees)
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(7.0, 5.4), layout="constrained")
+    else:
+        fig = ax.figure
+    mesh = ax.pcolormesh(x, y, index, shading="nearest", cmap=cmap, norm=norm)
+    bar = fig.colorbar(mesh, ax=ax)
+    bar.set_ticks(np.arange(len(names)))
+    bar.set_ticklabels(names)
+    bar.minorticks_off()
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title if title is not None else "period of the attractor")
     return fig
 
 

@@ -10,6 +10,11 @@ from .terms import tension_terms
 __all__ = ["finite_test", "renormalisations", "snippets", "stop_source"]
 
 
+def _counts(code: str, spec: KernelSpec) -> str:
+    """``NSTROBE`` -> the spec's number of stroboscopic samples."""
+    return code.replace("NSTROBE", str(spec.strobe_samples))
+
+
 def snippets(spec: KernelSpec, part: str, time: str = "(t0 + k_state * dt)") -> str:
     """Concatenate one part (init/update/final) of every observed observable, with
     ``COL`` replaced by the observable's first column and ``TENSION_TERMS`` by the
@@ -21,9 +26,10 @@ def snippets(spec: KernelSpec, part: str, time: str = "(t0 + k_state * dt)") -> 
         obs = OBSERVABLES[name]
         code = getattr(obs, part)
         if code:
-            code = code.replace("COL", str(col)).replace("TENSION_TERMS", extra)
+            code = _counts(code.replace("COL", str(col)), spec).replace("TENSION_TERMS",
+                                                                          extra)
             lines.append(f"# {name}\n" + code)
-        col += obs.n_columns
+        col += obs.n_columns(spec)
     return "\n".join(lines)
 
 
@@ -42,8 +48,9 @@ def stop_source(spec: KernelSpec, action: str = "break") -> str:
         flag = f"settled_{len(flags)}"
         flags.append(flag)
         lines.append(f"# {name} settled?\n"
-                     + obs.settled.replace("COL", str(col)).replace("SETTLED", flag))
-        col += obs.n_columns
+                     + _counts(obs.settled.replace("COL", str(col)), spec).replace("SETTLED",
+                                                                                   flag))
+        col += obs.n_columns(spec)
     lines.append(f"if {' and '.join(flags)}:\n" + indent(action, 1))
     return "\n".join(lines)
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 from .. import _config
 from .. import methods as _methods
-from ..observables import OBSERVABLES
+from ..observables import OBSERVABLES, STROBE_SAMPLES
 from ..physics import EFFECTS, EffectDeclaration
 
 __all__ = ["DEVICES", "KernelSpec", "Status", "check_method_fits", "check_observables_fit",
@@ -131,6 +131,9 @@ class KernelSpec:
         bytes per sine; `sweep.run` shares them only up to
         `sweep._config.SINE_TABLE_STEPS`), and other drives' sines are per lane.
         Bit-identical to ``refill=False`` (a test checks it).
+    strobe_samples : int
+        Stroboscopic samples the ``strobe`` observable keeps per trajectory (its
+        ring's length; `sweep.observables.STROBE_SAMPLES` by default).
     device : {"cpu", "cuda"}
         Where the kernel runs: the CPU's SIMD lanes and threads, or an NVIDIA GPU with
         one CUDA thread per trajectory (`sweep.kernels.cuda`; fixed-step methods only,
@@ -151,6 +154,7 @@ class KernelSpec:
     block: int = None
     refill: bool = False
     device: str = "cpu"
+    strobe_samples: int = STROBE_SAMPLES
 
     def __post_init__(self) -> None:
         if self.device not in DEVICES:
@@ -188,13 +192,14 @@ class KernelSpec:
         return (f"model={self.model!r}, effects={self.names!r}, observe={self.observe!r}, "
                 f"save={self.save!r}, method={self.method!r}, stop_early={self.stop_early!r}, "
                 f"shared_forcing={self.shared_forcing!r}, block={self.block!r}, "
-                f"refill={self.refill!r}, device={self.device!r}")
+                f"refill={self.refill!r}, device={self.device!r}, "
+                f"strobe_samples={self.strobe_samples!r}")
 
 
 def n_columns(spec: KernelSpec) -> int:
     """Width of ``out``: every column of every observed observable, in observe order
     (an observable with samples > 1 fills ``samples`` columns per variable)."""
-    return sum(OBSERVABLES[name].n_columns for name in spec.observe)
+    return sum(OBSERVABLES[name].n_columns(spec) for name in spec.observe)
 
 
 def tangent(spec: KernelSpec) -> bool:

@@ -8,6 +8,7 @@ and frequency responses by continuation.
 
 from .labels import (UNRESOLVED, amplitude, basins, identify_attractors, inverted, motion,
                      natural_frequency_squared, well)
+from .period import NO_PERIOD, period
 
-__all__ = ["UNRESOLVED", "amplitude", "basins", "identify_attractors", "inverted", "motion",
-           "natural_frequency_squared", "well"]
+__all__ = ["NO_PERIOD", "UNRESOLVED", "amplitude", "basins", "identify_attractors", "inverted",
+           "motion", "natural_frequency_squared", "period", "well"]

@@ -248,12 +248,27 @@ def basins(ds: xr.Dataset, *, rest_position: bool = False, max_period: int = 8,
     return out
 
 
-def _forced_basins(ds: xr.Dataset, *, max_period: int, tol: float) -> xr.DataArray:
+def strobe_table(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """The stroboscopic samples of every trajectory as two (n, P) tables, rows in the
+    order of the grid dims (returned third).
+
+    Raises
+    ------
+    ValueError
+        If the dataset has no stroboscopic samples.
+    """
+    _require(ds, ("strobe_theta", "strobe_omega"), "strobe", "stroboscopic analysis")
     theta = ds["strobe_theta"]
     dims = tuple(d for d in theta.dims if d != "strobe")
     samples = theta.sizes["strobe"]
-    flat_theta = theta.transpose(*dims, "strobe").values.reshape(-1, samples)
-    flat_omega = ds["strobe_omega"].transpose(*dims, "strobe").values.reshape(-1, samples)
+    table = [ds[name].transpose(*dims, "strobe").values.reshape(-1, samples)
+             for name in ("strobe_theta", "strobe_omega")]
+    return (np.ascontiguousarray(table[0], dtype=np.float64),
+            np.ascontiguousarray(table[1], dtype=np.float64), dims)
+
+
+def _forced_basins(ds: xr.Dataset, *, max_period: int, tol: float) -> xr.DataArray:
+    flat_theta, flat_omega, dims = strobe_table(ds)
     labels, catalogue = identify_attractors(flat_theta, flat_omega, max_period=max_period,
                                             tol=tol)
     shape = tuple(ds.sizes[d] for d in dims)

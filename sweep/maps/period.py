@@ -1,0 +1,71 @@
+"""Periodicity maps: the period of the attractor each trajectory settles on, over any
+grid (the "isoperiodic" diagrams of the driven-pendulum literature)."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from . import _strobe
+from .labels import strobe_table
+
+__all__ = ["NO_PERIOD", "period"]
+
+#: The period given where none is found (chaotic, quasi-periodic, not converged, or a
+#: failed trajectory).
+NO_PERIOD = -1
+
+
+def period(ds: xr.Dataset, *, max_period: int | None = None, tol: float = 1e-3
+           ) -> xr.DataArray:
+    """The period, in forcing periods, of the attractor each trajectory settles on.
+
+    A trajectory has period p when its last stroboscopic samples repeat after p
+    forcing periods (angles up to whole turns) within ``tol``: the smallest such p is
+    given (a period-2 orbit is not also called period 4).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A run observing ``strobe`` (forced scene), over any grid.
+    max_period : int, optional
+        Longest period looked for; at most half the stroboscopic samples (the
+        default: ``strobe_samples // 2``, 8 with the default 16 samples).
+    tol : float, default 1e-3
+        Repetition tolerance [rad and rad/s]; > 0.
+
+    Returns
+    -------
+    xarray.DataArray, int32, grid dims
+        ``1 .. max_period``, or ``NO_PERIOD`` (-1) where none is found: chaotic or
+        quasi-periodic motion, a transient too short to settle, a period longer than
+        ``max_period``, or a failed trajectory. Attributes: ``max_period``, ``tol``.
+
+    Raises
+    ------
+    ValueError
+        Without stroboscopic samples, or for ``max_period``/``tol`` out of range.
+    """
+    theta, omega, dims = strobe_table(ds)
+    samples = theta.shape[1]
+    largest = samples // 2
+    if max_period is None:
+        max_period = largest
+    if isinstance(max_period, (bool, np.bool_)) or not isinstance(max_period,
+                                                                  (int, np.integer)) \
+            or not 1 <= max_period <= largest:
+        raise ValueError(f"max_period must be an int from 1 to {largest} (half the "
+                         f"{samples} stroboscopic samples), got {max_period!r}; more "
+                         "samples: sweep.run(..., strobe_samples=N)")
+    if isinstance(tol, (bool, np.bool_)) or not isinstance(tol, (int, float, np.floating)) \
+            or not np.isfinite(tol) or tol <= 0:
+        raise ValueError(f"tol must be a finite number > 0 (rad and rad/s), got {tol!r}")
+    found, _ = _strobe.periods(theta, omega, int(max_period), float(tol))
+    found = np.where(found > 0, found, NO_PERIOD).astype(np.int32)
+    shape = tuple(ds.sizes[d] for d in dims)
+    out = xr.DataArray(found.reshape(shape), coords={d: ds[d] for d in dims}, dims=dims,
+                       name="period")
+    out.attrs = {"long_name": "period of the attractor (forcing periods); -1: none found",
+                 "units": "1", "max_period": int(max_period), "tol": float(tol),
+                 "no_period": NO_PERIOD}
+    return out
