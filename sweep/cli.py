@@ -107,6 +107,9 @@ def build_parser() -> argparse.ArgumentParser:
     what.add_argument("--trajectory", action="store_true",
                       help="draw theta(t) and the phase portrait (needs a 'time' dimension: "
                       "a run with save_every)")
+    what.add_argument("--orbit-diagram", metavar="AXIS",
+                      help="draw the stroboscopic angles against the grid axis AXIS (needs "
+                      "a run observing strobe; more samples: [run] strobe_samples)")
     plot.add_argument("--sel", action="append", default=[], metavar="DIM=VALUE",
                       help="select the nearest grid point along DIM; VALUE in the file's "
                       "units (rad, rad/s, ...) or in degrees with a 'deg' suffix "
@@ -403,7 +406,8 @@ def _parse_selection(items: list[str]) -> dict[str, float]:
 
 
 def _command_plot(args: argparse.Namespace) -> int:
-    """``sweep plot``: a 2-D map of ``--var`` or a ``--trajectory`` figure."""
+    """``sweep plot``: a 2-D map of ``--var``, a ``--trajectory`` figure or an
+    ``--orbit-diagram``."""
     from . import plot
     from .io import check_output_path
 
@@ -417,6 +421,9 @@ def _command_plot(args: argparse.Namespace) -> int:
                              "trajectories); accepted: a file from a run with save_every "
                              "(in [run] of the run file)")
         fig = plot.trajectory(ds, **selection)
+    elif args.orbit_diagram is not None:
+        fig = plot.orbit_diagram(plot.select(ds, **selection) if selection else ds,
+                                 along=args.orbit_diagram, degrees=not args.radians)
     else:
         if args.var not in ds.data_vars:
             raise ValueError(f"--var {args.var!r}: no such variable in {args.file}; "

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["basins", "map", "orbit_diagram", "period_map", "save_figure", "select",
+__all__ = ["basin_fractions", "basins", "map", "orbit_diagram", "period_map", "save_figure", "select",
            "trajectory"]
 
 #: Coordinates converted to degrees (and deg/s) when ``degrees=True``.
@@ -584,6 +584,50 @@ def period_map(periods, lyapunov=None, ax=None, degrees=True, threshold=0.0, tit
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.set_title(title if title is not None else "period of the attractor")
+    return fig
+
+
+def basin_fractions(fractions, ax=None, title=None):
+    """Draw the basin fractions of a continuation as stacked areas along its axis.
+
+    Parameters
+    ----------
+    fractions : xarray.Dataset
+        The second result of `sweep.maps.continuation`.
+    ax : matplotlib.axes.Axes, optional
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One area per attractor label (colour by label, ``tab20``, so a label keeps its
+        colour in every figure), then the unresolved share in grey on top; the legend
+        names each attractor with its period.
+    """
+    import matplotlib.pyplot as plt
+
+    along = fractions.attrs["along"]
+    x, xlabel = _coordinate(fractions, along, False)
+    palette = _colormap("tab20")
+    layers = [fractions["fraction"].sel(attractor=a).values
+              for a in fractions["attractor"].values]
+    names = [f"attractor {a} (period {p})" for a, p in
+             zip(fractions["attractor"].values, fractions["period"].values)]
+    colours = [palette(int(a) % 20) for a in fractions["attractor"].values]
+    layers.append(fractions["unresolved"].values)
+    names.append("unresolved")
+    colours.append("#bdbdbd")
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(7.5, 4.5), layout="constrained")
+    else:
+        fig = ax.figure
+    ax.stackplot(x, *layers, labels=names, colors=colours)
+    ax.set_xlim(float(x.min()), float(x.max()))
+    ax.set_ylim(0.0, 1.0)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("basin fraction")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
+    ax.set_title(title if title is not None else f"attractors continued along {along}")
     return fig
 
 

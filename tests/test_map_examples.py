@@ -92,3 +92,13 @@ def test_lyapunov_map(tmp_path, capsys):
     total = (line["lyapunov_max"] + line["lyapunov_min"]).values.ravel()
     np.testing.assert_allclose(total, -2 * example.BETA, rtol=1e-5)
     assert line["lyapunov_max"].values.ravel()[1] > 0.02  # measured 0.09 /s
+
+
+def test_orbit_diagram(tmp_path, capsys):
+    example = _load("orbit_diagram")
+    assert example.main(["--size", "9", "--out", str(tmp_path)]) == 0
+    _assert_png(tmp_path / "orbit_diagram.png")
+    assert "periods on the map" in capsys.readouterr().out
+    # every forcing frequency of the map has a whole number of steps per period
+    steps = 2 * np.pi / (example.frequencies(9) * example.DT)
+    np.testing.assert_allclose(steps, np.round(steps), rtol=0, atol=1e-9)

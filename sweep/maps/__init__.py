@@ -1,6 +1,7 @@
 """Maps of what each region of phase space does: pure functions ``Dataset -> DataArray``
-that read a run's stored features (they never re-run the integrator), basin metrics,
-and frequency responses by continuation.
+that read a run's stored features (they never re-run the integrator), periodicity maps,
+attractor continuation along a grid axis, basin metrics, and frequency responses by
+continuation.
 
 ``sweep.maps.metrics`` and ``sweep.maps.response`` are also reachable as
 ``sweep.metrics`` and ``sweep.response``.
@@ -8,7 +9,9 @@ and frequency responses by continuation.
 
 from .labels import (UNRESOLVED, amplitude, basins, identify_attractors, inverted, motion,
                      natural_frequency_squared, well)
+from .continuation import continuation
 from .period import NO_PERIOD, period
 
-__all__ = ["NO_PERIOD", "UNRESOLVED", "amplitude", "basins", "identify_attractors", "inverted",
-           "motion", "natural_frequency_squared", "period", "well"]
+__all__ = ["NO_PERIOD", "UNRESOLVED", "amplitude", "basins", "continuation",
+           "identify_attractors", "inverted", "motion", "natural_frequency_squared", "period",
+           "well"]
