@@ -600,7 +600,7 @@ def basin_fractions(fractions, ax=None, title=None):
     Returns
     -------
     matplotlib.figure.Figure
-        One area per attractor label (colour by label, ``tab20``, so a label keeps its
+        One area per attractor label (colour by label, ``tab10``, so a label keeps its
         colour in every figure), then the unresolved share in grey on top; the legend
         names each attractor with its period.
     """
@@ -608,12 +608,12 @@ def basin_fractions(fractions, ax=None, title=None):
 
     along = fractions.attrs["along"]
     x, xlabel = _coordinate(fractions, along, False)
-    palette = _colormap("tab20")
+    palette = _colormap("tab10")
     layers = [fractions["fraction"].sel(attractor=a).values
               for a in fractions["attractor"].values]
     names = [f"attractor {a} (period {p})" for a, p in
              zip(fractions["attractor"].values, fractions["period"].values)]
-    colours = [palette(int(a) % 20) for a in fractions["attractor"].values]
+    colours = [palette(int(a) % 10) for a in fractions["attractor"].values]
     layers.append(fractions["unresolved"].values)
     names.append("unresolved")
     colours.append("#bdbdbd")

@@ -102,3 +102,10 @@ def test_orbit_diagram(tmp_path, capsys):
     # every forcing frequency of the map has a whole number of steps per period
     steps = 2 * np.pi / (example.frequencies(9) * example.DT)
     np.testing.assert_allclose(steps, np.round(steps), rtol=0, atol=1e-9)
+
+
+def test_continuation(tmp_path, capsys):
+    assert _load("continuation").main(["--size", "5", "--out", str(tmp_path)]) == 0
+    _assert_png(tmp_path / "continuation.png")
+    out = capsys.readouterr().out
+    assert "attractor 0 (period 1): A from 0.020" in out

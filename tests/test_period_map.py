@@ -160,3 +160,19 @@ def test_strobe_samples_without_strobe_is_refused(no_compute):
                                          "observable"):
         sweep.run(_taylor_scene(), sweep.Grid(theta0=[0.0], omega0=[0.0]), t_end=2.0,
                   dt=0.01, observe=("final",), strobe_samples=64)
+
+
+def test_sweep_plot_orbit_diagram_from_the_command_line(tmp_path, capsys):
+    """`sweep plot FILE --orbit-diagram AXIS` draws it; an axis that is not in the file
+    is one line and status 2."""
+    from sweep import cli
+
+    path = tmp_path / "cascade.nc"
+    sweep.save(_run([1.06, 1.072], samples=8, transient=40), path)
+    assert cli.main(["plot", str(path), "--orbit-diagram", "forcing_amplitude",
+                     "-o", str(tmp_path / "od.png")]) == 0
+    assert (tmp_path / "od.png").stat().st_size > 0
+    assert cli.main(["plot", str(path), "--orbit-diagram", "damping",
+                     "-o", str(tmp_path / "bad.png")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "along = 'damping' is not a grid axis" in err[0]
