@@ -18,6 +18,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 import matplotlib
@@ -33,6 +34,7 @@ W0 = 1.5 * DRIVE
 BETA = W0 / 4
 THRESHOLDS = (1.0663, 1.0793, 1.0821)  # Taylor: 1 -> 2, 2 -> 4, 4 -> 8
 DT = 0.05  # s, for the periodicity map: every forcing period a whole number of steps
+FREQUENCIES = (0.4, 1.0)  # rad/s, the periodicity map's forcing frequencies
 
 
 def cascade(size: int) -> "xarray.Dataset":
@@ -45,25 +47,53 @@ def cascade(size: int) -> "xarray.Dataset":
                      observe=("strobe",), strobe_samples=64, progress=False)
 
 
-def frequencies(size: int) -> np.ndarray:
-    """About ``size`` forcing frequencies in [0.4, 1.0] rad/s whose periods are whole
-    numbers of steps DT."""
-    steps = np.unique(np.round(np.linspace(2 * np.pi / (1.0 * DT),
-                                           2 * np.pi / (0.4 * DT), size)))
-    return np.sort(2 * np.pi / (steps * DT))
+def time_step(size: int) -> float:
+    """The periodicity map's step [s]: DT, or DT / k with the least whole k that fits
+    ``size`` distinct forcing periods, each a whole number of steps, between those of
+    FREQUENCIES (with DT alone only 189 fit)."""
+    low, high = FREQUENCIES
+    span = 2 * np.pi / low - 2 * np.pi / high  # s, from the shortest period to the longest
+    return DT / max(1, math.ceil((size - 1) * DT / span))
+
+
+def frequencies(size: int, dt: float = DT) -> np.ndarray:
+    """``size`` forcing frequencies about FREQUENCIES [rad/s] whose periods are distinct
+    whole numbers of steps ``dt``, increasing.
+
+    Raises
+    ------
+    ValueError
+        If ``dt`` is too coarse for ``size`` distinct periods (see `time_step`).
+    """
+    low, high = FREQUENCIES
+    steps = np.unique(np.round(np.linspace(2 * np.pi / (high * dt), 2 * np.pi / (low * dt),
+                                           size)))
+    if steps.size != size:
+        raise ValueError(f"only {steps.size} forcing periods in {FREQUENCIES} rad/s are "
+                         f"distinct whole numbers of steps dt = {dt!r}, not size = {size}; "
+                         "accepted: dt <= time_step(size)")
+    return np.sort(2 * np.pi / (steps * dt))
+
+
+def periodicity_run(size: int, observe=("strobe", "lyapunov")) -> tuple:
+    """The periodicity map's ``(scene, grid, run keyword arguments)``: A in [0.8, 1.6]
+    x W in FREQUENCIES, ``size`` values each, from rest; 500 s of transient and 16
+    forcing periods observed, step `time_step` (size)."""
+    scene = sweep.Scene(gravity=1.0, length=1.0,
+                        effects=(sweep.Damping(0.5), sweep.Forcing(1.2, 2 / 3)))
+    dt = time_step(size)
+    grid = sweep.Grid(forcing_amplitude=np.linspace(0.8, 1.6, size),
+                      forcing_frequency=frequencies(size, dt), theta0=[0.0], omega0=[0.0])
+    longest = 2 * np.pi / FREQUENCIES[0]
+    n_steps = int(round((500.0 + 16 * longest) / dt))
+    return scene, grid, dict(t_end=n_steps * dt, dt=dt, t_transient=500.0,
+                             observe=tuple(observe), progress=False)
 
 
 def periodicity(size: int) -> "xarray.Dataset":
-    """Strobe samples and lambda_max over A in [0.8, 1.6] x W in [0.4, 1.0], from rest:
-    500 s of transient, 16 forcing periods observed."""
-    scene = sweep.Scene(gravity=1.0, length=1.0,
-                        effects=(sweep.Damping(0.5), sweep.Forcing(1.2, 2 / 3)))
-    grid = sweep.Grid(forcing_amplitude=np.linspace(0.8, 1.6, size),
-                      forcing_frequency=frequencies(size), theta0=[0.0], omega0=[0.0])
-    longest = 2 * np.pi / 0.4
-    n_steps = int(round((500.0 + 16 * longest) / DT))
-    return sweep.run(scene, grid, t_end=n_steps * DT, dt=DT, t_transient=500.0,
-                     observe=("strobe", "lyapunov"), progress=False)
+    """Strobe samples and lambda_max of `periodicity_run` (size)."""
+    scene, grid, kwargs = periodicity_run(size)
+    return sweep.run(scene, grid, **kwargs)
 
 
 def main(argv=None) -> int:

@@ -102,6 +102,17 @@ def test_orbit_diagram(tmp_path, capsys):
     # every forcing frequency of the map has a whole number of steps per period
     steps = 2 * np.pi / (example.frequencies(9) * example.DT)
     np.testing.assert_allclose(steps, np.round(steps), rtol=0, atol=1e-9)
+    # the benchmark's 400 x 400 map has 400 distinct such frequencies (a finer step;
+    # with DT only 189 fit in [0.4, 1.0] rad/s, and asking for more is refused)
+    dt = example.time_step(400)
+    steps = 2 * np.pi / (example.frequencies(400, dt) * dt)
+    assert np.unique(np.round(steps)).size == 400
+    np.testing.assert_allclose(steps, np.round(steps), rtol=0, atol=1e-9)
+    # the transient is a whole number of steps: 500 / dt is off only by rounding (~1e-11
+    # steps), far below 1e-6 of a step
+    assert (500.0 / dt) == pytest.approx(round(500.0 / dt), abs=1e-6)
+    with pytest.raises(ValueError, match="only 189 forcing periods"):
+        example.frequencies(400)
 
 
 def test_continuation(tmp_path, capsys):
