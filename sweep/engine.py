@@ -300,9 +300,24 @@ def _check_stable_step(scene: Scene, grid: Grid, settings, effects) -> None:
                      sorted({min(stiffnesses), max(stiffnesses)}))
 
 
-def _check_strobe_samples(strobe_samples, names) -> None:
+def check_strobe_samples(strobe_samples, names) -> None:
     """Refuse a number of stroboscopic samples out of range, or one given without the
-    ``strobe`` observable (it would change nothing)."""
+    ``strobe`` observable (it would change nothing).
+
+    Parameters
+    ----------
+    strobe_samples : int
+        Samples the ``strobe`` observable keeps (`STROBE_SAMPLES_RANGE`).
+    names : tuple of str
+        The observed observables (`sweep.observables.resolve`).
+
+    Raises
+    ------
+    TypeError
+        If ``strobe_samples`` is not an int (a bool is not).
+    ValueError
+        If it is out of range, or differs from the default without ``strobe``.
+    """
     low, high = STROBE_SAMPLES_RANGE
     accepted = f"an int from {low} to {high} (samples, one per forcing period)"
     if isinstance(strobe_samples, (bool, np.bool_)) or not isinstance(
@@ -376,7 +391,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         raise ValueError("observe is empty and save_every is None -- nothing would be "
                          "computed; accepted: at least one of final, winding, theta_max, "
                          "amplitude, tension, energy, or a save_every")
-    _check_strobe_samples(strobe_samples, names)
+    check_strobe_samples(strobe_samples, names)
     if estimate_error is not None:
         check_positive_int("estimate_error", estimate_error,
                            "None or an int >= 1 (trajectories)")

@@ -46,10 +46,10 @@ from typing import Any
 import numpy as np
 
 from ._validate import check_flag, check_positive_int
-from .engine import validate_settings
+from .engine import check_strobe_samples, validate_settings
 from .grid import Grid, from_degrees
 from .kernels.spec import DEVICES
-from .observables import resolve
+from .observables import DEFAULT_OBSERVE, resolve
 from .physics import Scene, parameter_names, parameters
 
 __all__ = ["OPTION_KEYS", "RUN_KEYS", "TABLES", "angle_axes", "check_scheduler", "load_run",
@@ -329,6 +329,9 @@ def _run(source: str, table: dict) -> dict[str, Any]:
                                  f"got {observe!r}")
             resolve(observe)
             kwargs["observe"] = (observe,) if isinstance(observe, str) else tuple(observe)
+        if "strobe_samples" in kwargs:
+            check_strobe_samples(kwargs["strobe_samples"],
+                                 resolve(kwargs.get("observe", DEFAULT_OBSERVE)))
         if "chunk_size" in kwargs:
             chunk_size = kwargs["chunk_size"]
             if isinstance(chunk_size, bool) or not isinstance(chunk_size, int):

@@ -57,6 +57,23 @@ def test_refill_gives_the_same_bits_as_blocks_that_wait(block, shared):
     assert (waiting[1] == Status.NONFINITE).sum() == 1
 
 
+@pytest.mark.parametrize("samples", [3, 40])
+def test_refill_gives_the_same_bits_with_other_strobe_counts(samples):
+    """``strobe_samples`` != 16 in both kernels: a ring of 3 (only period 1 can settle)
+    and of 40 (full at the 40th of the 41 samples after the transient, so only the last
+    two checks can stop a trajectory)."""
+    params = _table(300, seed=5)
+    kwargs = dict(stop_early=True, block=64, strobe_samples=samples)
+    waiting = _call(KernelSpec("nonlinear", ("damping", "forcing"), ("strobe",), **kwargs),
+                    params)
+    refill = KernelSpec("nonlinear", ("damping", "forcing"), ("strobe",), refill=True,
+                        **kwargs)
+    assert kernels.n_columns(refill) == 2 * samples
+    refilled = _call(refill, params)
+    np.testing.assert_array_equal(refilled[1], waiting[1])
+    assert refilled[0].tobytes() == waiting[0].tobytes()  # NaN where NaN, bits elsewhere
+
+
 @pytest.mark.parametrize("groups", [1, 3, 7])
 def test_refill_does_not_depend_on_the_number_of_groups(groups):
     """The wrapper makes one group per thread; any number of groups (strided over the
