@@ -23,6 +23,7 @@ A run file has three tables::
     t0 = 0.0                     # s
     t_transient = 80.0           # s
     observe = ["final", "winding"]
+    strobe_samples = 64          # samples kept by observe "strobe" (2 to 4096; 16)
     save_every = 10              # steps; stores theta(t), omega(t)
     method = "rk4"
     chunk_size = 1000            # trajectories per chunk (progress and checkpoints)

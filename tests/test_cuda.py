@@ -85,6 +85,22 @@ def test_stop_early_gives_the_cpus_answer():
     _assert_close(gpu, cpu, tol=0.0)
 
 
+@pytest.mark.parametrize("stop_early", [False, True])
+def test_other_strobe_counts_give_the_cpus_samples(stop_early):
+    """``strobe_samples = 5`` (odd, the ring rotated by 26 mod 5 = 1 in the final
+    pass): the CUDA kernel's samples, and with ``stop_early`` where its threads stop
+    (the early-stop test looks for periods 1 and 2 in the ring of 5), are the CPU's."""
+    scene = sweep.Scene(gravity=1.0, length=1.0, effects=(
+        sweep.Damping(0.3), sweep.Forcing(1.1, 1.3, 0.4)))
+    grid = sweep.Grid(theta0=[-1.0, 2.0], omega0=[0.0, 1.5])
+    period = 2 * np.pi / 1.3
+    gpu, cpu = _pair(scene, grid, t_end=35 * period, dt=period / 40, t_transient=10 * period,
+                     observe=("strobe",), strobe_samples=5, stop_early=stop_early)
+    assert gpu.sizes["strobe"] == 5 and gpu.attrs["strobe_samples"] == 5
+    assert np.isfinite(gpu["strobe_theta"]).all()
+    _assert_close(gpu, cpu)
+
+
 def test_small_angle_closed_form():
     """Linear model, undamped: theta0 cos(w t) + (omega0 / w) sin(w t); RK4's global
     error at w dt = 0.031 over 2 s is ~(w dt)^4 w t / 120 ~ 1e-8 rad; asserted 1e-7."""
