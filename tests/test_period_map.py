@@ -100,6 +100,83 @@ def test_more_samples_keep_the_last_sixteen():
                                   default.strobe_theta.values)
 
 
+# ------------------------------------------------------------------ synthetic strobe tables
+def _synthetic(theta, omega, **coords):
+    """A dataset shaped like a strobe run: (grid dims..., strobe)."""
+    import xarray as xr
+
+    dims = tuple(coords) + ("strobe",)
+    samples = np.shape(theta)[-1]
+    coords = {**coords, "strobe": np.arange(1 - samples, 1)}
+    return xr.Dataset({"strobe_theta": (dims, np.asarray(theta, dtype=float)),
+                       "strobe_omega": (dims, np.asarray(omega, dtype=float))}, coords)
+
+
+def test_period_of_synthetic_orbits_keeps_the_grid():
+    """Known sequences on a 2 x 3 grid: period 1 at rest and rotating (theta + 2 pi per
+    forcing period is the same state), period 2 (not reported as 4), period 3, one
+    failed trajectory (NaN) and an aperiodic one (-1)."""
+    m = np.arange(12.0)
+    rows = [
+        [np.full(12, 0.3), 0.3 + 2 * np.pi * m, 0.2 * (-1.0) ** m],
+        [np.array([0.1, 0.5, -0.7] * 4), np.full(12, np.nan), np.sin(m * np.sqrt(2))],
+    ]
+    theta = np.array(rows)
+    omega = np.zeros_like(theta)
+    omega[0, 1] = 1.0  # rotating: constant omega at the strobe times
+    ds = _synthetic(theta, omega, forcing_amplitude=[1.0, 1.1],
+                    forcing_frequency=[0.5, 0.6, 0.7])
+    periods = maps.period(ds)  # default max_period: 12 // 2 = 6
+    assert periods.dims == ("forcing_amplitude", "forcing_frequency")
+    np.testing.assert_array_equal(periods.forcing_frequency, [0.5, 0.6, 0.7])
+    np.testing.assert_array_equal(periods.values, [[1, 1, 2], [3, -1, -1]])
+    assert periods.attrs["max_period"] == 6
+    # period 3 is not looked for with max_period = 2
+    assert int(maps.period(ds, max_period=2)[1, 0]) == maps.NO_PERIOD
+
+
+def test_orbit_diagram_of_a_synthetic_run_wraps_and_labels():
+    """theta = 3 pi / 2 and -pi wrap to -pi / 2 and -pi ([-pi, pi)); omega is drawn as
+    stored; degrees convert the angle; a second grid axis is overplotted."""
+    theta = np.array([[[3 * np.pi / 2, -np.pi]], [[0.25, 0.25 + 4 * np.pi]]])  # (A, th0, s)
+    omega = np.array([[[1.0, -2.0]], [[0.5, 0.5]]])
+    ds = _synthetic(theta, omega, forcing_amplitude=[1.0, 1.2], theta0=[0.0])
+    ds["forcing_amplitude"].attrs.update(units="rad s-2", long_name="forcing amplitude")
+    fig = sweep.plot.orbit_diagram(ds)
+    x, y = fig.axes[0].lines[0].get_data()
+    np.testing.assert_array_equal(x, [1.0, 1.0, 1.2, 1.2])
+    # wrapping is exact up to the rounding of theta + pi (a few ulp of 2 pi)
+    np.testing.assert_allclose(y, [-np.pi / 2, -np.pi, 0.25, 0.25], rtol=0, atol=1e-14)
+    omega_fig = sweep.plot.orbit_diagram(ds, variable="omega")
+    np.testing.assert_array_equal(omega_fig.axes[0].lines[0].get_data()[1],
+                                  [1.0, -2.0, 0.5, 0.5])
+    assert omega_fig.axes[0].get_ylabel().endswith("[rad/s]")
+    degrees = sweep.plot.orbit_diagram(ds, degrees=True)
+    # the same angles in degrees (rounding of the conversion only)
+    np.testing.assert_allclose(degrees.axes[0].lines[0].get_data()[1],
+                               [-90.0, -180.0, np.degrees(0.25), np.degrees(0.25)],
+                               rtol=0, atol=1e-12)
+    assert degrees.axes[0].get_ylabel().endswith("[deg]")
+
+
+def test_period_map_refuses_what_it_cannot_draw():
+    import xarray as xr
+
+    periods = xr.DataArray(np.ones((2, 3, 2), dtype=np.int32),
+                           dims=("forcing_amplitude", "forcing_frequency", "theta0"),
+                           coords={"forcing_amplitude": [1.0, 1.1],
+                                   "forcing_frequency": [0.5, 0.6, 0.7],
+                                   "theta0": [0.0, 1.0]}, name="period")
+    with pytest.raises(ValueError, match=r"needs a 2-D variable; period has dimensions "
+                                         r"\(forcing_amplitude, forcing_frequency, theta0\)"):
+        sweep.plot.period_map(periods)
+    plane = periods.isel(theta0=0)
+    short = xr.zeros_like(plane.isel(forcing_frequency=[0, 1]), dtype=float)
+    with pytest.raises(ValueError, match=r"lyapunov has shape \(2, 2\), the periods "
+                                         r"\(3, 2\); accepted: lyapunov_max of the same run"):
+        sweep.plot.period_map(plane, lyapunov=short)
+
+
 # ------------------------------------------------------------------ periodicity map plot
 def test_period_map_names_each_period_none_and_chaos():
     import xarray as xr
