@@ -557,7 +557,9 @@ def run(
         Stroboscopic samples the ``strobe`` observable keeps per trajectory (the last
         ones, one per forcing period): 16 recognise periods up to 8; hundreds draw an
         orbit diagram (`sweep.plot.orbit_diagram`). Between 2 and 4096; only with
-        ``strobe`` observed.
+        ``strobe`` observed. With ``stop_early`` a trajectory stops only once all N
+        samples are taken and repeat with a period up to min(N // 2, 8), so a large N
+        stops late.
     device : {"cpu", "cuda"}, default "cpu"
         ``"cuda"``: run on an NVIDIA GPU, one CUDA thread per trajectory, from the same
         generated pieces (`sweep.kernels.cuda`; needs the ``cuda`` extra and a GPU,
