@@ -201,6 +201,22 @@ def test_continuing_down_the_axis_groups_the_starts_alike():
             b_fractions["fraction"].sel(attractor=b).values[::-1])
 
 
+def test_a_failed_trajectory_is_unresolved_even_with_periodic_samples():
+    """A start whose status says it failed (1: non-finite state) is unresolved even
+    though its stored samples (taken before it failed) repeat, and is counted in
+    ``unresolved``, not in an attractor's basin; status 0 elsewhere changes nothing."""
+    n_starts, amplitudes = 4, [1.0, 1.1]
+    rows = [[_orbit([(0.5, 0.1)], 0) for _ in range(n_starts)] for _ in amplitudes]
+    ds = _dataset(rows, amplitudes, n_starts)
+    status = np.zeros((n_starts, 2), dtype=np.int8)
+    status[1, 1] = 1
+    ds["status"] = (("theta0", "forcing_amplitude"), status)
+    labels, fractions = maps.continuation(ds, along="forcing_amplitude")
+    np.testing.assert_array_equal(labels.values, [[0, 0], [0, -1], [0, 0], [0, 0]])
+    np.testing.assert_array_equal(fractions.unresolved, [0.0, 0.25])  # 1 of 4: exact
+    np.testing.assert_array_equal(fractions["fraction"].sel(attractor=0), [1.0, 0.75])
+
+
 def test_set_distance_respects_the_wrap_and_the_cyclic_order():
     a = np.array([[0.01, 0.0], [3.0, 1.0]])
     b = np.array([[3.0, 1.0], [TWO_PI - 0.01, 0.0]])  # same set, other order, wrapped

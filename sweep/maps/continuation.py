@@ -149,7 +149,8 @@ def continuation(ds: xr.Dataset, along: str, *, max_period: int = 8, tol: float 
     -------
     labels : xarray.DataArray, int32, the grid dims of ``ds`` (order kept)
         The continued attractor label of each start; ``-1`` unresolved (no period
-        found: chaotic or not converged, or a failed trajectory). Labels count up from
+        found: chaotic or not converged, or a failed trajectory: non-finite samples,
+        or a nonzero ``status`` where the dataset has one). Labels count up from
         0 in order of first appearance along the axis (at the first value, by
         decreasing basin size).
     fractions : xarray.Dataset
@@ -206,7 +207,11 @@ def continuation(ds: xr.Dataset, along: str, *, max_period: int = 8, tol: float 
     known = []
     unresolved = np.zeros(n_values)
     for k in range(n_values):
-        theta, omega, dims = strobe_table(ds.isel({along: k}))
+        here = ds.isel({along: k})
+        theta, omega, dims = strobe_table(here)
+        if "status" in here:  # a failed trajectory's last samples may look periodic
+            failed = (here["status"].transpose(*dims).values != 0).reshape(-1, 1)
+            theta, omega = np.where(failed, np.nan, theta), np.where(failed, np.nan, omega)
         local, found = _attractors(theta, omega, max_period, tol)
         matched = _match(previous, found, threshold)
         labels_here = []
