@@ -121,7 +121,7 @@ def continuation(ds: xr.Dataset, along: str, *, max_period: int = 8, tol: float 
 
     At each value of ``along`` the attractors of that slice of the grid are found by
     `sweep.maps.identify_attractors`, then matched to those of the previous value
-    (see the module notes): a matched attractor keeps its label, an unmatched one gets
+    (see Notes): a matched attractor keeps its label, an unmatched one gets
     the next unused label, and the label of one that is not found again is retired.
 
     Parameters
