@@ -587,6 +587,19 @@ def period_map(periods, lyapunov=None, ax=None, degrees=True, threshold=0.0, tit
     return fig
 
 
+def _periods_text(fractions, attractor):
+    """"period 1", or "periods 1, 2" for an attractor whose period changes."""
+    if "attractor_period" not in fractions:
+        return f"period {int(fractions['period'].sel(attractor=attractor))}"
+    seen = []
+    for p in fractions["attractor_period"].sel(attractor=attractor).values.tolist():
+        if p > 0 and p not in seen:
+            seen.append(p)
+    if len(seen) == 1:
+        return f"period {seen[0]}"
+    return "periods " + ", ".join(str(p) for p in seen)
+
+
 def basin_fractions(fractions, ax=None, title=None):
     """Draw the basin fractions of a continuation as stacked areas along its axis.
 
@@ -602,7 +615,8 @@ def basin_fractions(fractions, ax=None, title=None):
     matplotlib.figure.Figure
         One area per attractor label (colour by label, ``tab10``, so a label keeps its
         colour in every figure), then the unresolved share in grey on top; the legend
-        names each attractor with its period.
+        names each attractor with its period (its periods, in order of appearance,
+        where it changes along the axis, e.g. through a period doubling).
     """
     import matplotlib.pyplot as plt
 
@@ -611,8 +625,8 @@ def basin_fractions(fractions, ax=None, title=None):
     palette = _colormap("tab10")
     layers = [fractions["fraction"].sel(attractor=a).values
               for a in fractions["attractor"].values]
-    names = [f"attractor {a} (period {p})" for a, p in
-             zip(fractions["attractor"].values, fractions["period"].values)]
+    names = [f"attractor {a} ({_periods_text(fractions, a)})"
+             for a in fractions["attractor"].values]
     colours = [palette(int(a) % 10) for a in fractions["attractor"].values]
     layers.append(fractions["unresolved"].values)
     names.append("unresolved")

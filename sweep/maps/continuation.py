@@ -16,6 +16,7 @@ import numpy as np
 import xarray as xr
 
 from .labels import UNRESOLVED, identify_attractors, strobe_table
+from .period import NO_PERIOD
 
 __all__ = ["continuation", "set_distance"]
 
@@ -23,9 +24,22 @@ TWO_PI = 2.0 * np.pi
 
 
 def set_distance(a: np.ndarray, b: np.ndarray) -> float:
-    """Hausdorff distance between two sets of stroboscopic points, shape (p, 2) of
-    (angle [rad], velocity [rad/s]), the angle taken modulo 2 pi (distances in the
-    Euclidean metric of (angle, velocity))."""
+    """Hausdorff distance between two sets of stroboscopic points.
+
+    Parameters
+    ----------
+    a, b : ndarray, shapes (p, 2) and (q, 2)
+        Points (angle [rad], angular velocity [rad/s]), in any order: a period-p orbit
+        is the set of its p points, so a cyclic shift of its samples changes nothing.
+
+    Returns
+    -------
+    float
+        The largest distance from a point of one set to the nearest point of the other
+        [rad, rad/s], in the Euclidean metric of (angle, velocity) with the angle
+        difference taken modulo 2 pi (so 0.01 and 2 pi - 0.01 are 0.02 apart, and a
+        rotating orbit's unwrapped angle may be given as it is).
+    """
     d_theta = np.abs(a[:, None, 0] - b[None, :, 0]) % TWO_PI
     d_theta = np.minimum(d_theta, TWO_PI - d_theta)
     d = np.hypot(d_theta, a[:, None, 1] - b[None, :, 1])
@@ -65,66 +79,139 @@ def _match(previous, current, threshold):
     return matched
 
 
+def _number(value) -> bool:
+    return (isinstance(value, (int, float, np.integer, np.floating))
+            and not isinstance(value, (bool, np.bool_)))
+
+
+def _check_options(along, max_period, tol, threshold) -> None:
+    """Refuse bad options before any work, naming what is accepted."""
+    if not isinstance(along, str):
+        raise ValueError(f"along must be the name of a grid axis (a str), got {along!r}")
+    if not (isinstance(max_period, (int, np.integer))
+            and not isinstance(max_period, (bool, np.bool_)) and max_period >= 1):
+        raise ValueError(f"max_period must be an int >= 1 (forcing periods), got "
+                         f"{max_period!r}")
+    if not (_number(tol) and np.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol must be a finite number > 0 (rad and rad/s), got {tol!r}")
+    if not (_number(threshold) and threshold > 0):
+        raise ValueError(f"threshold must be a number > 0 (rad, rad/s; inf for no "
+                         f"threshold), got {threshold!r}")
+
+
+def _not_an_axis(ds: xr.Dataset, along: str, axes: list[str]) -> ValueError:
+    """The error for an ``along`` that is not a grid axis, saying what it is instead."""
+    if along == "strobe":
+        what = " (it is the dimension of the stroboscopic samples)"
+    elif along in ds.data_vars:
+        what = " (it is a data variable)"
+    elif along in ds.coords:
+        what = " (it is a coordinate but not a dimension of the grid)"
+    elif along in ds.attrs:
+        what = " (it is held fixed in this run: a dataset attribute)"
+    else:
+        what = ""
+    return ValueError(f"along = {along!r} is not a grid axis of this dataset{what}; "
+                      f"accepted: {', '.join(repr(a) for a in axes)}")
+
+
 def continuation(ds: xr.Dataset, along: str, *, max_period: int = 8, tol: float = 1e-3,
-                 threshold: float = np.inf):
+                 threshold: float = np.inf) -> tuple[xr.DataArray, xr.Dataset]:
     """Follow the attractors of a forced basins run along one of its grid axes.
+
+    At each value of ``along`` the attractors of that slice of the grid are found by
+    `sweep.maps.identify_attractors`, then matched to those of the previous value
+    (see Notes): a matched attractor keeps its label, an unmatched one gets
+    the next unused label, and the label of one that is not found again is retired.
 
     Parameters
     ----------
     ds : xarray.Dataset
-        A run observing ``strobe`` whose grid has the axis ``along`` (e.g. theta0 x
-        omega0 x forcing_amplitude).
+        A run observing ``strobe`` (variables ``strobe_theta`` and ``strobe_omega``
+        over the grid dims and ``strobe``) whose grid has the axis ``along``, e.g.
+        theta0 x omega0 x forcing_amplitude.
     along : str
-        The grid axis to continue along, in the order of its values.
-    max_period, tol
-        Passed to `sweep.maps.identify_attractors` at each value.
+        The grid axis to continue along, taken in the stored order of its values (a
+        descending axis is continued downwards).
+    max_period : int, default 8
+        Longest period looked for [forcing periods], >= 1; periods longer than half
+        the stroboscopic samples are never found.
+    tol : float, default 1e-3
+        Repetition and identity tolerance of `identify_attractors` [rad and rad/s].
     threshold : float, default inf
         Largest set distance [rad, rad/s] at which two attractors at consecutive values
-        are the same one (Attractors.jl's default is also no threshold).
+        can be the same one; farther ones are never matched. Attractors.jl's
+        ``MatchBySSSetDistance`` has no threshold by default either; unlike its
+        ``use_vanished`` (on there when a threshold is given), a vanished attractor is
+        never matched again.
 
     Returns
     -------
-    labels : xarray.DataArray, int32, grid dims
-        The continued attractor label of each start (``-1`` unresolved: no period
-        found, or a failed trajectory). Labels count up from 0 in order of first
-        appearance along the axis (at the first value, by basin size).
+    labels : xarray.DataArray, int32, the grid dims of ``ds`` (order kept)
+        The continued attractor label of each start; ``-1`` unresolved (no period
+        found: chaotic or not converged, or a failed trajectory: non-finite samples,
+        or a nonzero ``status`` where the dataset has one). Labels count up from
+        0 in order of first appearance along the axis (at the first value, by
+        decreasing basin size).
     fractions : xarray.Dataset
-        Dims ``(along, "attractor")``: ``fraction`` [1], the share of that value's
-        starts in each attractor's basin (0 where it does not exist), and
-        ``unresolved`` (dim ``along``), so that they sum to one per value;
-        ``attractor_theta`` [rad, in [0, 2 pi)] and ``attractor_omega`` [rad/s], one
-        stroboscopic point of each attractor per value (NaN where absent); coordinates
-        ``period`` (forcing periods) and ``turns_per_period`` per attractor, and
-        ``first``/``last``, the values of ``along`` where it exists.
+        Dims ``(along, "attractor")``, ``attractor`` = 0 .. number of labels - 1:
+
+        - ``fraction`` [1]: the share of that value's starts in each attractor's
+          basin, 0 where the attractor does not exist;
+        - ``unresolved`` [1] (dim ``along``): the share of starts with label -1, so
+          that ``fraction.sum("attractor") + unresolved`` is one at every value;
+        - ``attractor_theta`` [rad, in [0, 2 pi)] and ``attractor_omega`` [rad/s]: one
+          stroboscopic point of the attractor at each value (NaN where absent);
+        - ``attractor_period`` [forcing periods]: its period at each value, ``-1``
+          where absent (a label continued through a period doubling changes period);
+        - coordinates per attractor: ``period`` (where it is first found),
+          ``turns_per_period`` (net turns per forcing period, 0 for an oscillation;
+          the same along the label), ``first`` and ``last``, the values of ``along``
+          where it is first and last found (it exists at every value in between).
+
+        Attributes: ``along``, ``matching``, ``threshold``, ``tol``, ``max_period``.
 
     Raises
     ------
     ValueError
-        Without stroboscopic samples, for an ``along`` that is not a grid axis of
-        ``ds`` (the message lists them), or an axis with fewer than two values.
+        Before any work: without stroboscopic samples (the message says to observe
+        ``'strobe'``); for an ``along`` that is not a grid axis of ``ds`` (the message
+        lists them) or one with fewer than two values; for ``max_period``, ``tol`` or
+        ``threshold`` out of range.
+
+    Notes
+    -----
+    Two attractors at consecutive values are compared only if they turn the same
+    number of times per forcing period; their distance is the Hausdorff distance of
+    their stroboscopic sets (`set_distance`). Pairs are matched one to one in order of
+    increasing distance (greedy, as Attractors.jl does), so an attractor that vanishes
+    while another appears far away hands its label on unless ``threshold`` forbids it.
     """
-    theta_all = ds.get("strobe_theta")
-    if theta_all is None or "strobe_omega" not in ds:
-        raise ValueError("continuation needs stroboscopic samples; accepted: a dataset from "
-                         "sweep.run(..., observe=('strobe',)) of a forced scene")
-    axes = [d for d in theta_all.dims if d != "strobe"]
+    _check_options(along, max_period, tol, threshold)
+    if not isinstance(ds, xr.Dataset) or "strobe_theta" not in ds or "strobe_omega" not in ds:
+        raise ValueError("continuation needs stroboscopic samples (strobe_theta and "
+                         "strobe_omega); accepted: a dataset from sweep.run(..., "
+                         "observe=('strobe',)) of a forced scene")
+    axes = [d for d in ds["strobe_theta"].dims if d != "strobe"]
     if along not in axes:
-        raise ValueError(f"along = {along!r} is not a grid axis of this dataset; accepted: "
-                         f"{', '.join(repr(a) for a in axes)}")
+        raise _not_an_axis(ds, along, axes)
     n_values = ds.sizes[along]
     if n_values < 2:
         raise ValueError(f"along = {along!r} has {n_values} value; accepted: an axis with "
                          "at least two values to continue along")
-    if not (isinstance(threshold, (int, float, np.floating)) and threshold > 0):
-        raise ValueError(f"threshold must be a number > 0 (rad, rad/s), got {threshold!r}")
     others = [d for d in axes if d != along]
     out = np.full((n_values,) + tuple(ds.sizes[d] for d in others), UNRESOLVED,
                   dtype=np.int32)
     previous, previous_labels = [], []
-    known = []  # per global label: (period, turns, {value index: (theta, omega, fraction)})
+    # per label: (period, turns, {value index: (theta, omega, fraction, period)})
+    known = []
     unresolved = np.zeros(n_values)
     for k in range(n_values):
-        theta, omega, dims = strobe_table(ds.isel({along: k}))
+        here = ds.isel({along: k})
+        theta, omega, dims = strobe_table(here)
+        if "status" in here:  # a failed trajectory's last samples may look periodic
+            failed = (here["status"].transpose(*dims).values != 0).reshape(-1, 1)
+            theta, omega = np.where(failed, np.nan, theta), np.where(failed, np.nan, omega)
         local, found = _attractors(theta, omega, max_period, tol)
         matched = _match(previous, found, threshold)
         labels_here = []
@@ -135,7 +222,7 @@ def continuation(ds: xr.Dataset, along: str, *, max_period: int = 8, tol: float 
                 label = len(known)
                 known.append((period, turns, {}))
             labels_here.append(label)
-            known[label][2][k] = (points[-1, 0], points[-1, 1], size / local.size)
+            known[label][2][k] = (points[-1, 0], points[-1, 1], size / local.size, period)
         mapping = np.array(labels_here + [UNRESOLVED], dtype=np.int32)
         out[k] = mapping[np.where(local >= 0, local, len(labels_here))].reshape(
             tuple(ds.sizes[d] for d in dims))
@@ -146,17 +233,24 @@ def continuation(ds: xr.Dataset, along: str, *, max_period: int = 8, tol: float 
     labels = labels.transpose(*axes)
     labels.attrs = {"long_name": f"attractor label, continued along {along}",
                     "unresolved": UNRESOLVED, "along": along}
-    n_attractors = len(known)
+    return labels, _fractions(ds, along, known, unresolved, max_period, tol, threshold)
+
+
+def _fractions(ds, along, known, unresolved, max_period, tol, threshold) -> xr.Dataset:
+    """The ``fractions`` Dataset of `continuation` from its per-label records."""
+    n_values, n_attractors = unresolved.size, len(known)
     fraction = np.zeros((n_values, n_attractors))
     point = np.full((2, n_values, n_attractors), np.nan)
+    period_here = np.full((n_values, n_attractors), NO_PERIOD, dtype=np.int32)
     for label, (_, _, where) in enumerate(known):
-        for k, (theta_point, omega_point, share) in where.items():
+        for k, (theta_point, omega_point, share, period) in where.items():
             fraction[k, label] = share
             point[:, k, label] = theta_point, omega_point
+            period_here[k, label] = period
     values = ds[along].values
     first = [values[min(w)] for _, _, w in known]
     last = [values[max(w)] for _, _, w in known]
-    fractions = xr.Dataset(
+    return xr.Dataset(
         {"fraction": ((along, "attractor"), fraction,
                       {"units": "1", "long_name": "basin fraction of the starts at this "
                                                   f"{along}"}),
@@ -168,7 +262,11 @@ def continuation(ds: xr.Dataset, along: str, *, max_period: int = 8, tol: float 
                                                           "attractor: angle modulo 2 pi"}),
          "attractor_omega": ((along, "attractor"), point[1],
                              {"units": "rad s-1", "long_name": "a stroboscopic point of the "
-                                                              "attractor: angular velocity"})},
+                                                              "attractor: angular velocity"}),
+         "attractor_period": ((along, "attractor"), period_here,
+                              {"units": "1", "long_name": "period of the attractor at this "
+                                                          f"{along} (forcing periods); -1 "
+                                                          "where absent"})},
         coords={along: ds[along],
                 "attractor": np.arange(n_attractors),
                 "period": ("attractor", np.array([p for p, _, _ in known], dtype=np.int64)),
@@ -179,4 +277,3 @@ def continuation(ds: xr.Dataset, along: str, *, max_period: int = 8, tol: float 
                "of the stroboscopic sets (angle modulo 2 pi), same turns per period",
                "threshold": float(threshold), "tol": float(tol),
                "max_period": int(max_period)})
-    return labels, fractions
