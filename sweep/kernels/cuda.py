@@ -32,7 +32,7 @@ from .lanes import indent
 from .snippets import finite_test, renormalisations, snippets, stop_source
 from .spec import KernelSpec, Status, n_columns
 from .steppers import STEPPERS
-from .terms import column_of, load_lines
+from .terms import load_lines
 
 __all__ = ["THREADS_PER_BLOCK", "available", "cuda_kernel", "device_functions"]
 
@@ -97,10 +97,8 @@ def cuda_kernel(spec: KernelSpec, method) -> str:
     update = snippets(spec, "update")
     stop = stop_source(spec, action="break")
     loop = drives.step + drives.values + parts["step"] + drives.carry + ["k_state = step + 1"]
-    for every, code in renormalisations(spec):
-        loop += [f"if k_state % {every} == 0 or k_state == n_transient or "
-                 "k_state == n_steps:", "    keep = k_state > n_transient",
-                 indent(code, 1)]
+    for head, code in renormalisations(spec):
+        loop += [head, indent(code, 1)]
     if update or stop:
         loop += ["if step + 1 >= n_transient:", indent(update, 1) or "    pass"]
         if stop:

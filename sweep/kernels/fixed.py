@@ -168,12 +168,6 @@ def _lane_dtypes(spec: KernelSpec, parts: dict, per_lane: list[str],
     return lane
 
 
-_RENORMALISE = """\
-if k_state % {every} == 0 or k_state == n_transient or k_state == n_steps:
-    keep = k_state > n_transient
-{{loop}}"""
-
-
 def fixed_kernel(spec: KernelSpec, method) -> str:
     """Kernel body of a fixed-step method (see the module docstring)."""
     parts = STEPPERS[method.kind](spec, method)
@@ -205,9 +199,8 @@ def fixed_kernel(spec: KernelSpec, method) -> str:
     if observe_block:
         observe_block = observe_block.format(loop=lane_loop(observe_body, lane, level=1,
                                                             head=observe_head))
-    renormalise_blocks = NL.join(
-        _RENORMALISE.format(every=every).format(loop=lane_loop(code, lane, level=1))
-        for every, code in renormalise)
+    renormalise_blocks = NL.join(head + NL + lane_loop(code, lane, level=1)
+                                 for head, code in renormalise)
     finish_loop = lane_loop(finish, lane, level=2, stores=[], count="n_real")
     return f'''
 BLOCK = {spec.block}

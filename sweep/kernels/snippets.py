@@ -55,11 +55,20 @@ def stop_source(spec: KernelSpec, action: str = "break") -> str:
     return "\n".join(lines)
 
 
-def renormalisations(spec: KernelSpec) -> list[tuple[int, str]]:
-    """``(every, snippet)`` of each observed observable with a ``renormalise`` snippet
-    (see `sweep.observables.Observable`)."""
-    return [(OBSERVABLES[name].renormalise_every, f"# {name}\n" + OBSERVABLES[name].renormalise)
-            for name in spec.observe if OBSERVABLES[name].renormalise]
+def renormalisations(spec: KernelSpec) -> list[tuple[str, str]]:
+    """``(head, snippet)`` of each observed observable with a ``renormalise`` snippet
+    (see `sweep.observables.Observable`): ``head`` is the test after a step (state at
+    step ``k_state``) that runs it -- every ``renormalise_every`` steps, at the start
+    of the steady window and at the last step -- and sets ``keep``; the kernel puts the
+    snippet under it (in a lane loop, or as it is for one thread)."""
+    found = []
+    for name in spec.observe:
+        obs = OBSERVABLES[name]
+        if obs.renormalise:
+            head = (f"if k_state % {obs.renormalise_every} == 0 or k_state == n_transient "
+                    "or k_state == n_steps:\n    keep = k_state > n_transient")
+            found.append((head, f"# {name}\n" + obs.renormalise))
+    return found
 
 
 def finite_test(spec: KernelSpec) -> str:
