@@ -25,8 +25,8 @@ from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
 from .execution.progress import progress_bar
 from .grid import Grid
-from .kernels import (DEVICES, KernelSpec, build, check_method_fits, check_observables_fit,
-                      check_tangent_fits, declarations, failure_summary, n_columns,
+from .kernels import (KernelSpec, build, check_device, check_method_fits,
+                      check_observables_fit, check_tangent_fits, declarations, failure_summary, n_columns,
                       status_counts)
 from .methods import METHODS
 from .observables import (DEFAULT_OBSERVE, OBSERVABLES, STROBE_SAMPLES, STROBE_SAMPLES_RANGE,
@@ -339,16 +339,9 @@ CUDA_CHUNK = 2 ** 20
 def _check_device(device, integrator) -> None:
     """Refuse an unknown device, an adaptive method on the GPU, and ``"cuda"`` where no
     GPU (or numba's CUDA simulator) is available -- before any compute."""
-    if not isinstance(device, str) or device not in DEVICES:
-        raise ValueError(f"device must be one of {', '.join(map(repr, DEVICES))}, got "
-                         f"{device!r}")
+    check_device(device, integrator)
     if device != "cuda":
         return
-    if integrator.adaptive:
-        fixed = ", ".join(repr(n) for n, m in METHODS.items() if not m.adaptive)
-        raise ValueError(f"device='cuda' runs fixed-step methods; method "
-                         f"{integrator.name!r} is adaptive; accepted: one of {fixed}, "
-                         "or device='cpu'")
     from .kernels.cuda import available
 
     reason = available()

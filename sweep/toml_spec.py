@@ -49,7 +49,7 @@ import numpy as np
 from ._validate import check_flag, check_positive_int
 from .engine import check_strobe_samples, validate_settings
 from .grid import Grid, from_degrees
-from .kernels.spec import DEVICES
+from .kernels.spec import check_device
 from .observables import DEFAULT_OBSERVE, resolve
 from .physics import Scene, parameter_names, parameters
 
@@ -346,9 +346,8 @@ def _run(source: str, table: dict) -> dict[str, Any]:
                 check_flag(flag, kwargs[flag])
         if "scheduler" in kwargs:
             check_scheduler("scheduler", kwargs["scheduler"])
-        if "device" in kwargs and kwargs["device"] not in DEVICES:
-            raise ValueError(f"device must be one of {', '.join(map(repr, DEVICES))}, got "
-                             f"{kwargs['device']!r}")
+        if "device" in kwargs:
+            check_device(kwargs["device"])
         if "estimate_error" in kwargs:
             check_positive_int("estimate_error", kwargs["estimate_error"],
                                "an int >= 1 (trajectories)")

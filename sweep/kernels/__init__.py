@@ -15,10 +15,10 @@ the engine, the execution back ends or the maps.
 
 from .cache import build
 from .source import source
-from .spec import (DEVICES, KernelSpec, Status, check_method_fits, check_observables_fit,
-                   check_tangent_fits, declarations, failure_summary, method_of, n_columns,
+from .spec import (DEVICES, KernelSpec, Status, check_device, check_method_fits,
+                   check_observables_fit, check_tangent_fits, declarations, failure_summary, method_of, n_columns,
                    status_counts)
 
-__all__ = ["DEVICES", "KernelSpec", "Status", "build", "check_method_fits",
+__all__ = ["DEVICES", "KernelSpec", "Status", "build", "check_device", "check_method_fits",
            "check_observables_fit", "check_tangent_fits", "declarations", "failure_summary",
            "method_of", "n_columns", "source", "status_counts"]

@@ -12,7 +12,8 @@ from .. import methods as _methods
 from ..observables import OBSERVABLES, STROBE_SAMPLES
 from ..physics import EFFECTS, EffectDeclaration
 
-__all__ = ["DEVICES", "KernelSpec", "Status", "check_method_fits", "check_observables_fit",
+__all__ = ["DEVICES", "KernelSpec", "Status", "check_device", "check_method_fits",
+           "check_observables_fit",
            "check_tangent_fits", "declarations", "failure_summary", "method_of", "n_columns",
            "status_counts", "tangent"]
 
@@ -157,9 +158,7 @@ class KernelSpec:
     strobe_samples: int = STROBE_SAMPLES
 
     def __post_init__(self) -> None:
-        if self.device not in DEVICES:
-            raise ValueError(f"device must be one of {', '.join(map(repr, DEVICES))}, got "
-                             f"{self.device!r}")
+        check_device(self.device)
         if self.device == "cuda":  # one thread per trajectory: no lanes to refill or share
             object.__setattr__(self, "refill", False)
             object.__setattr__(self, "shared_forcing", False)
@@ -200,6 +199,24 @@ def n_columns(spec: KernelSpec) -> int:
     """Width of ``out``: every column of every observed observable, in observe order
     (an observable with samples > 1 fills ``samples`` columns per variable)."""
     return sum(OBSERVABLES[name].n_columns(spec) for name in spec.observe)
+
+
+def check_device(device, method=None) -> None:
+    """Refuse an unknown device and, given the method, an adaptive method on the GPU
+    (its kernel is fixed-step only).
+
+    Raises
+    ------
+    ValueError
+        Naming the device or method and what is accepted.
+    """
+    if not isinstance(device, str) or device not in DEVICES:
+        raise ValueError(f"device must be one of {', '.join(map(repr, DEVICES))}, got "
+                         f"{device!r}")
+    if device == "cuda" and method is not None and method.adaptive:
+        fixed = ", ".join(repr(n) for n, m in _methods.METHODS.items() if not m.adaptive)
+        raise ValueError(f"device='cuda' runs fixed-step methods; method {method.name!r} "
+                         f"is adaptive; accepted: one of {fixed}, or device='cpu'")
 
 
 def tangent(spec: KernelSpec) -> bool:
