@@ -487,13 +487,9 @@ def orbit_diagram(ds, along="forcing_amplitude", variable="theta", ax=None, degr
     """
     import matplotlib.pyplot as plt
 
-    if "strobe_theta" not in ds or "strobe_omega" not in ds:
-        raise ValueError("an orbit diagram needs stroboscopic samples; accepted: a dataset "
-                         "from sweep.run(..., observe=('strobe',))")
-    axes = [d for d in ds["strobe_theta"].dims if d != "strobe"]
-    if along not in axes:
-        raise ValueError(f"along = {along!r} is not a grid axis of this dataset; accepted: "
-                         f"{', '.join(repr(a) for a in axes)}")
+    from .maps.labels import strobe_axes
+
+    strobe_axes(ds, "an orbit diagram", along)
     if variable not in ("theta", "omega"):
         raise ValueError(f"variable must be 'theta' or 'omega', got {variable!r}")
     samples = ds[f"strobe_{variable}"]

@@ -211,8 +211,9 @@ def test_period_needs_strobe_samples_and_sane_options():
 def test_orbit_diagram_errors_name_what_is_accepted():
     ds = _run([1.06], samples=4, transient=5)
     with pytest.raises(ValueError, match="along = 'damping' is not a grid axis of this "
-                                         "dataset; accepted: 'forcing_amplitude', "
-                                         "'theta0', 'omega0'"):
+                                         r"dataset \(it is held fixed in this run: a "
+                                         r"dataset attribute\); accepted: "
+                                         "'forcing_amplitude', 'theta0', 'omega0'"):
         sweep.plot.orbit_diagram(ds, along="damping")
     with pytest.raises(ValueError, match="variable must be 'theta' or 'omega'"):
         sweep.plot.orbit_diagram(ds, variable="phase")

@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .labels import UNRESOLVED, identify_attractors, strobe_table
+from .labels import (UNRESOLVED, check_tolerance, identify_attractors, strobe_axes,
+                     strobe_table)
 from .period import NO_PERIOD
 
 __all__ = ["continuation", "set_distance"]
@@ -92,27 +93,10 @@ def _check_options(along, max_period, tol, threshold) -> None:
             and not isinstance(max_period, (bool, np.bool_)) and max_period >= 1):
         raise ValueError(f"max_period must be an int >= 1 (forcing periods), got "
                          f"{max_period!r}")
-    if not (_number(tol) and np.isfinite(tol) and tol > 0):
-        raise ValueError(f"tol must be a finite number > 0 (rad and rad/s), got {tol!r}")
+    check_tolerance(tol)
     if not (_number(threshold) and threshold > 0):
         raise ValueError(f"threshold must be a number > 0 (rad, rad/s; inf for no "
                          f"threshold), got {threshold!r}")
-
-
-def _not_an_axis(ds: xr.Dataset, along: str, axes: list[str]) -> ValueError:
-    """The error for an ``along`` that is not a grid axis, saying what it is instead."""
-    if along == "strobe":
-        what = " (it is the dimension of the stroboscopic samples)"
-    elif along in ds.data_vars:
-        what = " (it is a data variable)"
-    elif along in ds.coords:
-        what = " (it is a coordinate but not a dimension of the grid)"
-    elif along in ds.attrs:
-        what = " (it is held fixed in this run: a dataset attribute)"
-    else:
-        what = ""
-    return ValueError(f"along = {along!r} is not a grid axis of this dataset{what}; "
-                      f"accepted: {', '.join(repr(a) for a in axes)}")
 
 
 def continuation(ds: xr.Dataset, along: str, *, max_period: int = 8, tol: float = 1e-3,
@@ -188,13 +172,7 @@ def continuation(ds: xr.Dataset, along: str, *, max_period: int = 8, tol: float 
     while another appears far away hands its label on unless ``threshold`` forbids it.
     """
     _check_options(along, max_period, tol, threshold)
-    if not isinstance(ds, xr.Dataset) or "strobe_theta" not in ds or "strobe_omega" not in ds:
-        raise ValueError("continuation needs stroboscopic samples (strobe_theta and "
-                         "strobe_omega); accepted: a dataset from sweep.run(..., "
-                         "observe=('strobe',)) of a forced scene")
-    axes = [d for d in ds["strobe_theta"].dims if d != "strobe"]
-    if along not in axes:
-        raise _not_an_axis(ds, along, axes)
+    axes = strobe_axes(ds, "continuation", along)
     n_values = ds.sizes[along]
     if n_values < 2:
         raise ValueError(f"along = {along!r} has {n_values} value; accepted: an axis with "

@@ -248,6 +248,54 @@ def basins(ds: xr.Dataset, *, rest_position: bool = False, max_period: int = 8,
     return out
 
 
+def strobe_axes(ds: xr.Dataset, what: str, along: str | None = None) -> list[str]:
+    """The grid axes of a dataset with stroboscopic samples, in order; with ``along``,
+    check that it is one of them.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+    what : str
+        What needs them, for the message (``"continuation"``).
+    along : str, optional
+
+    Raises
+    ------
+    ValueError
+        Without ``strobe_theta`` and ``strobe_omega`` (saying to observe ``strobe``), or
+        for an ``along`` that is not a grid axis (saying what it is instead, and listing
+        the axes).
+    """
+    if not isinstance(ds, xr.Dataset) or "strobe_theta" not in ds or "strobe_omega" not in ds:
+        raise ValueError(f"{what} needs stroboscopic samples (strobe_theta and "
+                         "strobe_omega); accepted: a dataset from sweep.run(..., "
+                         "observe=('strobe',)) of a forced scene")
+    axes = [d for d in ds["strobe_theta"].dims if d != "strobe"]
+    if along is not None and along not in axes:
+        if along == "strobe":
+            instead = " (it is the dimension of the stroboscopic samples)"
+        elif along in ds.data_vars:
+            instead = " (it is a data variable)"
+        elif along in ds.coords:
+            instead = " (it is a coordinate but not a dimension of the grid)"
+        elif along in ds.attrs:
+            instead = " (it is held fixed in this run: a dataset attribute)"
+        else:
+            instead = ""
+        raise ValueError(f"along = {along!r} is not a grid axis of this dataset{instead}; "
+                         f"accepted: {', '.join(repr(a) for a in axes)}")
+    return axes
+
+
+def check_tolerance(tol) -> float:
+    """``tol`` [rad and rad/s] as a float; ValueError unless a finite number > 0."""
+    if isinstance(tol, (bool, np.bool_)) or not isinstance(tol, (int, float, np.integer,
+                                                                 np.floating)) \
+            or not np.isfinite(tol) or tol <= 0:
+        raise ValueError(f"tol must be a finite number > 0 (rad and rad/s), got {tol!r}")
+    return float(tol)
+
+
 def strobe_table(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
     """The stroboscopic samples of every trajectory as two (n, P) tables, rows in the
     order of the grid dims (returned third).
@@ -257,9 +305,8 @@ def strobe_table(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray, tuple[str, ...
     ValueError
         If the dataset has no stroboscopic samples.
     """
-    _require(ds, ("strobe_theta", "strobe_omega"), "strobe", "stroboscopic analysis")
+    dims = tuple(strobe_axes(ds, "stroboscopic analysis"))
     theta = ds["strobe_theta"]
-    dims = tuple(d for d in theta.dims if d != "strobe")
     samples = theta.sizes["strobe"]
     table = [ds[name].transpose(*dims, "strobe").values.reshape(-1, samples)
              for name in ("strobe_theta", "strobe_omega")]

@@ -7,7 +7,7 @@ import numpy as np
 import xarray as xr
 
 from . import _strobe
-from .labels import strobe_table
+from .labels import check_tolerance, strobe_table
 
 __all__ = ["NO_PERIOD", "period"]
 
@@ -57,10 +57,8 @@ def period(ds: xr.Dataset, *, max_period: int | None = None, tol: float = 1e-3
         raise ValueError(f"max_period must be an int from 1 to {largest} (half the "
                          f"{samples} stroboscopic samples), got {max_period!r}; more "
                          "samples: sweep.run(..., strobe_samples=N)")
-    if isinstance(tol, (bool, np.bool_)) or not isinstance(tol, (int, float, np.floating)) \
-            or not np.isfinite(tol) or tol <= 0:
-        raise ValueError(f"tol must be a finite number > 0 (rad and rad/s), got {tol!r}")
-    found, _ = _strobe.periods(theta, omega, int(max_period), float(tol))
+    tol = check_tolerance(tol)
+    found, _ = _strobe.periods(theta, omega, int(max_period), tol)
     found = np.where(found > 0, found, NO_PERIOD).astype(np.int32)
     shape = tuple(ds.sizes[d] for d in dims)
     out = xr.DataArray(found.reshape(shape), coords={d: ds[d] for d in dims}, dims=dims,
