@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["basin_fractions", "basins", "map", "orbit_diagram", "period_map", "save_figure", "select",
-           "trajectory"]
+__all__ = ["basin_fractions", "basins", "map", "orbit_diagram", "period_map", "save_figure",
+           "select", "trajectory"]
 
 #: Coordinates converted to degrees (and deg/s) when ``degrees=True``.
 ANGLE_COORDS = ("theta0", "omega0", "forcing_phase")

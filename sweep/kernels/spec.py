@@ -141,8 +141,8 @@ class KernelSpec:
         no refill or shared drive sines there).
     block : int
         Trajectories per block of the fixed-step, refill and adaptive kernels (SIMD
-        lanes; a multiple of 8, or 1 for a few trajectories, each alone). Results do not depend on it (a test checks
-        it); `_config.BLOCK` by default.
+        lanes; a multiple of 8, or 1 for a few trajectories, each alone). Results do not
+        depend on it (a test checks it); `_config.BLOCK` by default.
     """
 
     model: str

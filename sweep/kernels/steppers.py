@@ -12,7 +12,7 @@ from fractions import Fraction
 from math import lcm
 
 from .spec import KernelSpec, check_method_fits, tangent
-from .terms import accel_call, accel_jacobian_call, drive_nodes, float_literal
+from .terms import accel_call, drive_nodes, float_literal
 
 __all__ = ["STEPPERS", "TANGENT", "at_node", "combination", "explicit_stepper", "rk_stages",
            "symplectic_stepper"]
@@ -96,8 +96,8 @@ def rk_stages(spec: KernelSpec, tableau, scale: str, constants, drives: dict) ->
             lines.append(f"k{i + 1}o = " + accel_call(
                 spec, th_stage, f"k{i + 1}t", at_node(drives, tableau.c[i])))
             continue
-        lines.append(f"k{i + 1}o, j{i + 1}t, j{i + 1}o = " + accel_jacobian_call(
-            spec, th_stage, f"k{i + 1}t", at_node(drives, tableau.c[i])))
+        lines.append(f"k{i + 1}o, j{i + 1}t, j{i + 1}o = " + accel_call(
+            spec, th_stage, f"k{i + 1}t", at_node(drives, tableau.c[i]), jacobian=True))
         for m in (1, 2):
             du = combination(row, [f"q{j + 1}u{m}" for j in range(i)], scale, constants)
             dv = combination(row, [f"q{j + 1}v{m}" for j in range(i)], scale, constants)

@@ -8,8 +8,8 @@ from ..physics import BASE_PARAMETERS, EffectDeclaration, parameter_names
 from .lanes import IDENTIFIER
 from .spec import KernelSpec
 
-__all__ = ["accel_call", "accel_jacobian_call", "accel_jacobian_source", "accel_source", "column_of", "drive_line", "drive_nodes",
-           "drive_sine", "energy_source", "float_literal", "load_lines", "symbols",
+__all__ = ["accel_call", "accel_jacobian_source", "accel_source", "column_of", "drive_line",
+           "drive_nodes", "drive_sine", "energy_source", "float_literal", "load_lines", "symbols",
            "tension_terms"]
 
 def float_literal(x) -> str:
@@ -47,13 +47,18 @@ def accel_source(spec: KernelSpec) -> str:
     then each effect's term in canonical order."""
     args = ["th", "om", "w0sq"] + [a for effect in spec.effects for a in _accel_args(effect)]
     f_theta = "vsin(th)" if spec.model == "nonlinear" else "th"
-    terms = ["-w0sq * " + f_theta] + [effect.term.replace("FTH", f_theta)
-                                      for effect in spec.effects]
     return (
         "@njit(**JIT)\n"
         f"def accel({', '.join(args)}):\n"
-        f"    return {' '.join(terms)}\n"
+        f"    return {_acceleration(spec, f_theta)}\n"
     )
+
+
+def _acceleration(spec: KernelSpec, f_theta: str) -> str:
+    """theta'' as an expression: gravity, then each effect's term in canonical order,
+    with ``f_theta`` the source of f(theta)."""
+    return " ".join(["-w0sq * " + f_theta] + [effect.term.replace("FTH", f_theta)
+                                              for effect in spec.effects])
 
 
 def accel_jacobian_source(spec: KernelSpec) -> str:
@@ -70,7 +75,6 @@ def accel_jacobian_source(spec: KernelSpec) -> str:
                                    for a in _accel_args(e, jacobian=True)]
     nonlinear = spec.model == "nonlinear"
     f_theta, df_theta = ("sin_th", "cos_th") if nonlinear else ("th", "1.0")
-    accel = ["-w0sq * " + f_theta] + [e.term.replace("FTH", f_theta) for e in spec.effects]
     d_theta = ["-w0sq * " + df_theta] + [e.jacobian("th").replace("DFTH", df_theta)
                                         .replace("FTH", f_theta) for e in spec.effects
                                         if e.jacobian("th")]
@@ -81,13 +85,8 @@ def accel_jacobian_source(spec: KernelSpec) -> str:
         "@njit(**JIT)\n"
         f"def accel_jac({', '.join(args)}):\n"
         + ("    sin_th, cos_th = vsincos(th)\n" if nonlinear else "")
-        + f"    return ({' '.join(accel)}), ({' '.join(d_theta)}), ({d_omega})\n"
+        + f"    return ({_acceleration(spec, f_theta)}), ({' '.join(d_theta)}), ({d_omega})\n"
     )
-
-
-def accel_jacobian_call(spec: KernelSpec, th: str, om: str, values: dict[str, str]) -> str:
-    """``accel_jac(...)`` on state ``th, om`` (see `accel_call` for ``values``)."""
-    return accel_call(spec, th, om, values, jacobian=True)
 
 
 def accel_call(spec: KernelSpec, th: str, om: str, values: dict[str, str],

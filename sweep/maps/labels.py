@@ -431,7 +431,8 @@ def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int
     orbits = [_orbit(theta[r], omega[r], int(buckets[b, 0])) for b, r in enumerate(first)]
     for a in range(len(buckets)):
         for b in range(a):
-            if parent[b] != b or buckets[a, 0] != buckets[b, 0] or buckets[a, 1] != buckets[b, 1]:
+            if parent[b] != b or buckets[a, 0] != buckets[b, 0] \
+                    or buckets[a, 1] != buckets[b, 1]:
                 continue
             if _same_orbit(orbits[a], orbits[b], 10 * tol):
                 parent[a] = b
