@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ._version import __version__
-from .kernels.spec import DEVICES
+from .kernels.spec import DEVICES, DTYPES
 
 __all__ = ["DEMO", "build_parser", "main"]
 
@@ -81,6 +81,10 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--device", choices=DEVICES,
                      help="where to run: the CPU (default) or an NVIDIA GPU (needs the cuda "
                      "extra); overrides [run] device")
+    run.add_argument("--dtype", choices=DTYPES,
+                     help="working precision of the state and the step (float32: about "
+                     "twice the trajectories per second, float32 rounding; fixed-step "
+                     "methods); overrides [run] dtype")
     _progress_option(run)
     run.set_defaults(handler=_command_run)
 
@@ -221,6 +225,8 @@ def _command_run(args: argparse.Namespace) -> int:
         kwargs.update(checkpoint=folder, resume=args.resume, keep_checkpoint=True)
     if args.device is not None:
         kwargs["device"] = args.device
+    if args.dtype is not None:
+        kwargs["dtype"] = args.dtype
     scheduler = args.scheduler if args.scheduler is not None else options.get("scheduler")
     client = _connect(scheduler) if scheduler is not None else None
     try:

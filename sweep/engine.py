@@ -25,7 +25,7 @@ from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
 from .execution.progress import progress_bar
 from .grid import Grid
-from .kernels import (KernelSpec, build, check_device, check_method_fits,
+from .kernels import (KernelSpec, build, check_device, check_dtype, check_method_fits,
                       check_observables_fit, check_tangent_fits, declarations, failure_summary, n_columns,
                       status_counts)
 from .methods import METHODS
@@ -369,7 +369,7 @@ def _drive_axes(effect) -> tuple[str, str]:
 
 def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, method,
              rtol, atol, chunk_size, specialize, check_stability, estimate_error,
-             stop_early, device="cpu", strobe_samples=STROBE_SAMPLES):
+             stop_early, device="cpu", strobe_samples=STROBE_SAMPLES, dtype="float64"):
     """Validate the arguments of `run` (before any compute); return the time
     settings, the kernel spec and the chunk size. Raises ValueError/TypeError."""
     if not isinstance(scene, Scene):
@@ -394,6 +394,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
 
     integrator = settings.integrator
     _check_device(device, integrator)
+    check_dtype(dtype, integrator)
     effects = declarations(grid.effects(scene))
     check_method_fits(integrator, effects)
     check_tangent_fits(integrator, effects, names)
@@ -428,6 +429,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         and not (refill and settings.n_steps > _config.SINE_TABLE_STEPS),
         device=device,
         strobe_samples=int(strobe_samples),
+        dtype=dtype,
     )
     return settings, spec, int(chunk_size)
 
@@ -457,6 +459,7 @@ def run(
     client=None,
     device: str = "cpu",
     strobe_samples: int = STROBE_SAMPLES,
+    dtype: str = "float64",
 ):
     """Integrate every trajectory of ``grid`` under ``scene``; return a labelled Dataset.
 
@@ -560,6 +563,14 @@ def run(
         the CPU kernels support; chunks are copied to the GPU and back, so memory
         stays O(chunk_size); results agree with the CPU's to rounding (the GPU's
         sine is not `sweep.kernels.vecmath`'s).
+    dtype : {"float64", "float32"}, default "float64"
+        Working precision of the state and the step's arithmetic (fixed-step methods;
+        `sweep.kernels.precision`). ``"float32"`` runs about twice as many trajectories
+        per SIMD register and per GPU clock, at the cost of float32 rounding: about
+        1e-7 relative per step, which grows over a run (see the README's work-precision
+        report: where basin labels and Lyapunov exponents change and where they do
+        not). The clock, the observables' accumulators and the outputs stay float64;
+        the step is ``float32(dt)``.
 
     Returns
     -------
@@ -586,7 +597,7 @@ def run(
         save_every=save_every, method=method, rtol=rtol, atol=atol, chunk_size=chunk_size,
         specialize=specialize, check_stability=check_stability,
         estimate_error=estimate_error, stop_early=stop_early, device=device,
-        strobe_samples=strobe_samples)
+        strobe_samples=strobe_samples, dtype=dtype)
     n = grid.size
     _check_memory(n, spec, settings)
     if client is not None:
@@ -626,7 +637,7 @@ def run(
     if estimate_error is not None:
         ds.attrs.update(_estimate(scene, grid, sample=estimate_error, t_end=t_end, dt=dt,
                                   t0=t0, t_transient=t_transient, method=method, rtol=rtol,
-                                  atol=atol))
+                                  atol=atol, dtype=dtype))
     return ds
 
 
@@ -745,9 +756,9 @@ def estimate_error(scene: Scene, grid: Grid, *, sample: int = 32, seed: int = 0,
     rng = np.random.default_rng(seed)
     picks = rng.choice(grid.size, size=min(int(sample), grid.size), replace=False)
     base = {k: v for k, v in run_kwargs.items()
-            if k in ("t_end", "dt", "t0", "t_transient", "method", "rtol", "atol")}
+            if k in ("t_end", "dt", "t0", "t_transient", "method", "rtol", "atol", "dtype")}
     base.update(observe=("final",), progress=False)
-    fine = dict(base)
+    fine = dict(base, dtype="float64")  # a float32 run's rounding is part of its error
     if method.adaptive:
         fine["rtol"] = (run_kwargs.get("rtol") or 1e-6) / 100
         fine["atol"] = (run_kwargs.get("atol") or 1e-9) / 100
@@ -757,6 +768,8 @@ def estimate_error(scene: Scene, grid: Grid, *, sample: int = 32, seed: int = 0,
         factor = 2.0**method.order / (2.0**method.order - 1)
         how = (f"Richardson: re-run with dt/2, difference x 2^{method.order}/"
                f"(2^{method.order} - 1)")
+    if base.get("dtype", "float64") != "float64":
+        how += "; the re-run in float64, so the estimate includes the float32 rounding"
     errors = []
     axes = grid.axes
     for flat in np.sort(picks):

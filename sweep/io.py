@@ -126,6 +126,8 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
         attrs["strobe_samples"] = spec.strobe_samples
     if spec.device != "cpu":  # where it ran, when not the default
         attrs["device"] = spec.device
+    if spec.dtype != "float64":  # its working precision, when not the default
+        attrs["dtype"] = spec.dtype
     return xr.Dataset(data_vars, coords, attrs)
 
 
@@ -156,6 +158,8 @@ def run_arguments(ds: xr.Dataset) -> dict:
         kwargs["save_every"] = int(a["save_every"])
     if "strobe_samples" in a:
         kwargs["strobe_samples"] = int(a["strobe_samples"])
+    if "dtype" in a:
+        kwargs["dtype"] = str(a["dtype"])
     for tolerance in ("rtol", "atol"):  # adaptive methods
         if tolerance in a:
             kwargs[tolerance] = float(a[tolerance])

@@ -49,7 +49,7 @@ import numpy as np
 from ._validate import check_flag, check_positive_int
 from .engine import check_strobe_samples, validate_settings
 from .grid import Grid, from_degrees
-from .kernels.spec import check_device
+from .kernels.spec import check_device, check_dtype
 from .observables import DEFAULT_OBSERVE, resolve
 from .physics import Scene, parameter_names, parameters
 
@@ -62,7 +62,7 @@ TABLES = ("scene", "grid", "run")
 #: Keys of the ``[run]`` table (keyword arguments of `sweep.run`).
 RUN_KEYS = ("t_end", "dt", "t0", "t_transient", "observe", "save_every", "method", "rtol",
             "atol", "chunk_size", "stop_early", "check_stability", "estimate_error",
-            "scheduler", "device", "strobe_samples")
+            "scheduler", "device", "strobe_samples", "dtype")
 
 #: Keys of ``[run]`` that say where the run executes, not what it computes: returned
 #: in ``options`` by `load_run`, never among the keyword arguments of `sweep.run`.
@@ -348,6 +348,8 @@ def _run(source: str, table: dict) -> dict[str, Any]:
             check_scheduler("scheduler", kwargs["scheduler"])
         if "device" in kwargs:
             check_device(kwargs["device"])
+        if "dtype" in kwargs:
+            check_dtype(kwargs["dtype"])
         if "estimate_error" in kwargs:
             check_positive_int("estimate_error", kwargs["estimate_error"],
                                "an int >= 1 (trajectories)")

@@ -74,10 +74,15 @@ def vsincos(x):
 '''
 
 
-def device_functions(text: str) -> str:
+def device_functions(text: str, dtype: str = "float64") -> str:
     """CPU physics functions (``@njit(**JIT)``) as CUDA device functions, after the
-    device's ``vsin``, ``vcos`` and ``vsincos``."""
-    return _DEVICE_MATH + "\n\n" + text.replace("@njit(**JIT)", "@cuda.jit(device=True)")
+    device's ``vsin``, ``vcos`` and ``vsincos`` (for float32: of the argument rounded
+    to float32, CUDA's ``sinf``/``cosf``, as a drive's phase comes from the float64
+    clock; see `sweep.kernels.precision`)."""
+    math = _DEVICE_MATH if dtype == "float64" else \
+        _DEVICE_MATH.replace("math.sin(x)", "math.sin(F(x))").replace("math.cos(x)",
+                                                                   "math.cos(F(x))")
+    return math + "\n\n" + text.replace("@njit(**JIT)", "@cuda.jit(device=True)")
 
 
 _NP_FLOOR = re.compile(r"\bnp\.floor\(")

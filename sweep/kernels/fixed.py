@@ -156,15 +156,17 @@ for col in range({width}):
 def _lane_dtypes(spec: KernelSpec, parts: dict, per_lane: list[str],
                  lane_sines: list[str]) -> dict[str, str]:
     """Every lane variable (name -> dtype): state, per-lane parameters, carried values,
-    per-lane drive sines, observable state, early-stop bookkeeping."""
-    lane = {"th": "float64", "om": "float64", "th0": "float64", "om0": "float64"}
-    lane.update({p: "float64" for p in per_lane})
-    lane.update({name: "float64" for name in parts["carried"]})
+    per-lane drive sines (in the spec's working precision), observable state (as the
+    observables declare it), early-stop bookkeeping."""
+    real = spec.dtype  # the working precision
+    lane = {"th": real, "om": real, "th0": real, "om0": real}
+    lane.update({p: real for p in per_lane})
+    lane.update({name: real for name in parts["carried"]})
     for name in spec.observe:
         lane.update(dict(OBSERVABLES[name].state))
     if spec.stop_early:
-        lane.update({"done": "bool_", "th_stop": "float64", "om_stop": "float64"})
-    lane.update({name: "float64" for name in lane_sines})
+        lane.update({"done": "bool_", "th_stop": real, "om_stop": real})
+    lane.update({name: real for name in lane_sines})
     return lane
 
 

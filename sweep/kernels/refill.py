@@ -40,7 +40,8 @@ def _sine_table(spec: KernelSpec, drives, shared: list[str]) -> tuple[str, list[
     # bound keeps every read inside the table anyway
     lines = [f"{name} = tab_{name}[min(ks, n_steps - 1)]" for name in names]
     table = NL.join(
-        [f"tab_{name} = np.empty(max(n_steps, 1))" for name in names] +
+        [f"tab_{name} = np.empty(max(n_steps, 1), dtype=np.{spec.dtype})"
+         for name in names] +
         ["for step in range(n_steps if n > 0 else 0):"] +
         [f"    {_load(spec, p, '0')}" for p in shared] +
         [f"    {line}" for line in drives.step] +

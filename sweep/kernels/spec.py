@@ -12,7 +12,8 @@ from .. import methods as _methods
 from ..observables import OBSERVABLES, STROBE_SAMPLES
 from ..physics import EFFECTS, EffectDeclaration
 
-__all__ = ["DEVICES", "KernelSpec", "Status", "check_device", "check_method_fits",
+__all__ = ["DEVICES", "DTYPES", "KernelSpec", "Status", "check_device", "check_dtype",
+           "check_method_fits",
            "check_observables_fit",
            "check_tangent_fits", "declarations", "failure_summary", "method_of", "n_columns",
            "status_counts", "tangent"]
@@ -20,6 +21,9 @@ __all__ = ["DEVICES", "KernelSpec", "Status", "check_device", "check_method_fits
 
 #: Where kernels run (`KernelSpec.device`).
 DEVICES = ("cpu", "cuda")
+
+#: The working precisions of the fixed-step kernels (`KernelSpec.dtype`).
+DTYPES = ("float64", "float32")
 
 
 class Status(enum.IntEnum):
@@ -139,6 +143,11 @@ class KernelSpec:
         Where the kernel runs: the CPU's SIMD lanes and threads, or an NVIDIA GPU with
         one CUDA thread per trajectory (`sweep.kernels.cuda`; fixed-step methods only,
         no refill or shared drive sines there).
+    dtype : {"float64", "float32"}
+        Working precision of the state, the parameters and the step's arithmetic
+        (`sweep.kernels.precision`; float32 for fixed-step methods only). The clock
+        ``t0 + n dt`` is formed in float64 and rounded once; observables accumulate
+        and report in float64.
     block : int
         Trajectories per block of the fixed-step, refill and adaptive kernels (SIMD
         lanes; a multiple of 8, or 1 for a few trajectories, each alone). Results do not
@@ -156,9 +165,11 @@ class KernelSpec:
     refill: bool = False
     device: str = "cpu"
     strobe_samples: int = STROBE_SAMPLES
+    dtype: str = "float64"
 
     def __post_init__(self) -> None:
         check_device(self.device)
+        check_dtype(self.dtype)
         if self.device == "cuda":  # one thread per trajectory: no lanes to refill or share
             object.__setattr__(self, "refill", False)
             object.__setattr__(self, "shared_forcing", False)
@@ -192,7 +203,8 @@ class KernelSpec:
                 f"save={self.save!r}, method={self.method!r}, stop_early={self.stop_early!r}, "
                 f"shared_forcing={self.shared_forcing!r}, block={self.block!r}, "
                 f"refill={self.refill!r}, device={self.device!r}, "
-                f"strobe_samples={self.strobe_samples!r}")
+                f"strobe_samples={self.strobe_samples!r}"
+                + (f", dtype={self.dtype!r}" if self.dtype != "float64" else ""))
 
 
 def n_columns(spec: KernelSpec) -> int:
@@ -217,6 +229,24 @@ def check_device(device, method=None) -> None:
         fixed = ", ".join(repr(n) for n, m in _methods.METHODS.items() if not m.adaptive)
         raise ValueError(f"device='cuda' runs fixed-step methods; method {method.name!r} "
                          f"is adaptive; accepted: one of {fixed}, or device='cpu'")
+
+
+def check_dtype(dtype, method=None) -> None:
+    """Refuse an unknown working precision and, given the method, float32 with an
+    adaptive method (its error control is written for float64's rounding).
+
+    Raises
+    ------
+    ValueError
+        Naming the dtype or method and what is accepted.
+    """
+    if not isinstance(dtype, str) or dtype not in DTYPES:
+        raise ValueError(f"dtype must be one of {', '.join(map(repr, DTYPES))}, got "
+                         f"{dtype!r}")
+    if dtype == "float32" and method is not None and method.adaptive:
+        fixed = ", ".join(repr(n) for n, m in _methods.METHODS.items() if not m.adaptive)
+        raise ValueError(f"dtype='float32' runs fixed-step methods; method {method.name!r} "
+                         f"is adaptive; accepted: one of {fixed}, or dtype='float64'")
 
 
 def tangent(spec: KernelSpec) -> bool:
