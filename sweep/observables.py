@@ -142,6 +142,16 @@ STROBE_MAX_PERIOD = 8
 #: (`benchmarks/forced_basins.py`: about 32 s -> 45 s for the whole map).
 STROBE_TOL = 1e-8
 
+#: The same test's tolerance in a ``dtype="float32"`` run, ``(absolute, relative)``:
+#: |difference| < 1e-6 + 2**-21 |x| [rad, rad/s]. 1e-8 is below float32's resolution
+#: (an angular velocity of 1.8 rad/s is held to 1.2e-7), so with it ``stop_early``
+#: would never stop. A converged float32 stroboscopic sequence repeats to about one
+#: float32 ulp of the velocity (measured on a forced map: at most 1.4e-7; the angle is
+#: float64, see `sweep.kernels.precision`), so this bound, ~14 ulps at 1.8 rad/s, is met
+#: soon after convergence while staying 100x tighter than the maps' default tolerance.
+#: The relative part covers faster velocities.
+STROBE_TOL_FLOAT32 = (1e-6, 2.0**-21)
+
 #: Steps between renormalisations of the ``lyapunov`` observable's tangent vectors. A
 #: stable RK4 step (|z| <= 2.83) grows a tangent vector by at most ~14 (the stability
 #: polynomial's modulus there), so 64 steps stay below 14**64 ~ 1e73, far from
@@ -258,7 +268,8 @@ OBSERVABLES: dict[str, Observable] = {
                 "            out[i, acc_sb_x], out[i, acc_sb_y] = out[i, acc_sb_y], out[i, acc_sb_x]"
             ),
             # settled: the ring is full and periodic with some p <= min(N/2, STROBE_MAX_PERIOD)
-            # within STROBE_TOL
+            # within STROBE_TOL (STROBE_TOL_FLOAT32 in a float32 kernel; the kernel
+            # generator writes ``STROBE_TOL(x)`` out as the working precision's bound)
             # (far tighter than the maps' default tolerance, so a stopped trajectory is
             # classified as it would be after a full run; see STROBE_TOL)
             settled=(
@@ -274,8 +285,9 @@ OBSERVABLES: dict[str, Observable] = {
                 "            acc_sb_x = (acc_sb_m + acc_sb_j) % NSTROBE\n"
                 "            acc_sb_y = (acc_sb_m + acc_sb_j + acc_sb_p) % NSTROBE\n"
                 "            if abs(out[i, COL + acc_sb_y] - out[i, COL + acc_sb_x] - TWO_PI * "
-                f"acc_sb_turns) >= {STROBE_TOL!r} or abs(out[i, COL + NSTROBE + "
-                f"acc_sb_y] - out[i, COL + NSTROBE + acc_sb_x]) >= {STROBE_TOL!r}:\n"
+                "acc_sb_turns) >= STROBE_TOL(out[i, COL + acc_sb_y]) or abs(out[i, COL + NSTROBE + "
+                "acc_sb_y] - out[i, COL + NSTROBE + acc_sb_x]) >= "
+                "STROBE_TOL(out[i, COL + NSTROBE + acc_sb_y]):\n"
                 "                acc_sb_periodic = False\n"
                 "                break\n"
                 "        if acc_sb_periodic:\n"

@@ -74,14 +74,54 @@ def vsincos(x):
 '''
 
 
+_DEVICE_MATH32 = '''\
+from sweep.kernels.vecmath import P1, P2, TWO_OVER_PI
+
+
+@cuda.jit(device=True)
+def _reduce(x):
+    # x - k pi/2 in float64 (x is float64: the angle or a drive's phase), rounded once
+    # to float32 and shifted by k quadrants: the CPU's sin32 reduction
+    k = math.floor(x * TWO_OVER_PI + 0.5)
+    return F((x - k * P1) - k * P2), int(k) & 3
+
+
+@cuda.jit(device=True)
+def _quadrant(s, c, q):
+    if q == 0:
+        return s, c
+    if q == 1:
+        return c, -s
+    if q == 2:
+        return -s, -c
+    return -c, s
+
+
+@cuda.jit(device=True)
+def vsin(x):
+    r, q = _reduce(x)
+    return _quadrant(math.sin(r), math.cos(r), q)[0]
+
+
+@cuda.jit(device=True)
+def vcos(x):
+    r, q = _reduce(x)
+    return _quadrant(math.sin(r), math.cos(r), q)[1]
+
+
+@cuda.jit(device=True)
+def vsincos(x):
+    r, q = _reduce(x)
+    return _quadrant(math.sin(r), math.cos(r), q)
+'''
+
+
 def device_functions(text: str, dtype: str = "float64") -> str:
     """CPU physics functions (``@njit(**JIT)``) as CUDA device functions, after the
-    device's ``vsin``, ``vcos`` and ``vsincos`` (for float32: of the argument rounded
-    to float32, CUDA's ``sinf``/``cosf``, as a drive's phase comes from the float64
-    clock; see `sweep.kernels.precision`)."""
-    math = _DEVICE_MATH if dtype == "float64" else \
-        _DEVICE_MATH.replace("math.sin(x)", "math.sin(F(x))").replace("math.cos(x)",
-                                                                   "math.cos(F(x))")
+    device's ``vsin``, ``vcos`` and ``vsincos``: CUDA's ``sin``/``cos`` in float64; in
+    float32 CUDA's ``sinf``/``cosf`` of the argument reduced in float64 (as
+    `sweep.kernels.vecmath.sin32` does; see `sweep.kernels.precision`)."""
+    math = _DEVICE_MATH if dtype == "float64" else _DEVICE_MATH32
     return math + "\n\n" + text.replace("@njit(**JIT)", "@cuda.jit(device=True)")
 
 

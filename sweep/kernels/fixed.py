@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 
 from ..observables import OBSERVABLES
 from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet
+from .precision import float64_symbols
 from .snippets import finite_test, renormalisations, snippets, stop_source
 from .spec import KernelSpec, Status, n_columns
 from .steppers import STEPPERS
@@ -159,13 +160,15 @@ def _lane_dtypes(spec: KernelSpec, parts: dict, per_lane: list[str],
     per-lane drive sines (in the spec's working precision), observable state (as the
     observables declare it), early-stop bookkeeping."""
     real = spec.dtype  # the working precision
-    lane = {"th": real, "om": real, "th0": real, "om0": real}
-    lane.update({p: real for p in per_lane})
+    keep = float64_symbols(spec.model, spec.effects) if real != "float64" else set()
+    angle = "float64" if "th0" in keep else real  # sweep.kernels.precision
+    lane = {"th": angle, "om": real, "th0": angle, "om0": real}
+    lane.update({p: "float64" if p in keep else real for p in per_lane})
     lane.update({name: real for name in parts["carried"]})
     for name in spec.observe:
         lane.update(dict(OBSERVABLES[name].state))
     if spec.stop_early:
-        lane.update({"done": "bool_", "th_stop": real, "om_stop": real})
+        lane.update({"done": "bool_", "th_stop": angle, "om_stop": real})
     lane.update({name: real for name in lane_sines})
     return lane
 

@@ -9,20 +9,35 @@ float32. So a float32 module is the float64 module's text with
 
 - every float literal and ``math.pi`` wrapped as ``F(...)`` (``F = np.float32``: LLVM
   folds the conversion, so these are float32 constants);
-- the working-precision lanes (state, parameters, stage values, drive sines) allocated
-  as float32 (`sweep.kernels.fixed`), the drives' phases rounded once to float32 from
-  the float64 clock (`sweep.kernels.terms.drive_sine`), the float32 sine
+- every parameter load ``x = params[...]`` rounded to float32 (``F(params[...])``),
+  except the ones that `float64_symbols` keeps: the start angle of the nonlinear
+  pendulum and the drives' frequencies and phases;
+- the working-precision lanes (angular velocity, parameters, stage values, drive sines)
+  allocated as float32 (`sweep.kernels.fixed`), the float32 sine
   (`sweep.kernels.vecmath.sin32`) imported as ``vsin``;
-- the kernel renamed and wrapped by `wrapper`, which hands it the parameter table in
-  float32 and the step ``F(dt)``.
+- the kernel renamed and wrapped by `wrapper`, which hands it the step ``F(dt)``.
 
-What stays float64, on purpose: the clock ``t0 + n F(dt)`` (formed in float64 and
-rounded once per use, so time is never accumulated in float32), the observables'
-accumulators (a sum over 10^5 steps in float32 would lose ~1e-2 of itself) and the
-outputs. The step of a float32 run is ``F(dt)``, consistently in the state and the
-clock, so its time grid is ``t0 + n F(dt)`` (relative difference from ``dt`` below
-6e-8). ``tests/test_float32.py`` checks from numba's type inference that the step's
-variables are float32.
+What stays float64, on purpose:
+
+- the nonlinear pendulum's angle ``th``. Its unwrapped value grows by 2 pi every turn,
+  and float32 would hold it only to ulp(|theta|) / 2: 3e-5 at 500 rad, 2.4e-4 past
+  4000 rad, an absolute rounding of the angle at every step that grows with time and
+  made every rotating attractor of a forced map unresolvable after a few hundred
+  periods. In float64 only the increments ``dt * k`` (float32, each rounded relative
+  to itself) carry float32's rounding. The stage angles ``th + dt/2 k1`` and the
+  update are float64 additions; `vecmath.sin32` reduces its float64 argument in
+  float64 and evaluates in float32. (The linear model's ``th`` is a coordinate, not an
+  angle, and stays float32.)
+- the drives' phases ``W t + phi``: frequency and phase stay float64 and the clock
+  ``t0 + n F(dt)`` is formed in float64, so the phase does not lose digits as ``t``
+  grows (W rounded to float32 would shift it by 1e-4 rad after 2000 s).
+- the observables' accumulators (a sum over 10^5 steps in float32 would lose ~1e-2 of
+  itself) and the outputs.
+
+The step of a float32 run is ``F(dt)``, consistently in the state and the clock, so
+its time grid is ``t0 + n F(dt)`` (relative difference from ``dt`` below 6e-8).
+``tests/test_float32.py`` checks from the machine code that the step is float32 SIMD
+arithmetic.
 """
 
 from __future__ import annotations
@@ -31,7 +46,7 @@ import io
 import re
 import tokenize
 
-__all__ = ["HEADER", "single", "wrapper"]
+__all__ = ["HEADER", "clock", "float64_symbols", "single", "single_loads", "wrapper"]
 
 #: The float32 CPU module's import of the float32 sine (``F = np.float32`` is set
 #: after NumPy's import).
@@ -64,14 +79,62 @@ def single(text: str) -> str:
     return text
 
 
+_LOAD = re.compile(r"^(?P<lead>[ \t]*)(?P<name>\w+) = (?P<load>params\[[^\]\n]*\])[ \t]*$",
+                   re.MULTILINE)
+
+
+def float64_symbols(model: str, effects) -> set[str]:
+    """The kernel symbols a float32 kernel keeps in float64: ``th0`` for the nonlinear
+    model (its angle is float64, see the module notes) and each drive's frequency and
+    phase (the drive's phase is formed in float64)."""
+    keep = {"th0"} if model == "nonlinear" else set()
+    for effect in effects:
+        if effect.drive is not None:
+            keep |= {effect.drive.frequency, effect.drive.phase}
+    return keep
+
+
+def single_loads(text: str, keep) -> str:
+    """``text`` with every parameter load ``x = params[...]`` written
+    ``x = F(params[...])``, except for the symbols in ``keep``."""
+    return _LOAD.sub(lambda m: m.group(0) if m.group("name") in keep else
+                     f"{m.group('lead')}{m.group('name')} = F({m.group('load')})", text)
+
+
+# a compiled kernel's head: the step is its third parameter
+_HEAD = re.compile(r"^(?P<head>@(?:njit|cuda\.jit)[^\n]*\ndef \w+\(params, t0, )dt(?P<rest>,[^)]*\):\n)"
+                   r"(?P<indent>[ \t]+)", re.MULTILINE)
+# products that are times: a step count times the step, a stage's offset c dt, a
+# forcing period in steps
+_TIMES = re.compile(r"(\b(?:step|k_state|ks)\b|\((?:step|ks) \+ 1\)|\(acc_n_steady - 1\)|"
+                    r"\(n_steps - max\(n_transient, 0\)\)|\bW) \* dt\b")
+_OFFSET = re.compile(r"^(?P<lead>[ \t]*cdt\d+) = dt \* F\((?P<c>[^()]*)\)$", re.MULTILINE)
+
+
+def clock(text: str) -> str:
+    """``text`` with the clock in float64 and the step in float32: each compiled
+    kernel takes the float64 step as ``dt_clock`` and steps with ``dt = F(dt_clock)``;
+    every time (``t0 + n dt_clock``, a stage's ``c dt_clock``, a window's length, the
+    forcing period in steps) is formed from ``dt_clock``. So the drives' phases and
+    the stroboscopic samples stay on the float64 time grid: a float32 clock
+    ``n F(dt)`` would drift from the forcing period by ~3e-8 of itself, and a
+    stroboscopic sequence with it (measured: 1e-6 rad/s per period, so ``stop_early``
+    never stopped)."""
+    text = _HEAD.sub(lambda m: f"{m.group('head')}dt_clock{m.group('rest')}"
+                               f"{m.group('indent')}dt = F(dt_clock)\n{m.group('indent')}",
+                     text)
+    text = _OFFSET.sub(lambda m: f"{m.group('lead')} = dt_clock * {m.group('c')}", text)
+    return _TIMES.sub(lambda m: f"{m.group(1)} * dt_clock", text)
+
+
 def wrapper(name: str) -> str:
     """Source of ``kernel`` with the fixed-step contract over the float32 kernel
-    ``name``: the parameter table converted to float32 (a copy of the chunk, half its
-    size), the step rounded to float32; outputs stay float64."""
+    ``name`` (the parameter table and the step stay float64: each trajectory's loads
+    round the table, `single_loads`, and the kernel its step, `clock`); outputs stay
+    float64."""
     return f'''
 
 def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
     """The float32 kernel {name} under the fixed-step contract (float64 arguments)."""
-    {name}(np.ascontiguousarray(params, dtype=np.float32), t0, np.float32(dt), n_steps,
-           n_transient, save_every, out, status, saved)
+    {name}(params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
 '''

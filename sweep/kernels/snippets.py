@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from ..observables import OBSERVABLES
+import re
+
+from ..observables import OBSERVABLES, STROBE_TOL, STROBE_TOL_FLOAT32
 from .lanes import indent
 from .spec import KernelSpec
 from .terms import tension_terms
@@ -13,6 +15,20 @@ __all__ = ["finite_test", "renormalisations", "snippets", "stop_source"]
 def _counts(code: str, spec: KernelSpec) -> str:
     """``NSTROBE`` -> the spec's number of stroboscopic samples."""
     return code.replace("NSTROBE", str(spec.strobe_samples))
+
+
+_TOLERANCE = re.compile(r"STROBE_TOL\(([^()]*)\)")
+
+
+def _tolerances(code: str, spec: KernelSpec) -> str:
+    """``STROBE_TOL(x)`` -> the strobe test's bound on a difference next to ``x`` in the
+    spec's working precision: ``STROBE_TOL`` in float64 (absolute), ``a + r * abs(x)``
+    in float32 (`sweep.observables.STROBE_TOL_FLOAT32`)."""
+    if spec.dtype == "float64":
+        return _TOLERANCE.sub(repr(STROBE_TOL), code)
+    absolute, relative = STROBE_TOL_FLOAT32
+    return _TOLERANCE.sub(lambda m: f"({absolute!r} + {relative!r} * abs({m.group(1)}))",
+                          code)
 
 
 def snippets(spec: KernelSpec, part: str, time: str = "(t0 + k_state * dt)") -> str:
@@ -48,8 +64,8 @@ def stop_source(spec: KernelSpec, action: str = "break") -> str:
         flag = f"settled_{len(flags)}"
         flags.append(flag)
         lines.append(f"# {name} settled?\n"
-                     + _counts(obs.settled.replace("COL", str(col)), spec).replace("SETTLED",
-                                                                                   flag))
+                     + _counts(_tolerances(obs.settled, spec).replace("COL", str(col)),
+                               spec).replace("SETTLED", flag))
         col += obs.n_columns(spec)
     lines.append(f"if {' and '.join(flags)}:\n" + indent(action, 1))
     return "\n".join(lines)
