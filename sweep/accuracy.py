@@ -477,7 +477,8 @@ def _reference(scene, grid, t_end, t0, kind):
 # =========================================================================== work-precision
 def work_precision(scene: Scene, sample, methods, *, t_end: float, t0: float = 0.0,
                    dts=None, tolerances=None, dt_max: float | None = None,
-                   reference: str = "auto", repeats: int = 3, floor: float = 1e-13):
+                   reference: str = "auto", repeats: int = 3, floor: float = 1e-13,
+                   dtype: str = "float64"):
     """Error against cost of several methods on the trajectories of ``sample``.
 
     Parameters
@@ -499,6 +500,10 @@ def work_precision(scene: Scene, sample, methods, *, t_end: float, t0: float = 0
         Wall time is the best of this many runs, after one run that compiles.
     floor : float
         Errors at or below this [rad] are left out of the order fit.
+    dtype : {"float64", "float32"}
+        Working precision of the runs (`sweep.run`'s ``dtype``; float32 with
+        fixed-step methods only): what float32's rounding costs in accuracy, against
+        the same reference.
 
     Returns
     -------
@@ -547,7 +552,7 @@ def work_precision(scene: Scene, sample, methods, *, t_end: float, t0: float = 0
                 warm = dict(kwargs, t_end=t0 + level)
             # unstable steps are data points of the diagram, not errors
             common = dict(t0=t0, method=method, observe=("final",), progress=False,
-                          check_stability=False)
+                          check_stability=False, dtype=dtype)
             run(scene, grid, **warm, **common)  # compile (or load) the kernel first
             best = math.inf
             for _ in range(repeats):
@@ -595,7 +600,7 @@ def work_precision(scene: Scene, sample, methods, *, t_end: float, t0: float = 0
         coords={"integrator": [m.name for m in integrators], "level": np.arange(n_levels)},
         attrs={"scene": json.dumps(scene.to_dict(), sort_keys=True),
                "model": scene.model, "t0": t0, "t_end": t_end,
-               "n_trajectories": n, "reference": kind,
+               "n_trajectories": n, "reference": kind, "dtype": dtype,
                "error": "max(|theta - theta_ref|, |omega - omega_ref| / sqrt(g/L)) at t_end",
                "sample_axes": " ".join(grid.dims)},
     )

@@ -565,12 +565,13 @@ def run(
         sine is not `sweep.kernels.vecmath`'s).
     dtype : {"float64", "float32"}, default "float64"
         Working precision of the state and the step's arithmetic (fixed-step methods;
-        `sweep.kernels.precision`). ``"float32"`` runs about twice as many trajectories
-        per SIMD register and per GPU clock, at the cost of float32 rounding: about
-        1e-7 relative per step, which grows over a run (see the README's work-precision
-        report: where basin labels and Lyapunov exponents change and where they do
-        not). The clock, the observables' accumulators and the outputs stay float64;
-        the step is ``float32(dt)``.
+        `sweep.kernels.precision`). ``"float32"`` runs more trajectories per SIMD
+        register and per GPU clock, at the cost of float32 rounding: about 6e-8
+        relative per step, which grows over a run (see the README's section on float32:
+        its speed, and where basin labels and Lyapunov exponents change and where they
+        do not). The nonlinear pendulum's angle, the drives' frequencies and phases, the
+        clock, the observables' accumulators and the outputs stay float64; the state
+        steps by ``float32(dt)``.
 
     Returns
     -------

@@ -170,3 +170,20 @@ def test_period_map_script(tmp_path):
     assert result["trajectories"] == 4 * 4 and result["run_s"] > 0
     assert 0.0 <= result["resolved_fraction"] <= 1.0
     assert (tmp_path / "period_map.md").read_text().startswith("# Periodicity map")
+
+
+def test_float32_benchmark_runs_and_writes_its_tables(tmp_path):
+    """``benchmarks/float32.py --quick``: every part runs at tiny size, writes its JSON
+    and Markdown, and its numbers are sane (rates positive, errors finite, the basin
+    map's starts accounted for). Correctness of float32 itself: tests/test_float32.py."""
+    float32 = importlib.import_module("float32")
+    assert float32.main(["--quick", "--output", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "float32.json").read_text())
+    for rate in result["speed"]["rates"].values():
+        assert rate["float64"] > 0 and rate["float32"] > 0
+    for row in result["precision"].values():
+        assert np.all(np.isfinite(row["float32"]["error_max"]))
+    for row in result["basins"].values():
+        assert 0 <= row["changed"] + row["unresolved"] <= row["starts"] == 81
+    assert result["basins"]["float64"]["unresolved"] < 81  # the map resolves something
+    assert "| chaotic (A = 1.5)" in (tmp_path / "float32.md").read_text()

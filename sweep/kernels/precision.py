@@ -34,8 +34,11 @@ What stays float64, on purpose:
 - the observables' accumulators (a sum over 10^5 steps in float32 would lose ~1e-2 of
   itself) and the outputs.
 
-The step of a float32 run is ``F(dt)``, consistently in the state and the clock, so
-its time grid is ``t0 + n F(dt)`` (relative difference from ``dt`` below 6e-8).
+The state steps by ``F(dt)``; the clock ``t0 + n dt`` stays float64 (`clock`), so
+the state's own time runs ``F(dt) / dt = 1 + O(6e-8)`` faster or slower than the
+clock's: a relative change of every time scale of that size, as if ``g/L`` were
+rounded to float32 too (it is). The forcing, the stroboscopic samples and the saved
+times stay on the float64 grid.
 ``tests/test_float32.py`` checks from the machine code that the step is float32 SIMD
 arithmetic.
 """

@@ -213,6 +213,19 @@ def n_columns(spec: KernelSpec) -> int:
     return sum(OBSERVABLES[name].n_columns(spec) for name in spec.observe)
 
 
+def _check_option(name: str, value, accepted: tuple[str, ...], default: str, method) -> None:
+    """Refuse a ``name`` not in ``accepted`` and, given the method, an adaptive method
+    with any value but ``default`` (those kernels are fixed-step only)."""
+    if not isinstance(value, str) or value not in accepted:
+        raise ValueError(f"{name} must be one of {', '.join(map(repr, accepted))}, got "
+                         f"{value!r}")
+    if value != default and method is not None and method.adaptive:
+        fixed = ", ".join(repr(n) for n, m in _methods.METHODS.items() if not m.adaptive)
+        raise ValueError(f"{name}={value!r} runs fixed-step methods; method "
+                         f"{method.name!r} is adaptive; accepted: one of {fixed}, or "
+                         f"{name}={default!r}")
+
+
 def check_device(device, method=None) -> None:
     """Refuse an unknown device and, given the method, an adaptive method on the GPU
     (its kernel is fixed-step only).
@@ -222,13 +235,7 @@ def check_device(device, method=None) -> None:
     ValueError
         Naming the device or method and what is accepted.
     """
-    if not isinstance(device, str) or device not in DEVICES:
-        raise ValueError(f"device must be one of {', '.join(map(repr, DEVICES))}, got "
-                         f"{device!r}")
-    if device == "cuda" and method is not None and method.adaptive:
-        fixed = ", ".join(repr(n) for n, m in _methods.METHODS.items() if not m.adaptive)
-        raise ValueError(f"device='cuda' runs fixed-step methods; method {method.name!r} "
-                         f"is adaptive; accepted: one of {fixed}, or device='cpu'")
+    _check_option("device", device, DEVICES, "cpu", method)
 
 
 def check_dtype(dtype, method=None) -> None:
@@ -240,13 +247,7 @@ def check_dtype(dtype, method=None) -> None:
     ValueError
         Naming the dtype or method and what is accepted.
     """
-    if not isinstance(dtype, str) or dtype not in DTYPES:
-        raise ValueError(f"dtype must be one of {', '.join(map(repr, DTYPES))}, got "
-                         f"{dtype!r}")
-    if dtype == "float32" and method is not None and method.adaptive:
-        fixed = ", ".join(repr(n) for n, m in _methods.METHODS.items() if not m.adaptive)
-        raise ValueError(f"dtype='float32' runs fixed-step methods; method {method.name!r} "
-                         f"is adaptive; accepted: one of {fixed}, or dtype='float64'")
+    _check_option("dtype", dtype, DTYPES, "float64", method)
 
 
 def tangent(spec: KernelSpec) -> bool:
