@@ -369,7 +369,8 @@ def _drive_axes(effect) -> tuple[str, str]:
 
 def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, method,
              rtol, atol, chunk_size, specialize, check_stability, estimate_error,
-             stop_early, device="cpu", strobe_samples=STROBE_SAMPLES, dtype="float64"):
+             stop_early, device="cpu", strobe_samples=STROBE_SAMPLES, dtype="float64",
+             attractors=None):
     """Validate the arguments of `run` (before any compute); return the time
     settings, the kernel spec and the chunk size. Raises ValueError/TypeError."""
     if not isinstance(scene, Scene):
@@ -380,6 +381,13 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     settings = validate_settings(t_end=t_end, dt=dt, t0=t0, t_transient=t_transient,
                                  save_every=save_every, method=method, rtol=rtol, atol=atol)
     names = resolve(observe)
+    orbits = attractor_orbits(attractors)
+    if orbits:
+        names = resolve(names + ("attractor",))
+    elif "attractor" in names:
+        raise ValueError("observable 'attractor' matches the run against an attractor "
+                         "catalogue; accepted: attractors=sweep.maps.attractor_catalogue("
+                         "pilot_run), or observe without 'attractor'")
     if not names and save_every is None:
         raise ValueError("observe is empty and save_every is None -- nothing would be "
                          "computed; accepted: at least one of final, winding, theta_max, "
@@ -430,8 +438,53 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         device=device,
         strobe_samples=int(strobe_samples),
         dtype=dtype,
+        attractors=orbits,
     )
     return settings, spec, int(chunk_size)
+
+
+def attractor_orbits(attractors) -> tuple:
+    """The kernel's attractor catalogue (`sweep.kernels.KernelSpec.attractors`) from a
+    catalogue of stroboscopic rings (`sweep.maps.attractor_catalogue`): per attractor,
+    the last ``period`` points of its ring, ``(theta mod 2 pi, omega)``; ``()`` for None.
+
+    Raises
+    ------
+    ValueError
+        Naming what is wrong with the catalogue and what is accepted.
+    """
+    if attractors is None:
+        return ()
+    accepted = ("accepted: a catalogue from sweep.maps.attractor_catalogue(run), a mapping "
+                "with 'theta', 'omega' (m x P stroboscopic rings, finite) and 'period' "
+                "(m ints, 1 <= period <= P)")
+    try:
+        theta = np.asarray(attractors["theta"], dtype=np.float64)
+        omega = np.asarray(attractors["omega"], dtype=np.float64)
+        period = np.asarray(attractors["period"])
+    except (KeyError, TypeError, ValueError, IndexError):
+        raise ValueError(f"attractors must be an attractor catalogue, got {attractors!r}; "
+                         f"{accepted}") from None
+    if theta.ndim != 2 or theta.shape != omega.shape or period.shape != theta.shape[:1] \
+            or theta.shape[0] == 0 or not np.all(np.isfinite(theta)) \
+            or not np.all(np.isfinite(omega)) or not np.issubdtype(period.dtype, np.integer) \
+            or np.any(period < 1) or np.any(period > theta.shape[1]):
+        raise ValueError(f"attractors: rings of shape {theta.shape} and {omega.shape}, "
+                         f"periods {period.tolist()!r}; {accepted}")
+    return tuple(tuple((float(np.mod(t, 2 * np.pi)), float(w))
+                       for t, w in zip(theta[a, -p:], omega[a, -p:]))
+                 for a, p in enumerate(int(q) for q in period))
+
+
+def _catalogue_attrs(attractors) -> dict:
+    """The catalogue's rings as dataset attributes (for `sweep.maps.basins`)."""
+    if attractors is None:
+        return {}
+    theta = np.asarray(attractors["theta"], dtype=np.float64)
+    return {"attractors_theta": theta.ravel(),
+            "attractors_omega": np.asarray(attractors["omega"], dtype=np.float64).ravel(),
+            "attractors_period": np.asarray(attractors["period"], dtype=np.int64),
+            "attractors_samples": int(theta.shape[1])}
 
 
 def run(
@@ -460,6 +513,7 @@ def run(
     device: str = "cpu",
     strobe_samples: int = STROBE_SAMPLES,
     dtype: str = "float64",
+    attractors=None,
 ):
     """Integrate every trajectory of ``grid`` under ``scene``; return a labelled Dataset.
 
@@ -572,6 +626,17 @@ def run(
         do not). The nonlinear pendulum's angle, the drives' frequencies and phases, the
         clock, the observables' accumulators and the outputs stay float64; the state
         steps by ``float32(dt)``.
+    attractors : mapping, optional
+        An attractor catalogue of the scene (`sweep.maps.attractor_catalogue` of a
+        pilot run, e.g. a coarse grid with ``stop_early``): adds the ``attractor``
+        observable, which records the catalogued attractor a trajectory is seen to
+        settle on (its stroboscopic point within `sweep.observables.ATTRACTOR_TOL` of
+        the attractor orbit's successive points for `ATTRACTOR_MATCHES` periods
+        running). With ``stop_early`` that match alone stops the trajectory, long
+        before the ``strobe`` test's 1e-8 periodicity could; `sweep.maps.basins` labels
+        such a trajectory by the catalogued attractor. Attractors not in the catalogue
+        are still found by the ``strobe`` test. The catalogue is stored in the
+        dataset's attributes (``attractors_*``).
 
     Returns
     -------
@@ -598,7 +663,7 @@ def run(
         save_every=save_every, method=method, rtol=rtol, atol=atol, chunk_size=chunk_size,
         specialize=specialize, check_stability=check_stability,
         estimate_error=estimate_error, stop_early=stop_early, device=device,
-        strobe_samples=strobe_samples, dtype=dtype)
+        strobe_samples=strobe_samples, dtype=dtype, attractors=attractors)
     n = grid.size
     _check_memory(n, spec, settings)
     if client is not None:
@@ -633,6 +698,7 @@ def run(
         warnings.warn(failures, RuntimeWarning, stacklevel=2)
     ds = io.to_dataset(scene=scene, grid=grid, settings=settings, spec=spec, out=out,
                        status=status, saved=persisted.get("saved"))
+    ds.attrs.update(_catalogue_attrs(attractors))
     if settings.adaptive:
         _add_step_statistics(ds, grid, settings, persisted["stats"])
     if estimate_error is not None:

@@ -163,6 +163,13 @@ def run_arguments(ds: xr.Dataset) -> dict:
     for tolerance in ("rtol", "atol"):  # adaptive methods
         if tolerance in a:
             kwargs[tolerance] = float(a[tolerance])
+    if "attractors_theta" in a:  # the attractor catalogue (sweep.run's attractors=)
+        samples = int(a["attractors_samples"])
+        kwargs["attractors"] = {
+            name: np.atleast_1d(np.asarray(a[f"attractors_{name}"], dtype=np.float64))
+            .reshape(-1, samples) for name in ("theta", "omega")}
+        kwargs["attractors"]["period"] = np.atleast_1d(
+            np.asarray(a["attractors_period"], dtype=np.int64))
     return kwargs
 
 

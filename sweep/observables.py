@@ -87,6 +87,11 @@ class Observable:
         An expression that must be True for the trajectory's outputs to count as
         finite (beside the state being finite); a False makes its status
         ``NONFINITE``.
+    alternative : bool
+        With ``stop_early``, its ``settled`` alone is enough to stop: a trajectory
+        stops when every other observed observable is settled *or* any alternative
+        one is (``attractor``: a match with a known attractor answers the question
+        the ``strobe`` test answers more slowly).
     """
 
     name: str
@@ -107,6 +112,7 @@ class Observable:
     renormalise: str = ""
     renormalise_every: int = 0
     finite: str = ""
+    alternative: bool = False
 
     def n_samples(self, spec=None) -> int:
         """Columns per variable for a kernel spec (its ``sample_option`` field), or
@@ -151,6 +157,20 @@ STROBE_TOL = 1e-8
 #: soon after convergence while staying 100x tighter than the maps' default tolerance.
 #: The relative part covers faster velocities.
 STROBE_TOL_FLOAT32 = (1e-6, 2.0**-21)
+
+#: Tolerance [rad, rad/s] of the ``attractor`` observable's match of a stroboscopic
+#: point with a catalogued attractor's point (angle modulo 2 pi): the maps' default
+#: identity tolerance (`sweep.maps.basins`), so a match is what `maps.basins` would
+#: call the same attractor.
+ATTRACTOR_TOL = 1e-3
+
+#: Forcing periods running on which a stroboscopic point must match the successive
+#: points of one catalogued attractor's orbit before the ``attractor`` observable
+#: settles. One match can be a transient passing by; a run of them, each at the orbit's
+#: next point, is a trajectory moving with the attractor (and contracting onto it:
+#: `benchmarks/forced_basins.py` checks every start of the 1200^2 map against the full
+#: run).
+ATTRACTOR_MATCHES = 3
 
 #: Steps between renormalisations of the ``lyapunov`` observable's tangent vectors. A
 #: stable RK4 step (|z| <= 2.83) grows a tangent vector by at most ~14 (the stability
@@ -301,6 +321,53 @@ OBSERVABLES: dict[str, Observable] = {
             requires_forcing=True,
             state=(("acc_sb_S", "int64"), ("acc_sb_k", "int64"), ("acc_sb_m", "int64"),
                    ("acc_sb_new", "bool_")),
+        ),
+        Observable(
+            name="attractor",
+            variables=(
+                ("attractor", "1",
+                 "index (in the run's attractor catalogue, attributes attractors_*) of "
+                 "the attractor the trajectory settled on: its stroboscopic point within "
+                 "ATTRACTOR_TOL of the successive points of that attractor's orbit for "
+                 "ATTRACTOR_MATCHES forcing periods running; -1 if it never was"),
+            ),
+            # the catalogue's points are pasted in by the kernel generator: CAT_TH, CAT_OM
+            # (angle in [0, 2 pi), velocity), CAT_NEXT (the orbit's next point), CAT_A
+            # (the attractor of each point), N_POINTS
+            init=(
+                "acc_at_S = round(TWO_PI / (W * dt))\n"
+                "acc_at_k = 0\n"
+                "acc_at_j = 0\n"
+                "acc_at_n = 0"
+            ),
+            update=(
+                "if acc_at_k == 0 and acc_at_n < ATTRACTOR_MATCHES:\n"
+                "    acc_at_w = th - TWO_PI * math.floor(th / TWO_PI)\n"
+                "    acc_at_q = -1\n"
+                "    for acc_at_c in range(N_POINTS):\n"
+                "        acc_at_d = abs(acc_at_w - CAT_TH[acc_at_c])\n"
+                "        if min(acc_at_d, TWO_PI - acc_at_d) < ATTRACTOR_TOL and "
+                "abs(om - CAT_OM[acc_at_c]) < ATTRACTOR_TOL:\n"
+                "            acc_at_q = acc_at_c\n"
+                "            break\n"
+                "    if acc_at_q < 0:\n"
+                "        acc_at_n = 0\n"
+                "    elif acc_at_n > 0 and acc_at_q == CAT_NEXT[acc_at_j]:\n"
+                "        acc_at_n += 1\n"
+                "    else:\n"
+                "        acc_at_n = 1\n"
+                "    acc_at_j = max(acc_at_q, 0)\n"
+                "acc_at_k += 1\n"
+                "if acc_at_k == acc_at_S:\n"
+                "    acc_at_k = 0"
+            ),
+            final="out[i, COL] = CAT_A[acc_at_j] if acc_at_n >= ATTRACTOR_MATCHES else -1",
+            settled="SETTLED = acc_at_n >= ATTRACTOR_MATCHES",
+            steady=True,
+            requires_forcing=True,
+            alternative=True,
+            state=(("acc_at_S", "int64"), ("acc_at_k", "int64"), ("acc_at_j", "int64"),
+                   ("acc_at_n", "int64")),
         ),
         Observable(
             name="capture",

@@ -57,7 +57,8 @@ def test_stop_early_refuses_what_needs_the_whole_run():
     scene = sweep.Scene(effects=(sweep.Damping(0.4),))
     grid = sweep.Grid(theta0=[1.0])
     with pytest.raises(ValueError, match=r"stop_early=True: observable 'final' needs the "
-                                         r"whole run; accepted with stop_early: strobe, capture"):
+                                         r"whole run; accepted with stop_early: strobe, attractor, "
+                                         r"capture"):
         sweep.run(scene, grid, t_end=1.0, dt=0.1, observe=("final", "capture"),
                   stop_early=True)
     with pytest.raises(ValueError, match=r"cannot save trajectories"):

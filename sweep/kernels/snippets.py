@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import re
 
-from ..observables import OBSERVABLES, STROBE_TOL, STROBE_TOL_FLOAT32
+from ..observables import (ATTRACTOR_MATCHES, ATTRACTOR_TOL, OBSERVABLES, STROBE_TOL,
+                           STROBE_TOL_FLOAT32)
 from .lanes import indent
 from .spec import KernelSpec
 from .terms import tension_terms
@@ -13,8 +14,27 @@ __all__ = ["finite_test", "renormalisations", "snippets", "stop_source"]
 
 
 def _counts(code: str, spec: KernelSpec) -> str:
-    """``NSTROBE`` -> the spec's number of stroboscopic samples."""
-    return code.replace("NSTROBE", str(spec.strobe_samples))
+    """``NSTROBE`` -> the spec's number of stroboscopic samples; the attractor
+    catalogue's names (``CAT_TH``, ``CAT_OM``, ``CAT_NEXT``, ``CAT_A``, ``N_POINTS``,
+    ``ATTRACTOR_TOL``, ``ATTRACTOR_MATCHES``) -> its points as tuples and the
+    constants (`sweep.observables`, the ``attractor`` observable)."""
+    code = code.replace("NSTROBE", str(spec.strobe_samples))
+    if "CAT_" not in code and "ATTRACTOR_" not in code:
+        return code
+    th, om, following, owner = [], [], [], []
+    for a, orbit in enumerate(spec.attractors):
+        start = len(th)
+        for k, (theta, omega) in enumerate(orbit):
+            th.append(repr(float(theta)))
+            om.append(repr(float(omega)))
+            following.append(str(start + (k + 1) % len(orbit)))
+            owner.append(str(a))
+    for name, values in (("CAT_TH", th), ("CAT_OM", om), ("CAT_NEXT", following),
+                         ("CAT_A", owner)):
+        code = re.sub(rf"\b{name}\b", "(" + ", ".join(values) + ",)", code)
+    return (code.replace("N_POINTS", str(len(th)))
+            .replace("ATTRACTOR_TOL", repr(ATTRACTOR_TOL))
+            .replace("ATTRACTOR_MATCHES", str(ATTRACTOR_MATCHES)))
 
 
 _TOLERANCE = re.compile(r"STROBE_TOL\(([^()]*)\)")
@@ -51,23 +71,27 @@ def snippets(spec: KernelSpec, part: str, time: str = "(t0 + k_state * dt)") -> 
 
 def stop_source(spec: KernelSpec, action: str = "break") -> str:
     """Early stop (spec.stop_early): each observable's ``settled`` snippet sets its own
-    flag; ``action`` runs when all flags are set."""
+    flag; ``action`` runs when all flags are set, or any flag of an ``alternative``
+    observable."""
     if not spec.stop_early:
         return ""
-    lines, flags, col = [], [], 0
+    lines, flags, alternatives, col = [], [], [], 0
     for name in spec.observe:
         obs = OBSERVABLES[name]
         if not obs.settled:
             raise ValueError(f"observable {name!r} has no settled test, so a trajectory "
                              "cannot stop early; accepted with stop_early: "
                              + ", ".join(n for n, o in OBSERVABLES.items() if o.settled))
-        flag = f"settled_{len(flags)}"
-        flags.append(flag)
+        flag = f"settled_{len(flags) + len(alternatives)}"
+        (alternatives if obs.alternative else flags).append(flag)
         lines.append(f"# {name} settled?\n"
                      + _counts(_tolerances(obs.settled, spec).replace("COL", str(col)),
                                spec).replace("SETTLED", flag))
         col += obs.n_columns(spec)
-    lines.append(f"if {' and '.join(flags)}:\n" + indent(action, 1))
+    test = " or ".join(([f"({' and '.join(flags)})"] if flags else []) + alternatives)
+    if not alternatives:
+        test = " and ".join(flags)
+    lines.append(f"if {test}:\n" + indent(action, 1))
     return "\n".join(lines)
 
 

@@ -148,6 +148,10 @@ class KernelSpec:
         (`sweep.kernels.precision`; float32 for fixed-step methods only). The clock
         ``t0 + n dt`` is formed in float64 and rounded once; observables accumulate
         and report in float64.
+    attractors : tuple of tuple of (float, float)
+        The attractor catalogue of the ``attractor`` observable: per attractor, its
+        orbit's stroboscopic points ``(theta mod 2 pi, omega)`` in the order the orbit
+        visits them (pasted into the kernel as constants; empty without it).
     block : int
         Trajectories per block of the fixed-step, refill and adaptive kernels (SIMD
         lanes; a multiple of 8, or 1 for a few trajectories, each alone). Results do not
@@ -166,10 +170,18 @@ class KernelSpec:
     device: str = "cpu"
     strobe_samples: int = STROBE_SAMPLES
     dtype: str = "float64"
+    attractors: tuple = ()
 
     def __post_init__(self) -> None:
         check_device(self.device)
         check_dtype(self.dtype)
+        attractors = tuple(tuple((float(theta), float(omega)) for theta, omega in orbit)
+                           for orbit in self.attractors)
+        object.__setattr__(self, "attractors", attractors)
+        if ("attractor" in self.observe) != bool(attractors) or any(not o for o in attractors):
+            raise ValueError("the 'attractor' observable needs an attractor catalogue and a "
+                             "catalogue needs the observable; accepted: both or neither, "
+                             "each orbit with at least one point")
         if self.device == "cuda":  # one thread per trajectory: no lanes to refill or share
             object.__setattr__(self, "refill", False)
             object.__setattr__(self, "shared_forcing", False)
@@ -204,7 +216,9 @@ class KernelSpec:
                 f"shared_forcing={self.shared_forcing!r}, block={self.block!r}, "
                 f"refill={self.refill!r}, device={self.device!r}, "
                 f"strobe_samples={self.strobe_samples!r}"
-                + (f", dtype={self.dtype!r}" if self.dtype != "float64" else ""))
+                + (f", dtype={self.dtype!r}" if self.dtype != "float64" else "")
+                + (f", attractors: {len(self.attractors)} orbits of "
+                   f"{sum(map(len, self.attractors))} points" if self.attractors else ""))
 
 
 def n_columns(spec: KernelSpec) -> int:

@@ -7,11 +7,12 @@ continuation.
 ``sweep.metrics`` and ``sweep.response``.
 """
 
-from .labels import (UNRESOLVED, amplitude, basins, identify_attractors, inverted, motion,
-                     natural_frequency_squared, well)
+from .labels import (UNRESOLVED, amplitude, attractor_catalogue, basins, identify_attractors,
+                     inverted, motion, natural_frequency_squared, well)
 from .continuation import continuation
 from .period import NO_PERIOD, period
 
-__all__ = ["NO_PERIOD", "UNRESOLVED", "amplitude", "basins", "continuation",
+__all__ = ["NO_PERIOD", "UNRESOLVED", "amplitude", "attractor_catalogue", "basins",
+           "continuation",
            "identify_attractors", "inverted", "motion", "natural_frequency_squared", "period",
            "well"]

@@ -24,8 +24,8 @@ from .._timesteps import transient_steps
 from .._validate import check_real
 from . import _strobe
 
-__all__ = ["motion", "well", "basins", "amplitude", "inverted", "natural_frequency_squared",
-           "UNRESOLVED"]
+__all__ = ["motion", "well", "basins", "attractor_catalogue", "amplitude", "inverted",
+           "natural_frequency_squared", "UNRESOLVED"]
 
 #: Label of a trajectory that no map can classify (failed, not settled, ...).
 UNRESOLVED = -1
@@ -314,10 +314,57 @@ def strobe_table(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray, tuple[str, ...
             np.ascontiguousarray(table[1], dtype=np.float64), dims)
 
 
+def _catalogued(ds: xr.Dataset, dims) -> np.ndarray | None:
+    """Per trajectory (rows in ``dims`` order), the index of the catalogued attractor
+    the run's ``attractor`` observable matched, -1 where none (or a failed
+    trajectory); None for a run without a catalogue."""
+    if "attractor" not in ds or "attractors_theta" not in ds.attrs:
+        return None
+    index = ds["attractor"].transpose(*dims).values.ravel()
+    return np.where(np.isfinite(index), index, -1).astype(np.int64)
+
+
+def _identify_with_catalogue(theta, omega, index, attrs, *, max_period, tol):
+    """`identify_attractors` for a run with an attractor catalogue: the trajectories the
+    kernel matched to catalogued attractor ``a`` (``index >= 0``; it stopped them then,
+    before their stroboscopic samples could show a period) get the label of that
+    attractor's ring, identified together with the unmatched trajectories; labels are
+    then ordered by basin size, as `identify_attractors` orders them."""
+    samples = int(attrs["attractors_samples"])
+    rings = [np.asarray(attrs[f"attractors_{name}"], dtype=np.float64).reshape(-1, samples)
+             for name in ("theta", "omega")]
+    width = min(theta.shape[1], samples)
+    matched = index >= 0
+    rows = [np.concatenate([table[~matched][:, -width:], ring[:, -width:]])
+            for table, ring in zip((theta, omega), rings)]
+    part, catalogue = identify_attractors(*rows, max_period=max_period, tol=tol)
+    m = rings[0].shape[0]
+    labels = np.full(index.shape, UNRESOLVED, dtype=np.int32)
+    labels[~matched] = part[:-m]
+    labels[matched] = part[-m:][index[matched]]
+    # order by basin size over all trajectories (the rings themselves not counted);
+    # an attractor only a ring holds (no trajectory of this run) is dropped
+    sizes = np.bincount(labels[labels >= 0], minlength=len(catalogue["size"]))
+    order = np.argsort(-sizes, kind="stable")
+    order = order[sizes[order] > 0]
+    rank = np.full(len(sizes), UNRESOLVED, dtype=np.int32)
+    rank[order] = np.arange(order.size, dtype=np.int32)
+    labels = np.where(labels >= 0, rank[np.maximum(labels, 0)], UNRESOLVED).astype(np.int32)
+    catalogue = {key: np.asarray(values)[order] for key, values in catalogue.items()}
+    catalogue["size"] = sizes[order]
+    return labels, catalogue
+
+
 def _forced_basins(ds: xr.Dataset, *, max_period: int, tol: float) -> xr.DataArray:
     flat_theta, flat_omega, dims = strobe_table(ds)
-    labels, catalogue = identify_attractors(flat_theta, flat_omega, max_period=max_period,
-                                            tol=tol)
+    index = _catalogued(ds, dims)
+    if index is None:
+        labels, catalogue = identify_attractors(flat_theta, flat_omega,
+                                                max_period=max_period, tol=tol)
+    else:
+        labels, catalogue = _identify_with_catalogue(flat_theta, flat_omega, index,
+                                                     ds.attrs, max_period=max_period,
+                                                     tol=tol)
     shape = tuple(ds.sizes[d] for d in dims)
     out = xr.DataArray(labels.reshape(shape), coords={d: ds[d] for d in dims}, dims=dims,
                        name="basins")
@@ -332,6 +379,58 @@ def _forced_basins(ds: xr.Dataset, *, max_period: int, tol: float) -> xr.DataArr
         "unresolved": UNRESOLVED,
     }
     return out
+
+
+def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
+                        max_period: int = 8, tol: float = 1e-3) -> dict:
+    """The attractors a forced run found, as a catalogue for ``sweep.run(...,
+    attractors=...)``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A run of a forced scene observing ``strobe`` (a pilot: e.g. a coarse grid of
+        the map to come, with ``stop_early``).
+    labels : xarray.DataArray, optional
+        `basins` of ``ds`` (computed with ``max_period`` and ``tol`` if not given).
+
+    Returns
+    -------
+    dict
+        ``theta``, ``omega``: ndarray, shape (m, P) [rad, rad/s]: the stroboscopic ring
+        (oldest first, angle unwrapped) of one trajectory on each of the m attractors,
+        in label order; ``period``: ndarray (m,) of int, forcing periods.
+
+    Raises
+    ------
+    ValueError
+        If the run found no attractor.
+    """
+    flat_theta, flat_omega, dims = strobe_table(ds)
+    if labels is None:
+        labels = basins(ds, max_period=max_period, tol=tol)
+    flat = labels.transpose(*dims).values.ravel()
+    period = np.asarray(labels.attrs["attractor_period"], dtype=np.int64)
+    if period.size == 0:
+        raise ValueError("attractor_catalogue: the run resolved no attractor (every "
+                         "trajectory is unresolved); accepted: a run whose trajectories "
+                         "settle, e.g. a longer t_end or t_transient")
+    index = _catalogued(ds, dims)
+    rings = []
+    for label in range(period.size):
+        members = np.flatnonzero(flat == label)
+        own = members if index is None else members[index[members] < 0]
+        if own.size:  # a trajectory of this run whose ring shows the attractor
+            rings.append((flat_theta[own[0]], flat_omega[own[0]]))
+        else:  # only trajectories the run matched to its own catalogue: that ring
+            samples = int(ds.attrs["attractors_samples"])
+            a = int(index[members[0]])
+            rings.append(tuple(np.asarray(ds.attrs[f"attractors_{name}"], dtype=np.float64)
+                               .reshape(-1, samples)[a] for name in ("theta", "omega")))
+    width = min(len(theta) for theta, _ in rings)
+    theta = np.array([t[-width:] for t, _ in rings])
+    omega = np.array([w[-width:] for _, w in rings])
+    return {"theta": theta, "omega": omega, "period": period}
 
 
 def amplitude(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:

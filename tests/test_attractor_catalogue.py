@@ -1,0 +1,172 @@
+"""Early stop on a catalogued attractor: ``sweep.run(..., attractors=catalogue)``.
+
+The oracle is the full run: every start that the full-length run (300 transient + 20
+observed periods, no early stop) resolves must get the same attractor when the run
+stops each trajectory as soon as its stroboscopic point follows a catalogued orbit.
+Beside it: the trajectories really stop (a longer t_end changes nothing), lane refill
+stays bit-identical, an attractor missing from the catalogue is still found by the
+strobe test, the catalogue survives a netCDF file, the CUDA kernel (simulated) matches
+the CPU's, and bad catalogues are refused before compute.
+"""
+
+import numpy as np
+import pytest
+
+import sweep
+from sweep import kernels, maps
+from sweep.kernels import KernelSpec
+
+PERIOD = 2 * np.pi
+#: The forced map of the maps issue (c = 0.2, A = 1.66, W = 1, cos forcing, g/L = 1):
+#: three attractors (two period-2 rotations, one period-1 oscillation), fractal basins.
+SCENE = sweep.Scene(gravity=1.0, length=1.0, effects=(
+    sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, np.pi / 2)))
+FULL = dict(t_end=320 * PERIOD, dt=PERIOD / 100, t_transient=300 * PERIOD,
+            observe=("strobe",), progress=False)
+EARLY = dict(FULL, t_transient=20 * PERIOD, stop_early=True)
+
+
+def _grid(n):
+    return sweep.Grid(theta0=np.linspace(-np.pi, np.pi, n), omega0=np.linspace(-4, 4, n))
+
+
+@pytest.fixture(scope="module")
+def catalogue():
+    """From a coarse pilot with the strict early stop, as a user would make it."""
+    return maps.attractor_catalogue(sweep.run(SCENE, _grid(21), **EARLY))
+
+
+@pytest.fixture(scope="module")
+def full_labels():
+    return maps.basins(sweep.run(SCENE, _grid(41), **FULL))
+
+
+def test_the_pilot_finds_the_three_attractors(catalogue):
+    assert sorted(catalogue["period"].tolist()) == [1, 2, 2]
+    assert catalogue["theta"].shape == catalogue["omega"].shape == (3, 16)
+
+
+def test_labels_are_the_full_runs_on_every_start(catalogue, full_labels):
+    """41 x 41 starts: every one the full run resolves gets its attractor (the labels,
+    ranked by basin size, and the catalogue's periods and sizes are the same), and
+    nearly all are matched in the kernel rather than by the slow periodicity test."""
+    ds = sweep.run(SCENE, _grid(41), **EARLY, attractors=catalogue)
+    labels = maps.basins(ds)
+    assert (full_labels >= 0).all()
+    np.testing.assert_array_equal(labels.values, full_labels.values)
+    for key in ("attractor_period", "attractor_turns_per_period", "attractor_size"):
+        np.testing.assert_array_equal(labels.attrs[key], full_labels.attrs[key])
+    assert (ds.attractor >= 0).mean() > 0.99
+    assert "attractor" in ds.attrs["observe"].split()
+
+
+def test_trajectories_stop_once_matched(catalogue):
+    """A stopped trajectory never sees the end of the run: twice the t_end gives the
+    same bits, where a trajectory that ran on would have moved on its orbit."""
+    grid = _grid(9)
+    short = sweep.run(SCENE, grid, **EARLY, attractors=catalogue)
+    long = sweep.run(SCENE, grid, **dict(EARLY, t_end=640 * PERIOD), attractors=catalogue)
+    assert (short.attractor >= 0).all()
+    for name in ("strobe_theta", "strobe_omega", "attractor"):
+        assert short[name].values.tobytes() == long[name].values.tobytes(), name
+
+
+def test_an_attractor_missing_from_the_catalogue_is_still_found(catalogue, full_labels):
+    """Drop the period-1 attractor from the catalogue: its starts are not matched, run
+    on until the strobe test settles, and get the full run's label all the same."""
+    keep = catalogue["period"] == 2
+    partial = {key: value[keep] for key, value in catalogue.items()}
+    ds = sweep.run(SCENE, _grid(41), **EARLY, attractors=partial)
+    labels = maps.basins(ds)
+    np.testing.assert_array_equal(labels.values, full_labels.values)
+    period_one = labels.attrs["attractor_period"] == 1
+    unmatched = ds.attractor.values < 0
+    assert unmatched.sum() == labels.attrs["attractor_size"][period_one].sum()
+
+
+def test_refill_gives_the_same_bits_as_waiting_lanes(catalogue):
+    from test_refill import _call, _table
+
+    params = _table(300)
+    orbits = sweep.engine.attractor_orbits(catalogue)
+    common = dict(stop_early=True, block=64, attractors=orbits)
+    waiting = _call(KernelSpec("nonlinear", ("damping", "forcing"), ("strobe", "attractor"),
+                               **common), params)
+    refill = _call(KernelSpec("nonlinear", ("damping", "forcing"), ("strobe", "attractor"),
+                              refill=True, **common), params)
+    np.testing.assert_array_equal(refill[1], waiting[1])
+    assert refill[0].tobytes() == waiting[0].tobytes()
+
+
+def test_the_catalogue_survives_a_file_and_run_arguments(catalogue, tmp_path):
+    ds = sweep.run(SCENE, _grid(9), **EARLY, attractors=catalogue)
+    sweep.save(ds, tmp_path / "map.nc")
+    loaded = sweep.load(tmp_path / "map.nc")
+    np.testing.assert_array_equal(maps.basins(loaded).values, maps.basins(ds).values)
+    again = maps.attractor_catalogue(loaded)  # from a run that matched: its stored rings
+    assert sorted(again["period"].tolist()) == sorted(catalogue["period"].tolist())
+    arguments = sweep.io.run_arguments(loaded)
+    np.testing.assert_array_equal(arguments["attractors"]["theta"], catalogue["theta"])
+    np.testing.assert_array_equal(arguments["attractors"]["period"], catalogue["period"])
+
+
+def test_float32_with_a_catalogue(catalogue, full_labels):
+    """The catalogue's tolerance (1e-3) is far above float32's rounding: the labels of
+    a float32 run with it are the float32 full run's (both compared on the starts
+    where float32 and float64 agree, see the float32 section of the README)."""
+    ds = sweep.run(SCENE, _grid(21), **EARLY, attractors=catalogue, dtype="float32")
+    full32 = maps.basins(sweep.run(SCENE, _grid(21), **FULL, dtype="float32"))
+    np.testing.assert_array_equal(maps.basins(ds).values, full32.values)
+
+
+def test_cuda_matches_the_cpu(catalogue):
+    pytest.importorskip("numba.cuda")
+    grid = _grid(5)
+    kwargs = dict(EARLY, t_end=120 * PERIOD, attractors=catalogue)
+    gpu = sweep.run(SCENE, grid, device="cuda", **kwargs)
+    cpu = sweep.run(SCENE, grid, **kwargs)
+    np.testing.assert_array_equal(gpu.attractor, cpu.attractor)
+    # the CUDA sine is not vecmath's: samples agree to rounding amplified over the run
+    np.testing.assert_allclose(gpu.strobe_theta, cpu.strobe_theta, rtol=0, atol=1e-9)
+
+
+# ------------------------------------------------------------------ refusals
+@pytest.mark.parametrize("bad, words", [
+    ({"theta": [[0.0, 1.0]], "omega": [[0.0, 1.0]]}, "attractors must be an attractor"),
+    ({"theta": [[0.0, 1.0]], "omega": [[0.0, 1.0]], "period": [3]}, r"periods \[3\]"),
+    ({"theta": [[np.nan, 1.0]], "omega": [[0.0, 1.0]], "period": [1]}, "rings of shape"),
+    ({"theta": [0.0, 1.0], "omega": [0.0, 1.0], "period": [1]}, "rings of shape"),
+    ("catalogue", "attractors must be an attractor catalogue, got 'catalogue'"),
+])
+def test_a_bad_catalogue_is_refused_before_compute(bad, words, no_compute):
+    with pytest.raises(ValueError, match=words):
+        sweep.run(SCENE, _grid(3), **EARLY, attractors=bad)
+
+
+def test_the_observable_without_a_catalogue_is_refused(no_compute):
+    with pytest.raises(ValueError, match="observable 'attractor' matches the run against an "
+                                         "attractor catalogue; accepted: attractors="):
+        sweep.run(SCENE, _grid(3), **dict(EARLY, observe=("strobe", "attractor")))
+
+
+def test_a_catalogue_needs_forcing(catalogue, no_compute):
+    with pytest.raises(ValueError, match="observable 'attractor' samples once per forcing "
+                                         "period and needs a forcing"):
+        sweep.run(sweep.Scene(effects=(sweep.Damping(0.2),)), _grid(3), t_end=10.0,
+                  dt=0.1, observe=("final",), attractors=catalogue)
+
+
+def test_a_run_that_resolved_nothing_has_no_catalogue():
+    ds = sweep.run(SCENE, _grid(3), **dict(FULL, t_end=4 * PERIOD, t_transient=0.0))
+    with pytest.raises(ValueError, match="resolved no attractor"):
+        maps.attractor_catalogue(ds)
+
+
+def test_kernel_spec_needs_both_or_neither():
+    with pytest.raises(ValueError, match="accepted: both or neither"):
+        KernelSpec("nonlinear", ("forcing",), ("attractor",))
+    with pytest.raises(ValueError, match="accepted: both or neither"):
+        KernelSpec("nonlinear", ("forcing",), ("strobe",), attractors=(((1.0, 0.0),),))
+    spec = KernelSpec("nonlinear", ("forcing",), ("strobe", "attractor"), stop_early=True,
+                      attractors=(((1.0, 0.0), (2.0, 0.5)),))
+    assert "(settled_0) or settled_1" in kernels.source(spec)
