@@ -128,14 +128,18 @@ def test_stop_early_script(tmp_path):
 
 def test_forced_basins_script(tmp_path):
     forced_basins = importlib.import_module("forced_basins")
-    assert forced_basins.main(["--size", "8", "--rows", "2", "--no-c-limit",
+    assert forced_basins.main(["--size", "8", "--rows", "2", "--pilot", "9", "--no-c-limit",
                               "--out", str(tmp_path)]) == 0
     result = json.loads((tmp_path / "forced_basins.json").read_text())
     assert result["grid"] == [2, 8] and result["full_grid"] == [8, 8]
     assert result["full"]["attractors"] >= 1
-    assert 0.0 <= result["stop_early"]["unresolved_fraction"] <= 1.0
-    assert 0 <= result["labels_differing"] <= 16
-    assert (tmp_path / "forced_basins.md").exists()
+    for name in ("stop_early", "catalogue"):
+        assert 0.0 <= result[name]["unresolved_fraction"] <= 1.0
+        # the script's own check of the labels: none differs where the full run resolves
+        assert result[name]["labels_differing_where_full_resolves"] == 0
+    assert 0.0 < result["catalogue"]["matched_fraction"] <= 1.0
+    assert result["catalogue"]["pilot_seconds"] > 0
+    assert "attractor catalogue (9 x 9 pilot)" in (tmp_path / "forced_basins.md").read_text()
 
 
 def test_lyapunov_script(tmp_path):
