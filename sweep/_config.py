@@ -37,6 +37,13 @@ SMALL_BLOCK = 64
 #: one), a block of 8 no faster than one.
 ADAPTIVE_BLOCK = 16
 
+#: The adaptive kernels compute the step-size controller's factor ``err ** -0.2`` with
+#: the lanes, vectorised (`sweep.kernels.vecmath.inverse_fifth_root`); False: with
+#: libm's power, lane by lane (not vectorisable, but the faster choice for one
+#: trajectory at a time: ``benchmarks/work_precision.py`` uses it for its baseline).
+#: Results differ between the two by the controller's ~4e-8 relative difference.
+VECTOR_CONTROLLER = True
+
 #: Early-stopped runs refill lanes (`sweep.kernels.refill`): a lane whose trajectory
 #: settled takes the next waiting one instead of idling until its block's slowest
 #: trajectory is done. Results do not depend on it; ``benchmarks/stop_early.py`` turns

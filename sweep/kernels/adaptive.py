@@ -14,8 +14,9 @@ rounding (LLVM contracts the error norm into FMAs differently; ``tests/test_effe
 A block costs BLOCK times the most step attempts of its trajectories, so blocks are
 small (`sweep._config.ADAPTIVE_BLOCK`). Measured by ``benchmarks/work_precision.py``
 (its last table): 2-3x the speed of one trajectory per block at the same tolerance.
-What is left per step is mostly scalar: the controller's ``err ** -0.2`` (a libm call
-LLVM cannot vectorise) and the accept/reject bookkeeping of each lane.
+The controller's factor ``err ** -0.2`` is computed with the lanes, vectorised
+(`sweep.kernels.vecmath.inverse_fifth_root`: square roots and Newton steps, no libm
+call); what is left scalar is each lane's accept/reject bookkeeping.
 
 Each trajectory advances its own time ``t`` (a sum of accepted steps) and clips its
 last step so that it ends at ``t_end`` exactly. A trajectory whose step would have to
@@ -26,6 +27,7 @@ shrinks the step, so a blow-up ends there too (its state stays finite).
 
 from __future__ import annotations
 
+from .. import _config
 from ..observables import OBSERVABLES
 from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet, skip_unless
 from .snippets import snippets
@@ -84,10 +86,16 @@ def adaptive_kernel(spec: KernelSpec, tableau) -> str:
         # nothing to integrate (t0 >= t_end): the start is the result, as one
         # trajectory at a time would give
         "if j < n_real and not active:", indent(_finish(spec), 1)]
+    # the controller's factor err^exponent: for a 5th-order pair computed with the
+    # lanes (vectorised, no libm: vecmath.inverse_fifth_root), else libm's power in the
+    # lane-by-lane control below
+    vectorised = exponent == -0.2 and _config.VECTOR_CONTROLLER
+    power = "fac_new" if vectorised else f"err ** {exponent!r}"
     try_step = ["last = t + h >= t_end", "if last:", "    h = t_end - t"] + attempt + err + [
         "sct = atol + rtol * max(abs(th), abs(thn))",
         "sco = atol + rtol * max(abs(om), abs(omn))",
-        "err = math.sqrt(0.5 * ((et / sct) ** 2 + (eo / sco) ** 2))"]
+        "err = math.sqrt(0.5 * ((et / sct) ** 2 + (eo / sco) ** 2))"] + \
+        ["fac_new = vroot5(err)"] * vectorised
     # accept or reject, lane by lane (the controller's power is a libm call, which
     # LLVM cannot vectorise: a branch per lane costs less than selects over all lanes,
     # measured); a lane that is done writes its results and goes idle
@@ -101,7 +109,7 @@ def adaptive_kernel(spec: KernelSpec, tableau) -> str:
     if err == 0.0:
         fac = {_FACMAX!r}
     else:
-        fac = min({_FACMAX!r}, max({_FACMIN!r}, {_SAFETY!r} * err ** {exponent!r}))
+        fac = min({_FACMAX!r}, max({_FACMIN!r}, {_SAFETY!r} * {power}))
     if after_reject:
         fac = min(fac, 1.0)
     after_reject = False
@@ -109,7 +117,7 @@ def adaptive_kernel(spec: KernelSpec, tableau) -> str:
 else:
     rejected += 1
     if math.isfinite(err):
-        h = h * max({_FACMIN!r}, {_SAFETY!r} * err ** {exponent!r})
+        h = h * max({_FACMIN!r}, {_SAFETY!r} * {power})
     else:
         h = h * {_FACMIN!r}
     after_reject = True
@@ -120,7 +128,8 @@ if not ok or t >= t_end:
     n_active -= 1
 {indent(_finish(spec), 1)}"""
     # per-lane variables (name -> dtype): those the loops after the first one read
-    lane = {name: "float64" for name in ["th", "om", "t", "h", "thn", "omn", "err"]}
+    lane = {name: "float64" for name in ["th", "om", "t", "h", "thn", "omn", "err",
+                                          "fac_new"]}
     lane.update({line.split("=")[0].strip(): "float64" for line in load_lines(spec)})
     lane.update({name: "float64" for name in (first and
                                               ["k1t", "k1o", f"k{s}t", f"k{s}o"])})
@@ -133,10 +142,13 @@ if not ok or t >= t_end:
     init_loop = lane_loop(nl.join(init), lane, level=2, load=False)
     try_loop = lane_loop(nl.join(try_step), lane, level=3,
                          stores=[name for name in lane if name in
-                                 {"h", "last", "thn", "omn", "err", f"k{s}t", f"k{s}o"}])
+                                 {"h", "last", "thn", "omn", "err", "fac_new", f"k{s}t",
+                                  f"k{s}o"}])
     control_loop = lane_loop(control, lane, level=3,
                              head=skip_unless("active"))
     return f'''
+from sweep.kernels.vecmath import inverse_fifth_root as vroot5
+
 BLOCK = {spec.block}
 
 
