@@ -96,10 +96,12 @@ def adaptive_kernel(spec: KernelSpec, tableau) -> str:
         "sco = atol + rtol * max(abs(om), abs(omn))",
         "err = math.sqrt(0.5 * ((et / sct) ** 2 + (eo / sco) ** 2))"] + \
         ["fac_new = vroot5(err)"] * vectorised
-    # accept or reject, lane by lane (the controller's power is a libm call, which
-    # LLVM cannot vectorise: a branch per lane costs less than selects over all lanes,
-    # measured); a lane that is done writes its results and goes idle
-    control = f"""if err <= 1.0 and math.isfinite(thn) and math.isfinite(omn):
+    # accept or reject. With libm's power (not vectorisable) lane by lane, skipping
+    # idle lanes: a branch per lane costs less than selects over all lanes (measured).
+    # With the vectorised power, over all lanes as selects (an idle lane's results are
+    # written already, so what it computes is never read), then lane by lane only the
+    # test for a lane that is done, which writes its results and goes idle.
+    decide = f"""if err <= 1.0 and math.isfinite(thn) and math.isfinite(omn):
     t = t_end if last else t + h
     th = thn
     om = omn
@@ -122,11 +124,12 @@ else:
         h = h * {_FACMIN!r}
     after_reject = True
     if h < h_min:
-        ok = False
-if not ok or t >= t_end:
+        ok = False"""
+    done = f"""if not ok or t >= t_end:
     active = False
     n_active -= 1
 {indent(_finish(spec), 1)}"""
+    control = decide + nl + done
     # per-lane variables (name -> dtype): those the loops after the first one read
     lane = {name: "float64" for name in ["th", "om", "t", "h", "thn", "omn", "err",
                                           "fac_new"]}
@@ -144,8 +147,11 @@ if not ok or t >= t_end:
                          stores=[name for name in lane if name in
                                  {"h", "last", "thn", "omn", "err", "fac_new", f"k{s}t",
                                   f"k{s}o"}])
-    control_loop = lane_loop(control, lane, level=3,
-                             head=skip_unless("active"))
+    if vectorised:
+        control_loop = lane_loop(decide, lane, level=3) + nl + lane_loop(
+            done, lane, level=3, head=skip_unless("active"), stores=["active"])
+    else:
+        control_loop = lane_loop(control, lane, level=3, head=skip_unless("active"))
     return f'''
 from sweep.kernels.vecmath import inverse_fifth_root as vroot5
 

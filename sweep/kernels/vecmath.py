@@ -142,28 +142,34 @@ def sincos(x):
     return (-v if (q & 2) else v), (-w if ((q + 1) & 2) else w)
 
 
-@njit(cache=True, **_JIT)
+@njit(cache=True, inline="always", **_JIT)
 def inverse_fifth_root(x):
     """x ** -0.2 for 1e-6 <= x <= 1e4, branch-free and without libm (vectorisable): the
     step-size controller's factor of a 5th-order pair (`sweep.kernels.adaptive`).
 
-    ``x ** (-13/64)`` from six square roots (hardware instructions) is within 4.5 % of
-    ``x ** -0.2`` on that range (``|ln x| <= 13.9``, times 0.2 - 13/64 = 0.003125), and
-    four Newton steps for ``y ** -5 = x`` (each squares the relative error, times
-    ~3: 4.5e-2, 6e-3, 1e-4, 4e-8, 5e-15) bring it to within a few ulps of libm's
-    power (measured, ``tests/test_vecmath.py``), so the controller makes the same
-    choices as with it.
-    The controller clips the factor to [0.2, 10], reached at ``x`` = 1845 and 5.9e-6,
-    so it clamps ``x`` to the range first.
+    ``x ** (-3/16)`` from four square roots (hardware instructions) is within 16 % of
+    ``x ** -0.2`` on that range (``|ln x| <= 13.9``, times 0.2 - 3/16 = 0.0125); five
+    Newton steps for ``y ** -5 = x`` (each squares the relative error, times ~3: 0.12,
+    0.043, 5.6e-3, 9e-5, 2.5e-8, 2e-15) bring it to within 2.8e-13 of libm's power
+    (measured, ``tests/test_vecmath.py``), so the controller makes the same choices as
+    with it. The controller clips the factor to [0.2, 10], reached at ``x`` = 1845 and
+    5.9e-6, so ``x`` is clamped to the range first. Inlined into the kernel by numba
+    (``inline="always"``): left to LLVM's inliner, a call stayed in the lane loop once
+    the function grew, and the loop was not vectorised (measured: 5x slower).
     """
     x = min(max(x, 1e-6), 1e4)
-    s = math.sqrt(math.sqrt(math.sqrt(math.sqrt(math.sqrt(math.sqrt(x))))))  # x^(1/64)
-    s4 = (s * s) * (s * s)
-    y = 1.0 / (s4 * s4 * s4 * s)  # x^(-13/64)
-    for _ in range(4):
-        y2 = y * y
-        y = y * (6.0 - x * (y2 * y2 * y)) * 0.2
-    return y
+    s = math.sqrt(math.sqrt(math.sqrt(math.sqrt(x))))  # x^(1/16)
+    y = 1.0 / (s * s * s)  # x^(-3/16)
+    y2 = y * y
+    y = y * (6.0 - x * (y2 * y2 * y)) * 0.2
+    y2 = y * y
+    y = y * (6.0 - x * (y2 * y2 * y)) * 0.2
+    y2 = y * y
+    y = y * (6.0 - x * (y2 * y2 * y)) * 0.2
+    y2 = y * y
+    y = y * (6.0 - x * (y2 * y2 * y)) * 0.2
+    y2 = y * y
+    return y * (6.0 - x * (y2 * y2 * y)) * 0.2
 
 
 # ---------------------------------------------------------------------------------------
