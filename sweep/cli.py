@@ -81,6 +81,11 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--device", choices=DEVICES,
                      help="where to run: the CPU (default) or an NVIDIA GPU (needs the cuda "
                      "extra); overrides [run] device")
+    run.add_argument("--pilot", type=int, metavar="N",
+                     help="forced maps: first run N x N starts of the grid with early stop "
+                     "to find the attractors, then stop each trajectory of the map once it "
+                     "follows one (sweep.maps.pilot_catalogue; the grid may vary only "
+                     "theta0 and omega0); overrides [run] pilot")
     run.add_argument("--dtype", choices=DTYPES,
                      help="working precision of the state and the step (float32: about "
                      "twice the trajectories per second, float32 rounding; fixed-step "
@@ -227,6 +232,12 @@ def _command_run(args: argparse.Namespace) -> int:
         kwargs["device"] = args.device
     if args.dtype is not None:
         kwargs["dtype"] = args.dtype
+    pilot = args.pilot if args.pilot is not None else options.get("pilot")
+    if pilot is not None:
+        from .maps.pilot import pilot_catalogue, pilot_grid
+
+        pilot_grid(grid, pilot)  # refuse a bad pilot before any compute
+        kwargs["attractors"] = pilot_catalogue(scene, grid, pilot, **kwargs)
     scheduler = args.scheduler if args.scheduler is not None else options.get("scheduler")
     client = _connect(scheduler) if scheduler is not None else None
     try:

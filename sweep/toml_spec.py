@@ -28,6 +28,9 @@ A run file has three tables::
     method = "rk4"
     chunk_size = 1000            # trajectories per chunk (progress and checkpoints)
     scheduler = "tcp://HOST:8786"  # run the chunks on this Dask cluster (sweep run only)
+    pilot = 41                   # forced maps: find the attractors on 41 x 41 starts
+                                 # first, then stop each trajectory on a match
+                                 # (sweep run only; sweep.maps.pilot_catalogue)
 
 ``units = "deg"`` is accepted for the angle-like axes ``theta0`` (deg),
 ``omega0`` (deg/s), ``forcing_phase`` (deg) and any effect parameter declared as an
@@ -62,11 +65,11 @@ TABLES = ("scene", "grid", "run")
 #: Keys of the ``[run]`` table (keyword arguments of `sweep.run`).
 RUN_KEYS = ("t_end", "dt", "t0", "t_transient", "observe", "save_every", "method", "rtol",
             "atol", "chunk_size", "stop_early", "check_stability", "estimate_error",
-            "scheduler", "device", "strobe_samples", "dtype")
+            "scheduler", "device", "strobe_samples", "dtype", "pilot")
 
 #: Keys of ``[run]`` that say where the run executes, not what it computes: returned
 #: in ``options`` by `load_run`, never among the keyword arguments of `sweep.run`.
-OPTION_KEYS = ("scheduler",)
+OPTION_KEYS = ("scheduler", "pilot")
 
 #: Keys of ``[run]`` that must be present.
 REQUIRED_RUN_KEYS = ("t_end", "dt")
@@ -353,4 +356,8 @@ def _run(source: str, table: dict) -> dict[str, Any]:
         if "estimate_error" in kwargs:
             check_positive_int("estimate_error", kwargs["estimate_error"],
                                "an int >= 1 (trajectories)")
+        if "pilot" in kwargs:
+            accepted = "an int >= 2 (points per initial-condition axis)"
+            if check_positive_int("pilot", kwargs["pilot"], accepted) < 2:
+                raise ValueError(f"pilot must be {accepted}, got {kwargs['pilot']!r}")
     return kwargs

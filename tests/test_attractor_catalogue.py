@@ -170,3 +170,53 @@ def test_kernel_spec_needs_both_or_neither():
     spec = KernelSpec("nonlinear", ("forcing",), ("strobe", "attractor"), stop_early=True,
                       attractors=(((1.0, 0.0), (2.0, 0.5)),))
     assert "(settled_0) or settled_1" in kernels.source(spec)
+
+
+# ------------------------------------------------------------------ the pilot
+def test_pilot_catalogue_thins_the_map_and_finds_its_attractors(catalogue):
+    grid = _grid(101)
+    pilot = maps.pilot_grid(grid, 21)
+    assert pilot.axes["theta0"].size == pilot.axes["omega0"].size == 21
+    np.testing.assert_array_equal(pilot.axes["theta0"][[0, -1]], grid.axes["theta0"][[0, -1]])
+    found = maps.pilot_catalogue(SCENE, grid, 21, **dict(EARLY, chunk_size=7))
+    np.testing.assert_array_equal(found["period"], catalogue["period"])
+    np.testing.assert_array_equal(found["theta"], catalogue["theta"])  # the same runs
+
+
+@pytest.mark.parametrize("grid, points, words", [
+    (sweep.Grid(theta0=[0.0, 1.0], forcing_amplitude=[1.0, 1.2]), 5,
+     "the grid varies forcing_amplitude; accepted: a grid that varies only theta0 and"),
+    (sweep.Grid(theta0=[0.0, 1.0]), 1, "pilot must be an int >= 2"),
+    (sweep.Grid(theta0=[0.0, 1.0]), 2.5, "pilot must be an int >= 2"),
+])
+def test_a_bad_pilot_is_refused_before_compute(grid, points, words, no_compute):
+    with pytest.raises(ValueError, match=words):
+        maps.pilot_catalogue(SCENE, grid, points, **EARLY)
+
+
+def test_command_line_and_run_file_pilot(tmp_path):
+    """``[run] pilot`` and ``--pilot`` run the pilot first: the file records the
+    catalogue and its labels are the Python API's; a bad value is one line."""
+    from sweep import cli
+
+    run_file = tmp_path / "forced.toml"
+    run_file.write_text(
+        "[scene]\ngravity = 1.0\nlength = 1.0\n"
+        "[scene.damping]\ncoefficient = 0.2\n"
+        "[scene.forcing]\namplitude = 1.66\nfrequency = 1.0\nphase = 1.5707963267948966\n"
+        "[grid]\ntheta0 = {start = -3.14159, stop = 3.14159, num = 9}\n"
+        "omega0 = {start = -4.0, stop = 4.0, num = 9}\n"
+        f"[run]\nt_end = {320 * PERIOD!r}\ndt = {PERIOD / 100!r}\n"
+        f"t_transient = {20 * PERIOD!r}\nobserve = [\"strobe\"]\nstop_early = true\n"
+        "pilot = 5\n")
+    assert cli.main(["run", str(run_file), "-o", str(tmp_path / "a.nc"),
+                     "--no-progress"]) == 0
+    ds = sweep.load(tmp_path / "a.nc")
+    assert "attractors_theta" in ds.attrs and (ds.attractor >= 0).all()
+    assert cli.main(["run", str(run_file), "-o", str(tmp_path / "b.nc"), "--pilot", "7",
+                     "--no-progress"]) == 0
+    np.testing.assert_array_equal(maps.basins(sweep.load(tmp_path / "b.nc")),
+                                  maps.basins(ds))
+    run_file.write_text(run_file.read_text().replace("pilot = 5", "pilot = 1"))
+    with pytest.raises(ValueError, match="pilot must be an int >= 2"):
+        sweep.toml_spec.load_run(run_file)

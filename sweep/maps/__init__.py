@@ -11,8 +11,10 @@ from .labels import (UNRESOLVED, amplitude, attractor_catalogue, basins, identif
                      inverted, motion, natural_frequency_squared, well)
 from .continuation import continuation
 from .period import NO_PERIOD, period
+from .pilot import pilot_catalogue, pilot_grid
 
 __all__ = ["NO_PERIOD", "UNRESOLVED", "amplitude", "attractor_catalogue", "basins",
            "continuation",
            "identify_attractors", "inverted", "motion", "natural_frequency_squared", "period",
+           "pilot_catalogue", "pilot_grid",
            "well"]

@@ -1,0 +1,85 @@
+"""A pilot run that finds a forced map's attractors, for ``sweep.run(...,
+attractors=...)``: the map's own initial-condition grid, thinned, with early stop."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import engine
+from .._validate import check_positive_int
+from ..grid import Grid
+from ..physics import Scene
+from .labels import attractor_catalogue
+
+__all__ = ["INITIAL_AXES", "pilot_catalogue", "pilot_grid"]
+
+#: The grid axes a pilot may thin: initial conditions only. Every other parameter
+#: changes the attractors themselves, and a catalogue holds the attractors of one scene.
+INITIAL_AXES = ("theta0", "omega0")
+
+#: Runs' settings the pilot does not take from the map's run (where and how the map
+#: itself is run and kept, not what is integrated).
+_MAP_ONLY = ("checkpoint", "resume", "keep_checkpoint", "estimate_error", "chunk_size",
+             "client", "progress", "stop_early", "attractors")
+
+
+def pilot_grid(grid: Grid, points: int) -> Grid:
+    """``grid`` with its initial-condition axes thinned to at most ``points`` evenly
+    spaced values each (ends kept).
+
+    Raises
+    ------
+    ValueError
+        If the grid varies anything but the initial conditions, or ``points`` < 2.
+    """
+    points = check_positive_int("pilot", points,
+                                "an int >= 2 (points per initial-condition axis)")
+    if points < 2:
+        raise ValueError(f"pilot must be an int >= 2 (points per initial-condition axis), "
+                         f"got {points!r}")
+    varied = [name for name, values in grid.axes.items()
+              if name not in INITIAL_AXES and np.size(values) > 1]
+    if varied:
+        raise ValueError(f"a pilot catalogue holds the attractors of one scene, but the grid "
+                         f"varies {', '.join(varied)}; accepted: a grid that varies only "
+                         f"{' and '.join(INITIAL_AXES)}")
+    axes = {}
+    for name, values in grid.axes.items():
+        values = np.asarray(values)
+        if name in INITIAL_AXES and values.size > points:
+            values = values[np.linspace(0, values.size - 1, points).round().astype(int)]
+        axes[name] = values
+    return Grid(**axes)
+
+
+def pilot_catalogue(scene: Scene, grid: Grid, points: int = 41, **run_kwargs) -> dict:
+    """The attractors of ``scene`` found by a pilot over ``grid`` thinned to
+    ``points`` x ``points`` starts (`pilot_grid`), run with ``stop_early``.
+
+    Parameters
+    ----------
+    scene : Scene
+        A forced scene.
+    grid : Grid
+        The map's grid (it may vary only ``theta0`` and ``omega0``).
+    points : int, default 41
+        Values per initial-condition axis in the pilot.
+    **run_kwargs
+        The map's `sweep.run` arguments (``observe`` must include ``strobe``); those
+        about where and how the map is run (checkpoints, chunks, a Dask client, the
+        error estimate) are not used.
+
+    Returns
+    -------
+    dict
+        `attractor_catalogue` of the pilot run: pass it as ``attractors=``.
+
+    Raises
+    ------
+    ValueError
+        As `pilot_grid`, `sweep.run` and `attractor_catalogue` do (before the map runs).
+    """
+    pilot = pilot_grid(grid, points)
+    kwargs = {key: value for key, value in run_kwargs.items() if key not in _MAP_ONLY}
+    ds = engine.run(scene, pilot, stop_early=True, progress=False, **kwargs)
+    return attractor_catalogue(ds)
