@@ -5,7 +5,9 @@ forcing frequency 1 rad/s; cos forcing is phase = pi/2). After a transient, each
 is sampled once per forcing period (observable ``strobe``); `sweep.maps.basins` finds
 the periodic orbit the samples sit on (period, turns per period) and labels the start
 by it. With ``stop_early=True`` each start stops as soon as its 16 latest samples repeat,
-so ``--periods`` is only an upper bound. The boundaries between basins are fractal: the boundary basin entropy exceeds
+so ``--periods`` is only an upper bound; with a pilot (``--pilot N``, default 41: N x N
+starts find the attractors first, `sweep.maps.pilot_catalogue`) a start stops as soon
+as it follows one of them, about 2.4x sooner on this map. The boundaries between basins are fractal: the boundary basin entropy exceeds
 log 2 (Daza et al. 2016).
 
 Usage::
@@ -26,15 +28,19 @@ from sweep import maps, metrics
 STEPS_PER_PERIOD = 100
 
 
-def compute(size: int, periods: int):
-    """Run the sweep on a size x size grid of theta0 in [-pi, pi], omega0 in [-4, 4]."""
+def compute(size: int, periods: int, pilot: int = 41):
+    """Run the sweep on a size x size grid of theta0 in [-pi, pi], omega0 in [-4, 4]
+    (``pilot`` > 0: with the attractor catalogue of a pilot x pilot pilot run)."""
     scene = sweep.Scene(gravity=1.0, length=1.0,
                         effects=(sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, np.pi / 2)))
     grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, size),
                       omega0=np.linspace(-4.0, 4.0, size))
     period = 2 * np.pi
-    return sweep.run(scene, grid, t_end=periods * period, dt=period / STEPS_PER_PERIOD,
-                     t_transient=20 * period, observe=("strobe",), stop_early=True)
+    kwargs = dict(t_end=periods * period, dt=period / STEPS_PER_PERIOD,
+                  t_transient=20 * period, observe=("strobe",), stop_early=True)
+    if pilot:
+        kwargs["attractors"] = maps.pilot_catalogue(scene, grid, pilot, **kwargs)
+    return sweep.run(scene, grid, **kwargs)
 
 
 def main(argv=None) -> int:
@@ -44,10 +50,13 @@ def main(argv=None) -> int:
     parser.add_argument("--periods", type=int, default=300,
                         help="most forcing periods a start is integrated (from period 20 "
                              "on it stops once its stroboscopic samples repeat)")
+    parser.add_argument("--pilot", type=int, default=41,
+                        help="points per axis of the pilot run that catalogues the "
+                             "attractors (0: none, stop on the strobe test alone)")
     parser.add_argument("--out", type=Path, default=Path("examples/output/forced_basins"))
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
-    ds = compute(args.size, args.periods)
+    ds = compute(args.size, args.periods, args.pilot)
     labels = maps.basins(ds)
     fig = sweep.plot.basins(labels, title="Driven pendulum basins (c = 0.2, A = 1.66, "
                                           "W = 1, cos forcing)")
