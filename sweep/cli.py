@@ -237,10 +237,11 @@ def _command_run(args: argparse.Namespace) -> int:
         from .maps.pilot import pilot_catalogue, pilot_grid
 
         pilot_grid(grid, pilot)  # refuse a bad pilot before any compute
-        kwargs["attractors"] = pilot_catalogue(scene, grid, pilot, **kwargs)
     scheduler = args.scheduler if args.scheduler is not None else options.get("scheduler")
     client = _connect(scheduler) if scheduler is not None else None
     try:
+        if pilot is not None:  # after the scheduler answered: no pilot for a dead one
+            kwargs["attractors"] = pilot_catalogue(scene, grid, pilot, **kwargs)
         ds, seconds = _run_quietly(scene, grid, progress=args.progress, client=client,
                                    **kwargs)
         save(ds, output)
@@ -305,6 +306,8 @@ def _resume_hint(args: argparse.Namespace, folder, output: Path) -> str:
         command += ["--checkpoint", str(args.checkpoint)]
     if getattr(args, "scheduler", None) is not None:
         command += ["--scheduler", args.scheduler]
+    if getattr(args, "pilot", None) is not None:  # the same catalogue, the same run
+        command += ["--pilot", str(args.pilot)]
     command.append("--resume")
     return (f"{done} finished chunks are checkpointed in {str(folder)!r}; resume with: "
             f"{shlex.join(command)}")

@@ -383,6 +383,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     names = resolve(observe)
     orbits = attractor_orbits(attractors)
     if orbits:
+        check_one_scene(grid)
         names = resolve(names + ("attractor",))
     elif "attractor" in names:
         raise ValueError("observable 'attractor' matches the run against an attractor "
@@ -443,6 +444,29 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     return settings, spec, int(chunk_size)
 
 
+#: The grid axes an attractor catalogue may be used across: initial conditions only.
+#: Every other parameter changes the attractors themselves, and a catalogue holds the
+#: attractors of one scene.
+INITIAL_AXES = ("theta0", "omega0")
+
+
+def check_one_scene(grid: Grid) -> None:
+    """Refuse a grid that varies anything but the initial conditions (for an attractor
+    catalogue, which holds one scene's attractors).
+
+    Raises
+    ------
+    ValueError
+        Naming the varied axes and what is accepted.
+    """
+    varied = [name for name, values in grid.axes.items()
+              if name not in INITIAL_AXES and np.size(values) > 1]
+    if varied:
+        raise ValueError(f"an attractor catalogue holds the attractors of one scene, but the "
+                         f"grid varies {', '.join(varied)}; accepted: a grid that varies only "
+                         f"{' and '.join(INITIAL_AXES)}")
+
+
 def attractor_orbits(attractors) -> tuple:
     """The kernel's attractor catalogue (`sweep.kernels.KernelSpec.attractors`) from a
     catalogue of stroboscopic rings (`sweep.maps.attractor_catalogue`): per attractor,
@@ -457,7 +481,7 @@ def attractor_orbits(attractors) -> tuple:
         return ()
     accepted = ("accepted: a catalogue from sweep.maps.attractor_catalogue(run), a mapping "
                 "with 'theta', 'omega' (m x P stroboscopic rings, finite) and 'period' "
-                "(m ints, 1 <= period <= P)")
+                "(m ints, 1 <= period <= P / 2: a ring shows its orbit twice)")
     try:
         theta = np.asarray(attractors["theta"], dtype=np.float64)
         omega = np.asarray(attractors["omega"], dtype=np.float64)
@@ -468,7 +492,7 @@ def attractor_orbits(attractors) -> tuple:
     if theta.ndim != 2 or theta.shape != omega.shape or period.shape != theta.shape[:1] \
             or theta.shape[0] == 0 or not np.all(np.isfinite(theta)) \
             or not np.all(np.isfinite(omega)) or not np.issubdtype(period.dtype, np.integer) \
-            or np.any(period < 1) or np.any(period > theta.shape[1]):
+            or np.any(period < 1) or np.any(2 * period > theta.shape[1]):
         raise ValueError(f"attractors: rings of shape {theta.shape} and {omega.shape}, "
                          f"periods {period.tolist()!r}; {accepted}")
     return tuple(tuple((float(np.mod(t, 2 * np.pi)), float(w))

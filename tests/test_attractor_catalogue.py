@@ -185,7 +185,7 @@ def test_pilot_catalogue_thins_the_map_and_finds_its_attractors(catalogue):
 
 @pytest.mark.parametrize("grid, points, words", [
     (sweep.Grid(theta0=[0.0, 1.0], forcing_amplitude=[1.0, 1.2]), 5,
-     "the grid varies forcing_amplitude; accepted: a grid that varies only theta0 and"),
+     "grid varies forcing_amplitude; accepted: a grid that varies only theta0 and"),
     (sweep.Grid(theta0=[0.0, 1.0]), 1, "pilot must be an int >= 2"),
     (sweep.Grid(theta0=[0.0, 1.0]), 2.5, "pilot must be an int >= 2"),
 ])
@@ -220,3 +220,65 @@ def test_command_line_and_run_file_pilot(tmp_path):
     run_file.write_text(run_file.read_text().replace("pilot = 5", "pilot = 1"))
     with pytest.raises(ValueError, match="pilot must be an int >= 2"):
         sweep.toml_spec.load_run(run_file)
+
+
+def test_a_catalogue_of_shorter_rings_leaves_the_maps_own_rings_whole(full_labels):
+    """A pilot that kept 2 stroboscopic samples only (it finds only the period-1
+    attractor): the map's 16-sample rings stay whole, so its period-2 attractors are
+    still found, and every label is the full run's (the catalogued ring is extended
+    along its orbit to the map's width, not the map's rings cut to the ring's)."""
+    small = maps.attractor_catalogue(sweep.run(SCENE, _grid(11), **EARLY, strobe_samples=2))
+    assert small["theta"].shape == (1, 2) and small["period"].tolist() == [1]
+    ds = sweep.run(SCENE, _grid(41), **EARLY, attractors=small)
+    np.testing.assert_array_equal(maps.basins(ds).values, full_labels.values)
+    assert 0 < int((ds.attractor >= 0).sum()) < ds.attractor.size
+
+
+def test_equal_basins_keep_the_full_runs_order():
+    """Two attractors with equal basins: labels tie-break as identify_attractors does
+    on the full run, whichever of them the kernel matched more often (matched rows
+    stand for their attractor's ring before identification)."""
+    samples = 16
+    rings = {"theta": np.array([np.full(samples, 1.0), np.full(samples, 3.0)]),
+             "omega": np.array([np.full(samples, 0.5), np.full(samples, -1.0)]),
+             "period": np.array([1, 1])}
+    theta = np.repeat(rings["theta"], 10, axis=0)
+    omega = np.repeat(rings["omega"], 10, axis=0)
+    full, _ = maps.identify_attractors(theta, omega)
+    index = np.array([0] * 7 + [-1] * 3 + [1] * 3 + [-1] * 7)
+    stopped = theta.copy()
+    stopped[index >= 0] += np.linspace(0.0, 0.5, samples)  # not yet periodic
+    attrs = {"attractors_theta": rings["theta"].ravel(),
+             "attractors_omega": rings["omega"].ravel(),
+             "attractors_period": rings["period"], "attractors_samples": samples}
+    labels, _ = maps.identify_attractors(
+        *sweep.maps.labels._with_catalogue(stopped, omega, index, attrs))
+    np.testing.assert_array_equal(labels, full)
+
+
+def test_a_catalogue_across_scenes_is_refused(catalogue, no_compute):
+    grid = sweep.Grid(theta0=[0.0, 1.0], forcing_amplitude=[1.5, 1.66])
+    with pytest.raises(ValueError, match="an attractor catalogue holds the attractors of "
+                                         "one scene, but the grid varies forcing_amplitude"):
+        sweep.run(SCENE, grid, **EARLY, attractors=catalogue)
+
+
+def test_the_pilot_ignores_what_only_the_map_does(catalogue):
+    """A map that saves trajectories or checkpoints: its pilot runs with early stop and
+    none of that."""
+    found = maps.pilot_catalogue(SCENE, _grid(21), 21,
+                                 **dict(EARLY, save_every=100, chunk_size=5,
+                                        estimate_error=3))
+    np.testing.assert_array_equal(found["period"], catalogue["period"])
+
+
+def test_the_resume_hint_repeats_the_pilot(tmp_path):
+    import argparse
+
+    from sweep import cli
+
+    (tmp_path / "ck").mkdir()
+    args = argparse.Namespace(run_file="map.toml", checkpoint=str(tmp_path / "ck"),
+                              scheduler=None, pilot=7)
+    hint = cli._resume_hint(args, tmp_path / "ck", tmp_path / "map.nc")
+    assert "--pilot 7 --resume" in hint

@@ -282,6 +282,36 @@ def test_float32_kernel_computes_in_float32_vectors(tmp_path):
     assert single > 0 and single > 3 * double
 
 
+@pytest.mark.parametrize("model", ["nonlinear", "linear"])
+def test_a_pivot_drive_keeps_the_step_in_float32(model, tmp_path):
+    """The pivot's amplitude a nu^2 / L reads the drive frequency, which stays float64
+    for the phase: its value must still enter the step as float32. From numba's types
+    of the compiled float32 kernel (damping + pivot): the float64 variables are only
+    those kept float64 on purpose (clock, drive frequency and phase, the nonlinear
+    angle, 2 pi), never the velocity or a stage."""
+    script = textwrap.dedent(f"""
+        import numpy as np, sweep
+        from sweep import kernels
+        spec = kernels.KernelSpec("{model}", ("damping", "pivot"), ("final",), block=64,
+                                  dtype="float32")
+        kernel = kernels.build(spec)
+        params = np.ones((64, len(sweep.physics.parameter_names())))
+        kernel(params, 0.0, 0.01, 10, 0, 1, np.empty((64, kernels.n_columns(spec))),
+               np.empty(64, dtype=np.int8), np.empty((0, 2, 0)))
+        for cres in kernel.__globals__["kernel_single"].overloads.values():
+            types = cres.type_annotation.typemap
+            print(" ".join(sorted({{k.split(".")[0] for k, v in types.items()
+                                   if str(v) == "float64" and not k.startswith(("$", "arg."))}})))
+    """)
+    env = dict(os.environ, SWEEP_CACHE_DIR=str(tmp_path))
+    result = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                            text=True, check=True)
+    double = set(result.stdout.split())
+    allowed = {"TWO_PI", "cdt0", "dt_clock", "nu", "psi", "t0", "th", "th0"}
+    assert double <= allowed, double - allowed
+    assert {"om", "k1o", "p0"}.isdisjoint(double)
+
+
 # ------------------------------------------------------------------ estimates, refusals
 def test_error_estimate_of_a_float32_run_includes_its_rounding():
     """The estimate re-runs in float64 at dt/2, so it sees float32's rounding: at

@@ -11,7 +11,8 @@ float32. So a float32 module is the float64 module's text with
   folds the conversion, so these are float32 constants);
 - every parameter load ``x = params[...]`` rounded to float32 (``F(params[...])``),
   except the ones that `float64_symbols` keeps: the start angle of the nonlinear
-  pendulum and the drives' frequencies and phases;
+  pendulum and the drives' frequencies and phases; a drive's amplitude (which may read
+  its frequency) rounded to float32 where it multiplies the drive's sine;
 - the working-precision lanes (angular velocity, parameters, stage values, drive sines)
   allocated as float32 (`sweep.kernels.fixed`), the float32 sine
   (`sweep.kernels.vecmath.sin32`) imported as ``vsin``;
@@ -49,7 +50,8 @@ import io
 import re
 import tokenize
 
-__all__ = ["HEADER", "clock", "float64_symbols", "single", "single_loads", "wrapper"]
+__all__ = ["HEADER", "clock", "float64_symbols", "single", "single_drive_values", "single_loads",
+           "wrapper"]
 
 #: The float32 CPU module's import of the float32 sine (``F = np.float32`` is set
 #: after NumPy's import).
@@ -95,6 +97,18 @@ def float64_symbols(model: str, effects) -> set[str]:
         if effect.drive is not None:
             keep |= {effect.drive.frequency, effect.drive.phase}
     return keep
+
+
+_DRIVE_VALUE = re.compile(r"^(?P<lead>[ \t]*)(?P<name>\w+) = (?P<amplitude>.+) \* s(?P=name)$",
+                          re.MULTILINE)
+
+
+def single_drive_values(text: str) -> str:
+    """Each drive value ``x = amplitude * sx`` with its amplitude rounded to float32:
+    an amplitude may read a drive frequency kept float64 (the pivot's ``a nu^2 / L``),
+    and would otherwise make the value, and the whole step after it, float64."""
+    return _DRIVE_VALUE.sub(lambda m: f"{m.group('lead')}{m.group('name')} = "
+                                      f"F({m.group('amplitude')}) * s{m.group('name')}", text)
 
 
 def single_loads(text: str, keep) -> str:

@@ -41,7 +41,8 @@ from ..observables import OBSERVABLES
 from .adaptive import adaptive_kernel
 from .cuda import cuda_kernel, device_functions
 from .fixed import fixed_kernel
-from .precision import HEADER, clock, float64_symbols, single, single_loads, wrapper
+from .precision import (HEADER, clock, float64_symbols, single, single_drive_values,
+                        single_loads, wrapper)
 from .refill import refill_kernel
 from .spec import (KernelSpec, check_device, check_dtype, check_method_fits, check_observables_fit, check_tangent_fits,
                    method_of, tangent)
@@ -129,7 +130,8 @@ def _precision(spec: KernelSpec, text: str) -> str:
         return _tidy(text)
     text = text.replace(_VECMATH_IMPORT, HEADER, 1).replace(
         "import numpy as np\n", "import numpy as np\nF = np.float32\n", 1)
-    text = clock(single_loads(single(text), float64_symbols(spec.model, spec.effects)))
+    text = clock(single_drive_values(single_loads(single(text), float64_symbols(
+        spec.model, spec.effects))))
     # 2 pi for the observables (turns of the float64 angle): kept float64
     text = text.replace("TWO_PI = F(2.0) * F(math.pi)", "TWO_PI = 2.0 * math.pi")
     text = re.sub(r"^def kernel\(", "def kernel_single(", text, flags=re.MULTILINE)

@@ -4,6 +4,7 @@ and the checks that a method and observables fit a scene."""
 from __future__ import annotations
 
 import enum
+import math
 import re
 from dataclasses import dataclass
 
@@ -178,10 +179,12 @@ class KernelSpec:
         attractors = tuple(tuple((float(theta), float(omega)) for theta, omega in orbit)
                            for orbit in self.attractors)
         object.__setattr__(self, "attractors", attractors)
-        if ("attractor" in self.observe) != bool(attractors) or any(not o for o in attractors):
+        if ("attractor" in self.observe) != bool(attractors) or any(not o for o in attractors) \
+                or not all(math.isfinite(x) for orbit in attractors for point in orbit
+                           for x in point):
             raise ValueError("the 'attractor' observable needs an attractor catalogue and a "
                              "catalogue needs the observable; accepted: both or neither, "
-                             "each orbit with at least one point")
+                             "each orbit with at least one point, every point finite")
         if self.device == "cuda":  # one thread per trajectory: no lanes to refill or share
             object.__setattr__(self, "refill", False)
             object.__setattr__(self, "shared_forcing", False)

@@ -324,47 +324,48 @@ def _catalogued(ds: xr.Dataset, dims) -> np.ndarray | None:
     return np.where(np.isfinite(index), index, -1).astype(np.int64)
 
 
-def _identify_with_catalogue(theta, omega, index, attrs, *, max_period, tol):
-    """`identify_attractors` for a run with an attractor catalogue: the trajectories the
-    kernel matched to catalogued attractor ``a`` (``index >= 0``; it stopped them then,
-    before their stroboscopic samples could show a period) get the label of that
-    attractor's ring, identified together with the unmatched trajectories; labels are
-    then ordered by basin size, as `identify_attractors` orders them."""
+def _catalogue_rings(attrs, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """The run's catalogued rings (``attractors_*`` attributes), each ``width`` samples
+    long: a shorter ring is extended backwards along its own orbit (its last ``period``
+    points repeat, the angle shifted by the orbit's turns), a longer one keeps its
+    last ``width`` samples."""
     samples = int(attrs["attractors_samples"])
-    rings = [np.asarray(attrs[f"attractors_{name}"], dtype=np.float64).reshape(-1, samples)
-             for name in ("theta", "omega")]
-    width = min(theta.shape[1], samples)
+    theta, omega = (np.asarray(attrs[f"attractors_{name}"], dtype=np.float64)
+                    .reshape(-1, samples) for name in ("theta", "omega"))
+    period = np.atleast_1d(np.asarray(attrs["attractors_period"], dtype=np.int64))
+    out_theta = np.empty((theta.shape[0], width))
+    out_omega = np.empty_like(out_theta)
+    for a, p in enumerate(period):
+        for k in range(1, width + 1):  # k-th sample from the end
+            back = max(0, (k - samples + p - 1) // p)  # orbits to step back
+            j = samples - k + back * p
+            out_theta[a, -k] = theta[a, j] - back * (theta[a, -1] - theta[a, -1 - p]) \
+                if back else theta[a, j]
+            out_omega[a, -k] = omega[a, j]
+    return out_theta, out_omega
+
+
+def _with_catalogue(theta, omega, index, attrs) -> tuple[np.ndarray, np.ndarray]:
+    """The stroboscopic tables with each trajectory the run matched to catalogued
+    attractor ``a`` (``index >= 0``: it stopped then, before its own samples could show
+    a period) given that attractor's ring, so that `identify_attractors` labels and
+    ranks it as a full run would (the ring is on the attractor its samples approach)."""
     matched = index >= 0
-    rows = [np.concatenate([table[~matched][:, -width:], ring[:, -width:]])
-            for table, ring in zip((theta, omega), rings)]
-    part, catalogue = identify_attractors(*rows, max_period=max_period, tol=tol)
-    m = rings[0].shape[0]
-    labels = np.full(index.shape, UNRESOLVED, dtype=np.int32)
-    labels[~matched] = part[:-m]
-    labels[matched] = part[-m:][index[matched]]
-    # order by basin size over all trajectories (the rings themselves not counted);
-    # an attractor only a ring holds (no trajectory of this run) is dropped
-    sizes = np.bincount(labels[labels >= 0], minlength=len(catalogue["size"]))
-    order = np.argsort(-sizes, kind="stable")
-    order = order[sizes[order] > 0]
-    rank = np.full(len(sizes), UNRESOLVED, dtype=np.int32)
-    rank[order] = np.arange(order.size, dtype=np.int32)
-    labels = np.where(labels >= 0, rank[np.maximum(labels, 0)], UNRESOLVED).astype(np.int32)
-    catalogue = {key: np.asarray(values)[order] for key, values in catalogue.items()}
-    catalogue["size"] = sizes[order]
-    return labels, catalogue
+    if not matched.any():
+        return theta, omega
+    rings = _catalogue_rings(attrs, theta.shape[1])
+    theta, omega = theta.copy(), omega.copy()
+    theta[matched], omega[matched] = rings[0][index[matched]], rings[1][index[matched]]
+    return theta, omega
 
 
 def _forced_basins(ds: xr.Dataset, *, max_period: int, tol: float) -> xr.DataArray:
     flat_theta, flat_omega, dims = strobe_table(ds)
     index = _catalogued(ds, dims)
-    if index is None:
-        labels, catalogue = identify_attractors(flat_theta, flat_omega,
-                                                max_period=max_period, tol=tol)
-    else:
-        labels, catalogue = _identify_with_catalogue(flat_theta, flat_omega, index,
-                                                     ds.attrs, max_period=max_period,
-                                                     tol=tol)
+    if index is not None:
+        flat_theta, flat_omega = _with_catalogue(flat_theta, flat_omega, index, ds.attrs)
+    labels, catalogue = identify_attractors(flat_theta, flat_omega, max_period=max_period,
+                                            tol=tol)
     shape = tuple(ds.sizes[d] for d in dims)
     out = xr.DataArray(labels.reshape(shape), coords={d: ds[d] for d in dims}, dims=dims,
                        name="basins")
@@ -416,20 +417,10 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
                          "trajectory is unresolved); accepted: a run whose trajectories "
                          "settle, e.g. a longer t_end or t_transient")
     index = _catalogued(ds, dims)
-    rings = []
-    for label in range(period.size):
-        members = np.flatnonzero(flat == label)
-        own = members if index is None else members[index[members] < 0]
-        if own.size:  # a trajectory of this run whose ring shows the attractor
-            rings.append((flat_theta[own[0]], flat_omega[own[0]]))
-        else:  # only trajectories the run matched to its own catalogue: that ring
-            samples = int(ds.attrs["attractors_samples"])
-            a = int(index[members[0]])
-            rings.append(tuple(np.asarray(ds.attrs[f"attractors_{name}"], dtype=np.float64)
-                               .reshape(-1, samples)[a] for name in ("theta", "omega")))
-    width = min(len(theta) for theta, _ in rings)
-    theta = np.array([t[-width:] for t, _ in rings])
-    omega = np.array([w[-width:] for _, w in rings])
+    if index is not None:  # matched trajectories stand for their catalogued ring
+        flat_theta, flat_omega = _with_catalogue(flat_theta, flat_omega, index, ds.attrs)
+    rows = [int(np.flatnonzero(flat == label)[0]) for label in range(period.size)]
+    theta, omega = flat_theta[rows], flat_omega[rows]
     return {"theta": theta, "omega": omega, "period": period}
 
 

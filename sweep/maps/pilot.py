@@ -7,20 +7,17 @@ import numpy as np
 
 from .. import engine
 from .._validate import check_positive_int
+from ..engine import INITIAL_AXES
 from ..grid import Grid
 from ..physics import Scene
 from .labels import attractor_catalogue
 
 __all__ = ["INITIAL_AXES", "pilot_catalogue", "pilot_grid"]
 
-#: The grid axes a pilot may thin: initial conditions only. Every other parameter
-#: changes the attractors themselves, and a catalogue holds the attractors of one scene.
-INITIAL_AXES = ("theta0", "omega0")
-
 #: Runs' settings the pilot does not take from the map's run (where and how the map
 #: itself is run and kept, not what is integrated).
 _MAP_ONLY = ("checkpoint", "resume", "keep_checkpoint", "estimate_error", "chunk_size",
-             "client", "progress", "stop_early", "attractors")
+             "client", "progress", "stop_early", "attractors", "save_every")
 
 
 def pilot_grid(grid: Grid, points: int) -> Grid:
@@ -37,12 +34,7 @@ def pilot_grid(grid: Grid, points: int) -> Grid:
     if points < 2:
         raise ValueError(f"pilot must be an int >= 2 (points per initial-condition axis), "
                          f"got {points!r}")
-    varied = [name for name, values in grid.axes.items()
-              if name not in INITIAL_AXES and np.size(values) > 1]
-    if varied:
-        raise ValueError(f"a pilot catalogue holds the attractors of one scene, but the grid "
-                         f"varies {', '.join(varied)}; accepted: a grid that varies only "
-                         f"{' and '.join(INITIAL_AXES)}")
+    engine.check_one_scene(grid)
     axes = {}
     for name, values in grid.axes.items():
         values = np.asarray(values)
