@@ -236,8 +236,8 @@ def test_a_catalogue_of_shorter_rings_leaves_the_maps_own_rings_whole(full_label
 
 def test_equal_basins_keep_the_full_runs_order():
     """Two attractors with equal basins: labels tie-break as identify_attractors does
-    on the full run, whichever of them the kernel matched more often (matched rows
-    stand for their attractor's ring before identification)."""
+    on the full run, whichever of them the kernel matched more often (a matched
+    attractor's ring is identified once, weighted by its matches)."""
     samples = 16
     rings = {"theta": np.array([np.full(samples, 1.0), np.full(samples, 3.0)]),
              "omega": np.array([np.full(samples, 0.5), np.full(samples, -1.0)]),
@@ -251,9 +251,10 @@ def test_equal_basins_keep_the_full_runs_order():
     attrs = {"attractors_theta": rings["theta"].ravel(),
              "attractors_omega": rings["omega"].ravel(),
              "attractors_period": rings["period"], "attractors_samples": samples}
-    labels, _ = maps.identify_attractors(
-        *sweep.maps.labels._with_catalogue(stopped, omega, index, attrs))
+    labels, found = sweep.maps.labels._identify_with_catalogue(
+        stopped, omega, index, attrs, max_period=8, tol=1e-3)
     np.testing.assert_array_equal(labels, full)
+    np.testing.assert_array_equal(found["size"], [10, 10])
 
 
 def test_a_catalogue_across_scenes_is_refused(catalogue, no_compute):
@@ -282,3 +283,16 @@ def test_the_resume_hint_repeats_the_pilot(tmp_path):
                               scheduler=None, pilot=7)
     hint = cli._resume_hint(args, tmp_path / "ck", tmp_path / "map.nc")
     assert "--pilot 7 --resume" in hint
+
+
+def test_weights_count_as_repeated_rows():
+    """identify_attractors(weights=): one row of weight 5 is five identical rows."""
+    a = (np.full(16, 1.0), np.full(16, 0.5))
+    b = (np.full(16, 3.0), np.full(16, -1.0))
+    repeated = maps.identify_attractors(np.array([a[0]] * 5 + [b[0]] * 3),
+                                        np.array([a[1]] * 5 + [b[1]] * 3))
+    weighted = maps.identify_attractors(np.array([a[0], b[0], b[0], b[0]]),
+                                        np.array([a[1], b[1], b[1], b[1]]),
+                                        weights=np.array([5, 1, 1, 1]))
+    assert weighted[0].tolist() == [0, 1, 1, 1] and repeated[0][0] == 0
+    np.testing.assert_array_equal(weighted[1]["size"], repeated[1]["size"])  # [5, 3]

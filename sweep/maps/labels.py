@@ -345,27 +345,41 @@ def _catalogue_rings(attrs, width: int) -> tuple[np.ndarray, np.ndarray]:
     return out_theta, out_omega
 
 
-def _with_catalogue(theta, omega, index, attrs) -> tuple[np.ndarray, np.ndarray]:
-    """The stroboscopic tables with each trajectory the run matched to catalogued
-    attractor ``a`` (``index >= 0``: it stopped then, before its own samples could show
-    a period) given that attractor's ring, so that `identify_attractors` labels and
-    ranks it as a full run would (the ring is on the attractor its samples approach)."""
+def _identify_with_catalogue(theta, omega, index, attrs, *, max_period: int, tol: float):
+    """`identify_attractors` for a run with an attractor catalogue. A trajectory the
+    kernel matched to catalogued attractor ``a`` (``index >= 0``) stopped before its
+    own samples could show a period; it stands for that attractor's ring (extended to
+    the map's width, `_catalogue_rings`). The unmatched trajectories and one row per
+    matched attractor, weighted by its matches, are identified together: the labels,
+    sizes and order (ties included) are those of identifying every row, at the cost of
+    the unmatched rows only."""
     matched = index >= 0
-    if not matched.any():
-        return theta, omega
+    counts = np.bincount(index[matched], minlength=0)
+    used = np.flatnonzero(counts)  # catalogued attractors this run matched
     rings = _catalogue_rings(attrs, theta.shape[1])
-    theta, omega = theta.copy(), omega.copy()
-    theta[matched], omega[matched] = rings[0][index[matched]], rings[1][index[matched]]
-    return theta, omega
+    unmatched = np.flatnonzero(~matched)
+    table = [np.concatenate([t[unmatched], r[used]]) for t, r in zip((theta, omega), rings)]
+    weights = np.concatenate([np.ones(unmatched.size, dtype=np.int64), counts[used]])
+    part, catalogue = identify_attractors(*table, max_period=max_period, tol=tol,
+                                          weights=weights)
+    labels = np.empty(index.size, dtype=np.int32)
+    labels[unmatched] = part[:unmatched.size]
+    ring_label = np.full(max(counts.size, 1), UNRESOLVED, dtype=np.int32)
+    ring_label[used] = part[unmatched.size:]
+    labels[matched] = ring_label[index[matched]]
+    return labels, catalogue
 
 
 def _forced_basins(ds: xr.Dataset, *, max_period: int, tol: float) -> xr.DataArray:
     flat_theta, flat_omega, dims = strobe_table(ds)
     index = _catalogued(ds, dims)
-    if index is not None:
-        flat_theta, flat_omega = _with_catalogue(flat_theta, flat_omega, index, ds.attrs)
-    labels, catalogue = identify_attractors(flat_theta, flat_omega, max_period=max_period,
-                                            tol=tol)
+    if index is None or not (index >= 0).any():
+        labels, catalogue = identify_attractors(flat_theta, flat_omega,
+                                                max_period=max_period, tol=tol)
+    else:
+        labels, catalogue = _identify_with_catalogue(flat_theta, flat_omega, index,
+                                                     ds.attrs, max_period=max_period,
+                                                     tol=tol)
     shape = tuple(ds.sizes[d] for d in dims)
     out = xr.DataArray(labels.reshape(shape), coords={d: ds[d] for d in dims}, dims=dims,
                        name="basins")
@@ -417,10 +431,16 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
                          "trajectory is unresolved); accepted: a run whose trajectories "
                          "settle, e.g. a longer t_end or t_transient")
     index = _catalogued(ds, dims)
-    if index is not None:  # matched trajectories stand for their catalogued ring
-        flat_theta, flat_omega = _with_catalogue(flat_theta, flat_omega, index, ds.attrs)
-    rows = [int(np.flatnonzero(flat == label)[0]) for label in range(period.size)]
-    theta, omega = flat_theta[rows], flat_omega[rows]
+    if index is not None and (index >= 0).any():  # matched rows: their catalogued ring
+        rings = _catalogue_rings(ds.attrs, flat_theta.shape[1])
+    theta = np.empty((period.size, flat_theta.shape[1]))
+    omega = np.empty_like(theta)
+    for label in range(period.size):
+        row = int(np.flatnonzero(flat == label)[0])
+        if index is not None and index[row] >= 0:
+            theta[label], omega[label] = rings[0][index[row]], rings[1][index[row]]
+        else:
+            theta[label], omega[label] = flat_theta[row], flat_omega[row]
     return {"theta": theta, "omega": omega, "period": period}
 
 
@@ -467,7 +487,7 @@ def _same_orbit(a: np.ndarray, b: np.ndarray, tol: float) -> bool:
 
 
 def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int = 8,
-                        tol: float = 1e-3):
+                        tol: float = 1e-3, weights: np.ndarray | None = None):
     """Group trajectories by the periodic attractor their stroboscopic samples sit on.
 
     Parameters
@@ -478,6 +498,9 @@ def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int
         Longest period (in forcing periods) that is looked for.
     tol : float, default 1e-3
         Repetition and identity tolerance, in rad and rad/s.
+    weights : ndarray of int, shape (n,), optional
+        How many trajectories each row stands for (default one each): basin sizes, and
+        the order of the labels, count them so.
 
     Returns
     -------
@@ -530,6 +553,9 @@ def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int
     attractor_of_bucket = parent[bucket_of]
     roots, inverse, sizes = np.unique(attractor_of_bucket, return_inverse=True,
                                       return_counts=True)
+    if weights is not None:
+        sizes = np.bincount(inverse.ravel(), weights=np.asarray(weights)[resolved],
+                            minlength=roots.size).round().astype(np.int64)
     order = np.argsort(-sizes, kind="stable")
     rank = np.empty_like(order)
     rank[order] = np.arange(order.size)
