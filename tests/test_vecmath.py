@@ -14,7 +14,7 @@ bound, not as a claim of accuracy.
 
 import numpy as np
 import pytest
-from numba import njit, prange
+from numba import njit, prange, vectorize
 
 from sweep import _config
 from sweep.kernels import vecmath as _vecmath
@@ -179,27 +179,13 @@ def test_sincos_is_sin_and_cos_from_one_reduction(rng):
 
 # ------------------------------------------------------------------ float32 (dtype="float32")
 @njit(parallel=True, cache=True, fastmath=KERNEL_FLAGS)
-def _vsin32(x):
-    out = np.empty(x.size, dtype=np.float32)
+def _float32_sines(x):
+    """sin32, cos32 and both halves of sincos32 of every element (float32 arrays)."""
+    out = np.empty((4, x.size), dtype=np.float32)
     for i in prange(x.size):
-        out[i] = _vecmath.sin32(x[i])
-    return out
-
-
-@njit(parallel=True, cache=True, fastmath=KERNEL_FLAGS)
-def _vsincos32(x):
-    s = np.empty(x.size, dtype=np.float32)
-    c = np.empty(x.size, dtype=np.float32)
-    for i in prange(x.size):
-        s[i], c[i] = _vecmath.sincos32(x[i])
-    return s, c
-
-
-@njit(parallel=True, cache=True, fastmath=KERNEL_FLAGS)
-def _vcos32(x):
-    out = np.empty(x.size, dtype=np.float32)
-    for i in prange(x.size):
-        out[i] = _vecmath.cos32(x[i])
+        out[0, i] = _vecmath.sin32(x[i])
+        out[1, i] = _vecmath.cos32(x[i])
+        out[2, i], out[3, i] = _vecmath.sincos32(x[i])
     return out
 
 
@@ -220,33 +206,28 @@ def test_float32_sine_up_to_1e4_and_beyond(rng):
                         rng.uniform(-1e6, 1e6, 500_000), rng.uniform(-1e8, 1e8, 500_000),
                         _neighbours(np.arange(-6366, 6367) * (np.pi / 2)),
                         10.0 ** rng.uniform(-30, 0, 100_000)])
-    assert np.max(np.abs(_vsin32(x) - np.sin(x))) <= TOL32
-    assert np.max(np.abs(_vcos32(x) - np.cos(x))) <= TOL32
+    sines = _float32_sines(x)
+    assert np.max(np.abs(sines[0] - np.sin(x))) <= TOL32
+    assert np.max(np.abs(sines[1] - np.cos(x))) <= TOL32
     x32 = x.astype(np.float32)
     wide = x32.astype(np.float64)
-    assert np.max(np.abs(_vsin32(x32) - np.sin(wide))) <= TOL32
+    assert np.max(np.abs(_float32_sines(x32)[0] - np.sin(wide))) <= TOL32
 
 
 def test_float32_sincos_is_sin32_and_cos32():
-    x = np.linspace(-1e3, 1e3, 200_001)
-    s, c = _vsincos32(x)
-    assert s.dtype == np.float32 and c.dtype == np.float32
-    np.testing.assert_array_equal(s, _vsin32(x))
-    np.testing.assert_array_equal(c, _vcos32(x))
+    sines = _float32_sines(np.linspace(-1e3, 1e3, 200_001))
+    np.testing.assert_array_equal(sines[2], sines[0])
+    np.testing.assert_array_equal(sines[3], sines[1])
 
 
 def test_float32_nan_and_inf_propagate():
-    x = np.array([np.nan, np.inf, -np.inf])
-    assert np.all(np.isnan(_vsin32(x))) and np.all(np.isnan(_vcos32(x)))
+    assert np.all(np.isnan(_float32_sines(np.array([np.nan, np.inf, -np.inf]))))
 
 
 # ------------------------------------------------------------------ the controller's root
-@njit(parallel=True, cache=True, fastmath=KERNEL_FLAGS)
-def _vroot5(x):
-    out = np.empty_like(x)
-    for i in prange(x.size):
-        out[i] = _vecmath.inverse_fifth_root(x[i])
-    return out
+#: the controller's root as a ufunc (its vectorisation inside the kernel is what
+#: benchmarks/work_precision.py measures)
+_vroot5 = vectorize(["float64(float64)"], cache=True)(_vecmath.inverse_fifth_root.py_func)
 
 
 def test_inverse_fifth_root_is_libms_power_to_rounding(rng):
