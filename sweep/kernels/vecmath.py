@@ -108,24 +108,28 @@ def _cos_poly(r):
 
 
 @njit(cache=True, **_JIT)
+def _quadrant(s, c, q):
+    """(sin x, cos x) from ``s = sin r``, ``c = cos r`` of the reduced argument and the
+    quadrant ``q`` (x = q pi/2 + r), by selects: sin x is +-s or +-c by ``q mod 4``, and
+    cos(x) = sin(x + pi/2), i.e. quadrant q + 1 (the polynomials swapped, the sign
+    flipped on quadrants 1 and 2). Both precisions use it."""
+    v = c if (q & 1) else s
+    w = s if (q & 1) else c
+    return (-v if (q & 2) else v), (-w if ((q + 1) & 2) else w)
+
+
+@njit(cache=True, **_JIT)
 def sin(x):
     """sin(x) in float64, branch-free (vectorisable); accurate for |x| < ~1e8."""
     r, q = _reduce(x)
-    s = _sin_poly(r)
-    c = _cos_poly(r)
-    v = c if (q & 1) else s
-    return -v if (q & 2) else v
+    return _quadrant(_sin_poly(r), _cos_poly(r), q)[0]
 
 
 @njit(cache=True, **_JIT)
 def cos(x):
     """cos(x) = sin(x + pi/2) through the same reduction (quadrant shifted by one)."""
     r, q = _reduce(x)
-    s = _sin_poly(r)
-    c = _cos_poly(r)
-    q = q + 1
-    v = c if (q & 1) else s
-    return -v if (q & 2) else v
+    return _quadrant(_sin_poly(r), _cos_poly(r), q)[1]
 
 
 @njit(cache=True, **_JIT)
@@ -133,13 +137,7 @@ def sincos(x):
     """(sin(x), cos(x)) from one argument reduction: the same bits as `sin` and `cos`
     (the tangent dynamics of `sweep.kernels` need both at every stage)."""
     r, q = _reduce(x)
-    s = _sin_poly(r)
-    c = _cos_poly(r)
-    v = c if (q & 1) else s
-    w = s if (q & 1) else c
-    # cos(x) = sin(x + pi/2): quadrant q + 1, i.e. swap the polynomials and flip the
-    # sign on quadrants 1 and 2
-    return (-v if (q & 2) else v), (-w if ((q + 1) & 2) else w)
+    return _quadrant(_sin_poly(r), _cos_poly(r), q)
 
 
 @njit(cache=True, inline="always", **_JIT)
@@ -233,21 +231,14 @@ def sin32(x):
     """sin(x) in float32 (x float32 or float64), branch-free; see the single-precision
     notes."""
     r, q = _reduce32(x)
-    s = _sin_poly32(r)
-    c = _cos_poly32(r)
-    v = c if (q & 1) else s
-    return -v if (q & 2) else v
+    return _quadrant(_sin_poly32(r), _cos_poly32(r), q)[0]
 
 
 @njit(cache=True, **_JIT)
 def cos32(x):
     """cos(x) in float32 through the same reduction (quadrant shifted by one)."""
     r, q = _reduce32(x)
-    s = _sin_poly32(r)
-    c = _cos_poly32(r)
-    q = q + 1
-    v = c if (q & 1) else s
-    return -v if (q & 2) else v
+    return _quadrant(_sin_poly32(r), _cos_poly32(r), q)[1]
 
 
 @njit(cache=True, **_JIT)
@@ -255,8 +246,4 @@ def sincos32(x):
     """(sin(x), cos(x)) in float32 from one reduction (the same bits as `sin32`,
     `cos32`)."""
     r, q = _reduce32(x)
-    s = _sin_poly32(r)
-    c = _cos_poly32(r)
-    v = c if (q & 1) else s
-    w = s if (q & 1) else c
-    return (-v if (q & 2) else v), (-w if ((q + 1) & 2) else w)
+    return _quadrant(_sin_poly32(r), _cos_poly32(r), q)
