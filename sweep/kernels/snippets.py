@@ -88,9 +88,9 @@ def stop_source(spec: KernelSpec, action: str = "break") -> str:
                      + _counts(_tolerances(obs.settled, spec).replace("COL", str(col)),
                                spec).replace("SETTLED", flag))
         col += obs.n_columns(spec)
-    test = " or ".join(([f"({' and '.join(flags)})"] if flags else []) + alternatives)
-    if not alternatives:
-        test = " and ".join(flags)
+    test = " and ".join(flags)
+    if alternatives:
+        test = " or ".join(([f"({test})"] if flags else []) + alternatives)
     lines.append(f"if {test}:\n" + indent(action, 1))
     return "\n".join(lines)
 
