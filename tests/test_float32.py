@@ -214,6 +214,9 @@ def test_strobe_early_stop_in_float32_stops():
     source = kernels.source(KernelSpec("nonlinear", ("damping", "forcing"), ("strobe",),
                                        stop_early=True, dtype="float32"))
     assert "F(1e-06) + F(4.76837158203125e-07) * abs(" in source
+    # 2 pi stays float64 for the observables' turns of the float64 angle
+    # (sweep.kernels.source._precision patches the generated line back)
+    assert "TWO_PI = 2.0 * math.pi" in source and "TWO_PI = F(" not in source
 
 
 def test_refill_gives_the_same_bits_as_waiting_lanes_in_float32():
