@@ -16,7 +16,53 @@ import numpy as np
 from ._validate import check_axis, check_numbers
 from .physics import EFFECTS, Scene, parameter_names, parameters
 
-__all__ = ["Grid", "from_degrees"]
+__all__ = ["Grid", "GridRows", "from_degrees"]
+
+
+class GridRows:
+    """Rows ``start:start + n`` of a grid's parameter table (`Grid.table`), described:
+    row ``i`` is ``template`` with, for each axis ``a``, column ``columns[a]`` set to
+    ``values[offsets[a] + ((start + i) // strides[a]) % sizes[a]]``.
+
+    What the GPU kernel receives instead of the table: its threads build their own rows,
+    so a chunk costs no host-side table and no copy of one (`sweep.kernels.cuda`).
+
+    Attributes
+    ----------
+    template : ndarray, shape (n_parameters,), float64
+        The scene's parameters (theta0 = omega0 = 0 where no axis sets them).
+    columns, strides, sizes, offsets : ndarray, shape (n_axes,), int64
+        Per axis: its table column, its flat-index stride (C order), its length, and
+        where its values start in ``values``.
+    values : ndarray, shape (sum of the axes' lengths,), float64
+        The axes' values, concatenated in axis order.
+    start, n : int
+        The first flat trajectory index and the number of rows.
+    """
+
+    def __init__(self, *, template, columns, strides, sizes, offsets, values, start, n):
+        self.template, self.columns, self.strides = template, columns, strides
+        self.sizes, self.offsets, self.values = sizes, offsets, values
+        self.start, self.n = start, n
+
+    @classmethod
+    def from_table(cls, table: np.ndarray) -> GridRows:
+        """A table's rows described: every column an axis of stride 1 over the rows."""
+        n, width = table.shape
+        return cls(template=np.zeros(width), columns=np.arange(width, dtype=np.int64),
+                   strides=np.ones(width, dtype=np.int64),
+                   sizes=np.full(width, n, dtype=np.int64),
+                   offsets=np.arange(width, dtype=np.int64) * n,
+                   values=np.ascontiguousarray(table.T).ravel().astype(np.float64),
+                   start=0, n=n)
+
+    def __len__(self) -> int:
+        return self.n
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """The table's shape, (n, n_parameters)."""
+        return (self.n, self.template.size)
 
 
 def from_degrees(values) -> np.ndarray:
@@ -155,19 +201,34 @@ class Grid:
         ndarray, shape (stop - start, n_parameters), float64, C-contiguous
             Columns in the order of `sweep.physics.parameter_names`.
         """
-        stop = self.size if stop is None else stop
-        n = stop - start
-        names = parameter_names()
-        table = np.empty((n, len(names)), dtype=np.float64)
-        fixed = {"theta0": 0.0, "omega0": 0.0, **scene.parameters()}
-        for column, name in enumerate(names):
-            table[:, column] = fixed[name]
-        if n == 0:
-            return table
-        index = np.unravel_index(np.arange(start, stop, dtype=np.int64), self.shape)
-        for axis_index, (name, values) in zip(index, self._axes.items()):
-            table[:, names.index(name)] = values[axis_index]
+        rows = self.rows(scene, start, stop)
+        # the constant row broadcast in one contiguous pass, then only the axes' columns
+        table = np.empty(rows.shape, dtype=np.float64)
+        table[:] = rows.template
+        flat = np.arange(rows.start, rows.start + len(rows), dtype=np.int64)
+        for column, stride, size, offset in zip(rows.columns, rows.strides, rows.sizes,
+                                                rows.offsets):
+            table[:, column] = rows.values[offset + (flat // stride) % size]
         return table
+
+    def rows(self, scene: Scene, start: int = 0, stop: int | None = None) -> GridRows:
+        """The rows ``start:stop`` of `table`, described instead of tabulated: the
+        constant row and each axis's column, stride and values, from which trajectory
+        ``start + i`` builds its own row where it runs (a GPU thread does; see
+        `GridRows`). O(number of axis values) memory, whatever the chunk's size."""
+        stop = self.size if stop is None else stop
+        names = parameter_names()
+        fixed = {"theta0": 0.0, "omega0": 0.0, **scene.parameters()}
+        template = np.array([fixed[name] for name in names], dtype=np.float64)
+        strides = np.cumprod((self.shape + (1,))[:0:-1])[::-1] if self._axes else ()
+        sizes = [values.size for values in self._axes.values()]
+        return GridRows(
+            template=template,
+            columns=np.array([names.index(name) for name in self._axes], dtype=np.int64),
+            strides=np.array(strides, dtype=np.int64), sizes=np.array(sizes, dtype=np.int64),
+            offsets=np.array(np.cumsum([0] + sizes[:-1]), dtype=np.int64),
+            values=np.concatenate([np.zeros(0)] + list(self._axes.values())).astype(np.float64),
+            start=int(start), n=int(stop - start))
 
     def chunks(self, chunk_size: int) -> Iterator[tuple[int, int]]:
         """Yield ``(start, stop)`` flat index ranges of at most ``chunk_size`` rows."""

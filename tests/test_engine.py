@@ -297,3 +297,35 @@ def test_warm_up_compiles_the_kernel_the_run_then_uses():
     assert len(kernel.signatures) == 1  # and nothing new compiled
     with pytest.raises(ValueError, match=r"t_end must be > t0"):
         sweep.engine.warm_up(scene, grid, t_end=-1.0, dt=0.01)  # validated like run
+
+
+def test_grid_table_and_its_description_against_meshgrid():
+    """`Grid.table` (any slice) is the C-order meshgrid of the axes over the scene's
+    row, and `Grid.rows` / `GridRows.from_table` describe the same rows: rebuilding
+    each row from the description the way a GPU thread does gives the table exactly."""
+    from sweep.grid import GridRows
+    from sweep.physics import parameter_names
+
+    grid = sweep.Grid(theta0=np.linspace(-1, 1, 7), omega0=[1.0, 2.0, 3.0],
+                      damping=[0.1, 0.2])
+    scene = sweep.Scene(gravity=3.0, effects=(sweep.Damping(0.3),))
+    names = parameter_names()
+    mesh = np.meshgrid(*grid.axes.values(), indexing="ij")
+
+    def rebuilt(rows):
+        table = np.tile(rows.template, (len(rows), 1))
+        for i in range(len(rows)):
+            for a, column in enumerate(rows.columns):
+                k = (rows.start + i) // rows.strides[a] % rows.sizes[a]
+                table[i, column] = rows.values[rows.offsets[a] + k]
+        return table
+
+    for start, stop in ((0, 42), (5, 37), (41, 42), (9, 9)):
+        table = grid.table(scene, start, stop)
+        assert table.shape == (stop - start, len(names)) and table.flags.c_contiguous
+        for name, values in zip(grid.axes, mesh):
+            np.testing.assert_array_equal(table[:, names.index(name)],
+                                          values.ravel()[start:stop])
+        assert (table[:, names.index("gravity")] == 3.0).all()
+        np.testing.assert_array_equal(rebuilt(grid.rows(scene, start, stop)), table)
+        np.testing.assert_array_equal(rebuilt(GridRows.from_table(table)), table)
