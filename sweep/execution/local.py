@@ -24,7 +24,11 @@ class RunContext:
         self.spec = spec
         self.settings = settings
 
-    def table(self, start: int, stop: int) -> np.ndarray:
+    def table(self, start: int, stop: int):
+        """The rows ``start:stop`` for the kernel: a table on the CPU, described
+        (`sweep.grid.GridRows`) for the GPU, whose threads build their own rows."""
+        if self.spec.device == "cuda":
+            return self.grid.rows(self.scene, start, stop)
         return self.grid.table(self.scene, start, stop)
 
 

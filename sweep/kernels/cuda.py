@@ -125,6 +125,18 @@ def device_functions(text: str, dtype: str = "float64") -> str:
     return math + "\n\n" + text.replace("@njit(**JIT)", "@cuda.jit(device=True)")
 
 
+# one parameter of the thread's row of the table, from the chunk's description (see
+# `sweep.grid.GridRows`): the scene's value, or the value of the axis that sets it
+_PARAMETER = '''
+
+@cuda.jit(device=True)
+def _param(column, params, flat, columns, strides, sizes, offsets, values):
+    for axis in range(columns.shape[0]):
+        if columns[axis] == column:
+            return values[offsets[axis] + (flat // strides[axis]) % sizes[axis]]
+    return params[column]
+'''
+
 _NP_FLOOR = re.compile(r"\bnp\.floor\(")
 
 
@@ -152,7 +164,9 @@ def cuda_kernel(spec: KernelSpec, method) -> str:
         loop += ["if (step + 1) % save_every == 0:",
                  "    saved[i, 0, (step + 1) // save_every] = th",
                  "    saved[i, 1, (step + 1) // save_every] = om"]
-    first = load_lines(spec) + ["th = th0", "om = om0", snippets(spec, "init")]
+    first = load_lines(spec, row=None, table="_param",
+                       arguments="params, flat, columns, strides, sizes, offsets, values"
+                       ) + ["th = th0", "om = om0", snippets(spec, "init")]
     if update:
         first += ["if n_transient <= 0:", indent(update, 1)]
     if spec.save:
@@ -164,31 +178,41 @@ def cuda_kernel(spec: KernelSpec, method) -> str:
               "        out[i, col] = math.nan"]
     if spec.save:
         finish += [indent(_FAIL_SAVED, 1)]
-    body = NL.join(["i = cuda.grid(1)", "if i >= params.shape[0]:", "    return",
-                    "TWO_PI = 2.0 * math.pi", "k_state = 0"] + parts["preamble"] + first +
+    body = NL.join(["i = cuda.grid(1)", "if i >= out.shape[0]:", "    return",
+                    "flat = first + i", "TWO_PI = 2.0 * math.pi", "k_state = 0"] + parts["preamble"] + first +
                    ["for step in range(n_steps):", indent(NL.join(loop), 1)]
                    + finish)
     return f'''
 THREADS = {THREADS_PER_BLOCK}
 
 
+{_PARAMETER}
+
 @cuda.jit
-def _thread(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
+def _thread(params, t0, dt, n_steps, n_transient, save_every, out, status, saved, first,
+            columns, strides, sizes, offsets, values):
 {indent(_device(body), 1)}
 
 
 def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
-    """Copy the chunk to the GPU, run one thread per trajectory, copy the outputs
-    back (the CPU kernels' contract)."""
+    """Run one GPU thread per trajectory and copy the outputs back (the CPU kernels'
+    contract). ``params``: the chunk's rows described (`sweep.grid.GridRows`: a few
+    hundred bytes go to the GPU, and each thread reads its own parameters from it, see
+    ``_param``) or a table."""
     n = params.shape[0]
     if n == 0:
         return
-    d_params = cuda.to_device(np.ascontiguousarray(params))
+    rows = params if isinstance(params, GridRows) else GridRows.from_table(params)
     d_out = cuda.device_array(out.shape, dtype=out.dtype)
     d_status = cuda.device_array(status.shape, dtype=status.dtype)
     d_saved = cuda.to_device(np.ascontiguousarray(saved))
-    _thread[(n + THREADS - 1) // THREADS, THREADS](
-        d_params, t0, dt, n_steps, n_transient, save_every, d_out, d_status, d_saved)
+    with warnings.catch_warnings():  # a small grid is a legitimate run, not a mistake
+        warnings.filterwarnings("ignore", ".*Grid size .* under-utilization")
+        _thread[(n + THREADS - 1) // THREADS, THREADS](
+            cuda.to_device(rows.template), t0, dt, n_steps, n_transient, save_every, d_out,
+            d_status, d_saved, rows.start, cuda.to_device(rows.columns),
+            cuda.to_device(rows.strides), cuda.to_device(rows.sizes),
+            cuda.to_device(rows.offsets), cuda.to_device(rows.values))
     out[...] = d_out.copy_to_host()
     status[...] = d_status.copy_to_host()
     if saved.size:

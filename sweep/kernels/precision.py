@@ -9,7 +9,8 @@ float32. So a float32 module is the float64 module's text with
 
 - every float literal and ``math.pi`` wrapped as ``F(...)`` (``F = np.float32``: LLVM
   folds the conversion, so these are float32 constants);
-- every parameter load ``x = params[...]`` rounded to float32 (``F(params[...])``),
+- every parameter load ``x = params[...]`` (``x = _param(...)`` on the GPU) rounded to
+  float32 (``F(params[...])``),
   except the ones that `float64_symbols` keeps: the start angle of the nonlinear
   pendulum and the drives' frequencies and phases; a drive's amplitude (which may read
   its frequency) rounded to float32 where it multiplies the drive's sine;
@@ -84,8 +85,8 @@ def single(text: str) -> str:
     return text
 
 
-_LOAD = re.compile(r"^(?P<lead>[ \t]*)(?P<name>\w+) = (?P<load>params\[[^\]\n]*\])[ \t]*$",
-                   re.MULTILINE)
+_LOAD = re.compile(r"^(?P<lead>[ \t]*)(?P<name>\w+) = "
+                   r"(?P<load>params\[[^\]\n]*\]|_param\([^)\n]*\))[ \t]*$", re.MULTILINE)
 
 
 def float64_symbols(model: str, effects) -> set[str]:

@@ -52,8 +52,12 @@ def status_counts(status) -> dict[int, int]:
     """``{code: trajectories}`` of a `Status` array (any shape)."""
     import numpy as np
 
-    codes, counts = np.unique(np.asarray(status), return_counts=True)
-    return {int(c): int(k) for c, k in zip(codes, counts)}
+    status = np.asarray(status).reshape(-1)
+    ok = status == Status.OK  # nearly every trajectory: sort only the others
+    counts = {int(Status.OK): int(np.count_nonzero(ok))} if ok.any() else {}
+    codes, others = np.unique(status[~ok], return_counts=True)
+    counts.update({int(c): int(k) for c, k in zip(codes, others)})
+    return dict(sorted(counts.items()))
 
 
 def failure_summary(counts: dict[int, int], total: int) -> str | None:
@@ -188,6 +192,7 @@ class KernelSpec:
         if self.device == "cuda":  # one thread per trajectory: no lanes to refill or share
             object.__setattr__(self, "refill", False)
             object.__setattr__(self, "shared_forcing", False)
+            object.__setattr__(self, "block", 1)  # one kernel whatever the grid's size
         method = self.method
         if not isinstance(method, str) and \
                 _methods.METHODS.get(getattr(method, "name", None)) == method:

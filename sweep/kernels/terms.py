@@ -168,10 +168,17 @@ def drive_line(effect: EffectDeclaration, name: str, at: str) -> str:
     return f"{name} = {effect.drive.amplitude} * {drive_sine(effect, at)}"
 
 
-def load_lines(spec: KernelSpec, row: str = "i") -> list[str]:
-    """Per-trajectory loads: initial state, pendulum, the effects' parameters."""
-    load = [f"{p.symbol} = params[{row}, {column_of(spec, p.symbol)}]"
-            for p in BASE_PARAMETERS] + ["w0sq = g / L"]
+def load_lines(spec: KernelSpec, row: str | None = "i", table: str = "params",
+               arguments: str = "") -> list[str]:
+    """Per-trajectory loads: initial state, pendulum, the effects' parameters, from
+    ``table[row, column]``, or, where ``row`` is None, from the call
+    ``table(column, arguments)`` (a GPU thread's parameter, `sweep.kernels.cuda`)."""
+    def load(symbol):
+        column = column_of(spec, symbol)
+        return f"{symbol} = {table}({column}, {arguments})" if row is None else \
+            f"{symbol} = {table}[{row}, {column}]"
+
+    lines = [load(p.symbol) for p in BASE_PARAMETERS] + ["w0sq = g / L"]
     for effect in spec.effects:
-        load += [f"{s} = params[{row}, {column_of(spec, s)}]" for s in effect.symbols]
-    return load
+        lines += [load(s) for s in effect.symbols]
+    return lines
