@@ -194,3 +194,26 @@ def test_run_file_and_command_line_device(tmp_path):
     run_file.write_text(run_file.read_text().replace('"cuda"', '"tpu"'))
     with pytest.raises(ValueError, match="device must be one of 'cpu', 'cuda', got 'tpu'"):
         sweep.toml_spec.load_run(run_file)
+
+
+def test_a_table_and_its_description_give_the_same_bits():
+    """The GPU kernel takes a chunk as `sweep.grid.GridRows` (what `sweep.run` passes:
+    each thread reads its own parameters) or as a table (`GridRows.from_table`): the
+    same rows give the same bits either way."""
+    from sweep.execution.local import RunContext, allocate, integrate
+    from sweep.kernels import build
+
+    grid = sweep.Grid(theta0=[-2.0, 0.5, 3.0], omega0=[0.0, 1.5], forcing_frequency=[1.5, 2.0])
+    settings, spec, _ = sweep.engine._prepare(
+        FULL, grid, t_end=1.0, dt=0.01, t0=0.0, t_transient=0.0, observe=("final",),
+        save_every=None, method="rk4", rtol=None, atol=None, chunk_size=None,
+        specialize=True, check_stability=True, estimate_error=None, stop_early=False,
+        device="cuda")
+    context = RunContext(FULL, grid, spec, settings)
+    results = []
+    for rows in (context.table(2, 11), grid.table(FULL, 2, 11)):
+        arrays = allocate(spec, settings, 9)
+        integrate(build(spec), rows, settings, arrays)
+        results.append(arrays["out"])
+    assert type(context.table(2, 11)).__name__ == "GridRows"
+    np.testing.assert_array_equal(results[0], results[1])
