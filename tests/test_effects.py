@@ -95,7 +95,7 @@ def test_generated_kernels_are_bit_identical_to_those_before_the_declarations(na
         # dopri5 now runs in SIMD lanes (sweep.kernels.adaptive): the same method, the
         # same step counts, but its error norm is contracted into FMAs differently from
         # the one-trajectory kernel of sweep 0.1, and its controller's err^-0.2 comes
-        # from vecmath.inverse_fifth_root (within 3e-13 of libm's pow), so a step size
+        # from vecmath.inverse_fifth_root (within 3 ulp of libm's pow), so a step size
         # differs in its last bits now and then; on these chaotic trajectories that
         # grows to at most 7.4e-11 relative over the 30 s (4e-9 on an accumulator of
         # 55). A change of method (a coefficient, the controller) would change the step
