@@ -31,17 +31,17 @@ SMALL_BLOCK = 64
 
 #: Lanes per block of the adaptive kernel (`sweep.kernels.adaptive`). A block tries
 #: steps until its slowest trajectory is done, so it costs BLOCK x the most attempts
-#: of its trajectories: the smallest block LLVM vectorises (8 is left scalar) wastes
-#: least on grids whose trajectories need different numbers of steps. Measured on
-#: 20,000 forced trajectories: blocks of 16, 32 and 64 equally fast (3.2x a block of
-#: one), a block of 8 no faster than one.
-ADAPTIVE_BLOCK = 16
+#: of its trajectories. ``benchmarks/work_precision.py`` (its last table, 8192
+#: trajectories): blocks of 16 are 11-21 % slower than blocks of 64 on the four
+#: work-precision scenes and 6-9 % slower on an uneven grid (the phase plane with omega0
+#: in [-20, 20] along the block); a block of 8 is left scalar by LLVM.
+ADAPTIVE_BLOCK = 64
 
 #: The adaptive kernels compute the step-size controller's factor ``err ** -0.2`` with
 #: the lanes, vectorised (`sweep.kernels.vecmath.inverse_fifth_root`); False: with
 #: libm's power, lane by lane (not vectorisable, but the faster choice for one
 #: trajectory at a time: ``benchmarks/work_precision.py`` uses it for its baseline).
-#: Step choices are the same (the two agree to 2.8e-13); results differ in the last bits.
+#: Step choices are the same (the two agree to 3 ulp); results differ in the last bits.
 VECTOR_CONTROLLER = True
 
 #: Early-stopped runs refill lanes (`sweep.kernels.refill`): a lane whose trajectory

@@ -196,3 +196,21 @@ def test_float32_benchmark_runs_and_writes_its_tables(tmp_path):
         assert 0 <= row["changed"] + row["unresolved"] <= row["starts"] == 81
     assert result["basins"]["float64"]["unresolved"] < 81  # the map resolves something
     assert "| chaotic (A = 1.5)" in (tmp_path / "float32.md").read_text()
+
+
+def test_dopri5_lanes_table_of_the_work_precision_script():
+    """The work-precision script's dopri5 table on a few trajectories: every scene and
+    the uneven grid, each with the three timings and the speed-up between them; the
+    block setting is restored afterwards (rates mean nothing at this size)."""
+    import sweep
+
+    work_precision = importlib.import_module("work_precision")
+    block = sweep._config.ADAPTIVE_BLOCK
+    rows, table = work_precision.dopri5_lanes(64, 1, tolerances=(1e-6,))
+    assert sweep._config.ADAPTIVE_BLOCK == block and sweep._config.VECTOR_CONTROLLER
+    assert [row["scene"] for row in rows] == ["libration", "separatrix", "rotation",
+                                              "forced", "uneven"]
+    for row in rows:
+        assert min(row["one_at_a_time_s"], row["small_blocks_s"], row["lanes_s"]) > 0
+        assert row["speedup"] == row["one_at_a_time_s"] / row["lanes_s"]
+    assert len(table) == 6 + len(rows) + 1 and table[-2].startswith("| uneven")

@@ -11,13 +11,13 @@ the block or the thread count, bit for bit (``tests/test_blocks.py``). Against t
 one-trajectory kernel of sweep 0.1 the step counts are the same and the states agree to
 rounding (LLVM contracts the error norm into FMAs differently; ``tests/test_effects.py``).
 
-A block costs BLOCK times the most step attempts of its trajectories, so blocks are
-small (`sweep._config.ADAPTIVE_BLOCK`). Measured by ``benchmarks/work_precision.py``
-(its last table): 4.5-5.1x the speed of one trajectory per block (with libm's power, the
-faster scalar choice) at the same tolerance.
+A block costs BLOCK times the most step attempts of its trajectories
+(`sweep._config.ADAPTIVE_BLOCK`). Measured by ``benchmarks/work_precision.py`` (its
+last table): 5.0-5.9x the speed of one trajectory per block (with libm's power, the
+faster scalar choice) at the same tolerance, 4.1-4.5x on an uneven grid.
 The controller's factor ``err ** -0.2`` is computed with the lanes, vectorised
-(`sweep.kernels.vecmath.inverse_fifth_root`: square roots and Newton steps, no libm
-call); what is left scalar is each lane's accept/reject bookkeeping.
+(`sweep.kernels.vecmath.inverse_fifth_root`: a guess from the float's bits and Newton
+steps, no libm call); what is left scalar is a finished lane's write-out.
 
 Each trajectory advances its own time ``t`` (a sum of accepted steps) and clips its
 last step so that it ends at ``t_end`` exactly. A trajectory whose step would have to
