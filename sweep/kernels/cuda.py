@@ -179,9 +179,9 @@ def cuda_kernel(spec: KernelSpec, method) -> str:
     if spec.save:
         finish += [indent(_FAIL_SAVED, 1)]
     body = NL.join(["i = cuda.grid(1)", "if i >= out.shape[0]:", "    return",
-                    "flat = first + i", "TWO_PI = 2.0 * math.pi", "k_state = 0"] + parts["preamble"] + first +
-                   ["for step in range(n_steps):", indent(NL.join(loop), 1)]
-                   + finish)
+                    "flat = first + i", "TWO_PI = 2.0 * math.pi", "k_state = 0"]
+                   + parts["preamble"] + first
+                   + ["for step in range(n_steps):", indent(NL.join(loop), 1)] + finish)
     return f'''
 THREADS = {THREADS_PER_BLOCK}
 

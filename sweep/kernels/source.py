@@ -100,7 +100,7 @@ def source(spec: KernelSpec) -> str:
 import math
 import warnings
 import numpy as np
-from numba import cuda, float64
+from numba import cuda
 from sweep.grid import GridRows
 
 

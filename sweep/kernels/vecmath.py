@@ -44,8 +44,6 @@ every stage beside the sine). Measured (``tests/test_vecmath.py``): max abs erro
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from llvmlite import ir
 from numba import njit, types
@@ -175,10 +173,11 @@ def inverse_fifth_root(x):
     A first guess from the float's bits (``_ROOT5_MAGIC``, the inverse-square-root
     trick for the fifth root: within 3.5 %), then four Newton steps for ``y ** -5 = x``
     (each squares the relative error, times ~3: 3.8e-3, 4.3e-5, 5.5e-9, then rounding),
-    within 2 ulp of libm's power (``tests/test_vecmath.py``), so the controller makes
-    the same choices as with it. No square root and no division: the previous version
-    (four square roots for ``x ** (-3/16)``, a division, five Newton steps) took a fifth
-    of the lanes' time (measured). The controller clips the factor to [0.2, 10],
+    within 3 ulp of libm's power (``tests/test_vecmath.py``), so the controller makes
+    the same choices as with it. No square root and no division (the previous version
+    took four square roots for ``x ** (-3/16)``, a division and five Newton steps, and
+    was within 2.8e-13); the lanes' speed did not change measurably with it
+    (``benchmarks/work_precision.py``). The controller clips the factor to [0.2, 10],
     reached at ``x`` = 1845 and 5.9e-6, so ``x`` is clamped to the range first. Inlined
     into the kernel by numba (``inline="always"``): left to LLVM's inliner, a call
     stayed in the lane loop once the function grew, and the loop was not vectorised
