@@ -9,14 +9,17 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-#: numba ``fastmath`` flags. Never ``reassoc`` (it would let LLVM reorder sums, so
-#: results would drift from the NumPy oracle and break `sweep.kernels.vecmath`'s exact
-#: argument reduction), nor ``nnan``/``ninf`` (non-finite states must be detected).
-#: ``contract`` lets LLVM fuse a*b + c into one FMA instruction (one rounding instead
-#: of two). Measured by ``benchmarks/run_all.py`` (its flag table): on the full scene
-#: none 385, nsz 380, contract 505, contract + nsz 509 M trajectory-steps/s, so
-#: ``contract`` alone: the speed, and no other license.
-FASTMATH: bool | frozenset = frozenset({"contract"})
+#: numba ``fastmath`` flags of the kernels and `sweep.kernels.vecmath`: none. Never
+#: ``reassoc`` (it would let LLVM reorder sums, so results would drift from the NumPy
+#: oracle and break `sweep.kernels.vecmath`'s exact argument reduction), nor
+#: ``nnan``/``ninf`` (non-finite states must be detected), and no longer ``contract``:
+#: the fused multiply-adds the kernels want are written explicitly (``vfma``,
+#: `sweep.kernels.vecmath.fma`: the RK stages and updates, gravity onto the other
+#: terms, the sine), because with ``contract`` LLVM chose which product of an
+#: ``a * b + c * d`` to fuse by the code around it, so a lone trajectory, an unrolled
+#: block of 8 and a vectorised block of 64 gave different last bits (measured, once
+#: the sine changed). ``benchmarks/run_all.py`` times the flag sets (its flag table).
+FASTMATH: bool | frozenset = frozenset()
 
 #: Trajectories per block of the fixed-step kernels: the lanes one thread advances
 #: together, step by step (a multiple of the SIMD width). Results do not depend on
@@ -82,7 +85,7 @@ CHUNK_MIN = 16 * BLOCK
 def jit_options() -> dict:
     """numba options of sweep's compiled helpers (`sweep.kernels.vecmath`): `FASTMATH`, in the
     form ``njit`` accepts (a set or a bool), and `BOUNDSCHECK`."""
-    fastmath = FASTMATH if isinstance(FASTMATH, bool) else set(FASTMATH)
+    fastmath = FASTMATH if isinstance(FASTMATH, bool) else (set(FASTMATH) or False)
     return {"fastmath": fastmath, "boundscheck": BOUNDSCHECK}
 
 

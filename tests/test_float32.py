@@ -207,10 +207,22 @@ def test_strobe_early_stop_in_float32_stops():
     assert short.strobe_theta.values.tobytes() == long.strobe_theta.values.tobytes()
     labels = maps.basins(short).values.ravel()
     reference = maps.basins(sweep.run(scene, grid, t_end=300 * period, **kwargs)).values.ravel()
-    assert (reference >= 0).all() and len(set(reference)) == 3
+    assert (reference >= 0).all() and len(set(reference)) == 3 == len(set(labels))
     # the same partition of the starts (the catalogues may list the attractors in
-    # another order)
-    assert len(set(zip(labels, reference))) == len(set(labels)) == len(set(reference))
+    # another order), except at starts within float32's resolution of a basin
+    # boundary: there float64 itself ends in another attractor when theta0 moves by a
+    # float32 ulp (this grid has one such start, (-3, 0), next to the inverted
+    # position), so float32's rounding may too
+    pairs = list(zip(labels, reference))
+    match = {a: max(set(reference), key=lambda b: pairs.count((a, b))) for a in set(labels)}
+    differ = np.flatnonzero([match[a] != b for a, b in pairs])
+    assert len(differ) <= 2
+    theta0, omega0 = np.meshgrid(np.linspace(-3, 3, 7), [-1.0, 0.0, 1.0], indexing="ij")
+    for k in differ:
+        th = theta0.ravel()[k] + np.spacing(np.float32(theta0.ravel()[k])) * np.arange(-4, 5)
+        near = sweep.run(scene, sweep.Grid(theta0=th, omega0=[omega0.ravel()[k]]),
+                         t_end=300 * period, **kwargs)
+        assert len(set(maps.basins(near).values.ravel())) > 1
     source = kernels.source(KernelSpec("nonlinear", ("damping", "forcing"), ("strobe",),
                                        stop_early=True, dtype="float32"))
     assert "F(1e-06) + F(4.76837158203125e-07) * abs(" in source

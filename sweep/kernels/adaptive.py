@@ -33,7 +33,7 @@ from ..observables import OBSERVABLES
 from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet, skip_unless
 from .snippets import snippets
 from .spec import KernelSpec, Status, n_columns
-from .steppers import at_node, combination, rk_stages
+from .steppers import at_node, combination, fused, rk_stages
 from .terms import accel_call, drive_line, drive_nodes, load_lines
 
 __all__ = ["adaptive_kernel"]
@@ -55,8 +55,8 @@ def adaptive_kernel(spec: KernelSpec, tableau) -> str:
     stages = rk_stages(spec, tableau, "h", None, drives)
     kt = [f"k{j + 1}t" for j in range(s)]
     ko = [f"k{j + 1}o" for j in range(s)]
-    new_state = [f"thn = th + {combination(tableau.b, kt, 'h', None)}",
-                 f"omn = om + {combination(tableau.b, ko, 'h', None)}"]
+    new_state = [f"thn = {fused('th', tableau.b, kt, 'h', None)}",
+                 f"omn = {fused('om', tableau.b, ko, 'h', None)}"]
     if tableau.fsal:
         # the last stage is evaluated at the new state: it is the next step's first
         stages = stages[2:-2]

@@ -71,6 +71,13 @@ def vcos(x):
 @cuda.jit(device=True)
 def vsincos(x):
     return math.sin(x), math.cos(x)
+
+
+@cuda.jit(device=True)
+def vfma(a, b, c):
+    # the CPU kernels' explicit fused multiply-add; CUDA's compiler fuses a * b + c
+    # into one FMA by default
+    return a * b + c
 '''
 
 
@@ -113,6 +120,13 @@ def vcos(x):
 def vsincos(x):
     r, q = _reduce(x)
     return _quadrant(math.sin(r), math.cos(r), q)
+
+
+@cuda.jit(device=True)
+def vfma(a, b, c):
+    # the CPU kernels' explicit fused multiply-add; CUDA's compiler fuses a * b + c
+    # into one FMA by default
+    return a * b + c
 '''
 
 

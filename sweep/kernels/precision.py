@@ -56,7 +56,7 @@ __all__ = ["HEADER", "clock", "float64_symbols", "single", "single_drive_values"
 
 #: The float32 CPU module's import of the float32 sine (``F = np.float32`` is set
 #: after NumPy's import).
-HEADER = ("from sweep.kernels.vecmath import cos32 as vcos, sin32 as vsin, "
+HEADER = ("from sweep.kernels.vecmath import cos32 as vcos, fma as vfma, sin32 as vsin, "
           "sincos32 as vsincos")
 
 _FLOAT = re.compile(r"^(\d+\.\d*|\.\d+|\d+[eE][-+]?\d+|\d+\.\d*[eE][-+]?\d+)$")

@@ -55,7 +55,7 @@ _VECMATH_DIGEST = hashlib.sha1(
     (Path(__file__).parent / "vecmath.py").read_bytes()).hexdigest()[:16]
 
 
-_VECMATH_IMPORT = ("from sweep.kernels.vecmath import cos as vcos, sin as vsin, "
+_VECMATH_IMPORT = ("from sweep.kernels.vecmath import cos as vcos, fma as vfma, sin as vsin, "
                    "sincos as vsincos")
 
 
@@ -87,7 +87,8 @@ def source(spec: KernelSpec) -> str:
     check_dtype(spec.dtype, method)
     fastmath = _config.FASTMATH
     if not isinstance(fastmath, bool):  # a set, written in a fixed order (stable hash)
-        fastmath = "{" + ", ".join(repr(flag) for flag in sorted(fastmath)) + "}"
+        fastmath = "{" + ", ".join(repr(flag) for flag in sorted(fastmath)) + "}" \
+            if fastmath else "False"
     jit = (f"{{'fastmath': {fastmath}, 'boundscheck': {_config.BOUNDSCHECK!r}, "
            "'error_model': 'numpy', 'cache': True}")
     uses_energy = any(OBSERVABLES[n].uses_energy for n in spec.observe)

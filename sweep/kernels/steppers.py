@@ -2,8 +2,10 @@
 tableau, a kick-drift sequence from a splitting method's coefficients.
 
 RK4 included: the generated code performs exactly the operations of the classical
-hand-written step, ``th + (dt/6) * (k1 + 2 k2 + 2 k3 + k4)`` etc., so there is no
-separate fast path.
+hand-written step, ``th + (dt/6) * (k1 + 2 k2 + 2 k3 + k4)`` etc., with each
+``base + factor * sum`` a fused multiply-add written explicitly (``vfma``: LLVM is
+allowed to fuse nothing itself, so the bits cannot depend on the code around the step),
+so there is no separate fast path.
 """
 
 from __future__ import annotations
@@ -14,8 +16,8 @@ from math import lcm
 from .spec import KernelSpec, check_method_fits, tangent
 from .terms import accel_call, drive_nodes, float_literal
 
-__all__ = ["STEPPERS", "TANGENT", "at_node", "combination", "explicit_stepper", "rk_stages",
-           "symplectic_stepper"]
+__all__ = ["STEPPERS", "TANGENT", "at_node", "combination", "explicit_stepper", "fused",
+           "rk_stages", "symplectic_stepper"]
 
 #: Lane variables of the tangent dynamics (``spec`` observing ``lyapunov``): two
 #: tangent vectors (theta and theta' components), integrated beside the state.
@@ -33,15 +35,10 @@ def at_node(drives: dict, c) -> dict[str, str]:
 _MAX_COMMON_DENOMINATOR = 1000
 
 
-def combination(coeffs, names, scale: str, constants: dict[str, str] | None):
-    """Source of ``scale * sum(coeffs[j] * names[j])`` over the non-zero coefficients,
-    or None when they are all zero.
-
-    With ``constants`` (a dict filled with preamble lines), exact rows with a small
-    common denominator D become ``dt_D * (n1 * x1 + ...)`` with ``dt_D = dt / D``
-    computed once per kernel call; otherwise ``scale * (c1 * x1 + ...)`` with the
-    coefficients as float literals.
-    """
+def _factored(coeffs, names, scale: str, constants: dict[str, str] | None):
+    """``(factor, sum)`` with ``factor * sum`` = ``scale * sum(coeffs[j] * names[j])``
+    over the non-zero coefficients, or None when they are all zero (see
+    `combination`)."""
     terms = [(x, name) for x, name in zip(coeffs, names) if x != 0]
     if not terms:
         return None
@@ -63,13 +60,35 @@ def combination(coeffs, names, scale: str, constants: dict[str, str] | None):
             text = ("-" if parts[0][0] == "-" else "") + parts[0][1]
             for sign, body in parts[1:]:
                 text += f" {sign} {body}"
-            return f"{factor} * {text}" if len(parts) == 1 else f"{factor} * ({text})"
+            return factor, (text if len(parts) == 1 else f"({text})")
     text = ""
     for x, name in terms:
         body = f"{float_literal(abs(x))} * {name}"
         text += (("-" if x < 0 else "") + body) if not text else \
             (f" - {body}" if x < 0 else f" + {body}")
-    return f"{scale} * ({text})"
+    return scale, f"({text})"
+
+
+def combination(coeffs, names, scale: str, constants: dict[str, str] | None):
+    """Source of ``scale * sum(coeffs[j] * names[j])`` over the non-zero coefficients,
+    or None when they are all zero.
+
+    With ``constants`` (a dict filled with preamble lines), exact rows with a small
+    common denominator D become ``dt_D * (n1 * x1 + ...)`` with ``dt_D = dt / D``
+    computed once per kernel call; otherwise ``scale * (c1 * x1 + ...)`` with the
+    coefficients as float literals.
+    """
+    parts = _factored(coeffs, names, scale, constants)
+    return None if parts is None else f"{parts[0]} * {parts[1]}"
+
+
+def fused(base: str, coeffs, names, scale: str, constants: dict[str, str] | None) -> str:
+    """Source of ``base + scale * sum(coeffs[j] * names[j])`` (see `combination`) with
+    the last multiply-add fused: ``vfma(factor, sum, base)``, one rounding, written
+    explicitly (the kernels let LLVM fuse nothing itself: `sweep._config.FASTMATH`);
+    ``base`` alone when every coefficient is zero."""
+    parts = _factored(coeffs, names, scale, constants)
+    return base if parts is None else f"vfma({parts[0]}, {parts[1]}, {base})"
 
 
 def rk_stages(spec: KernelSpec, tableau, scale: str, constants, drives: dict) -> list[str]:
@@ -88,10 +107,8 @@ def rk_stages(spec: KernelSpec, tableau, scale: str, constants, drives: dict) ->
         row = tableau.a[i][:i]
         kt = [f"k{j + 1}t" for j in range(i)]
         ko = [f"k{j + 1}o" for j in range(i)]
-        dth = combination(row, kt, scale, constants)
-        dom = combination(row, ko, scale, constants)
-        lines.append(f"k{i + 1}t = " + (f"om + {dom}" if dom else "om"))
-        th_stage = f"th + {dth}" if dth else "th"
+        lines.append(f"k{i + 1}t = " + fused("om", row, ko, scale, constants))
+        th_stage = fused("th", row, kt, scale, constants)
         if not with_tangent:
             lines.append(f"k{i + 1}o = " + accel_call(
                 spec, th_stage, f"k{i + 1}t", at_node(drives, tableau.c[i])))
@@ -99,12 +116,10 @@ def rk_stages(spec: KernelSpec, tableau, scale: str, constants, drives: dict) ->
         lines.append(f"k{i + 1}o, j{i + 1}t, j{i + 1}o = " + accel_call(
             spec, th_stage, f"k{i + 1}t", at_node(drives, tableau.c[i]), jacobian=True))
         for m in (1, 2):
-            du = combination(row, [f"q{j + 1}u{m}" for j in range(i)], scale, constants)
-            dv = combination(row, [f"q{j + 1}v{m}" for j in range(i)], scale, constants)
-            lines.append(f"q{i + 1}u{m} = ly_v{m}" + (f" + {dv}" if dv else ""))
-            lines.append(f"q{i + 1}v{m} = j{i + 1}t * ("
-                         + (f"ly_u{m} + {du}" if du else f"ly_u{m}")
-                         + f") + j{i + 1}o * q{i + 1}u{m}")
+            u = fused(f"ly_u{m}", row, [f"q{j + 1}u{m}" for j in range(i)], scale, constants)
+            v = fused(f"ly_v{m}", row, [f"q{j + 1}v{m}" for j in range(i)], scale, constants)
+            lines.append(f"q{i + 1}u{m} = {v}")
+            lines.append(f"q{i + 1}v{m} = vfma(j{i + 1}t, {u}, j{i + 1}o * q{i + 1}u{m})")
     return lines
 
 
@@ -132,14 +147,13 @@ def explicit_stepper(spec: KernelSpec, tableau) -> dict[str, list]:
     step = rk_stages(spec, tableau, "dt", constants, drives)
     kt = [f"k{j + 1}t" for j in range(tableau.stages)]
     ko = [f"k{j + 1}o" for j in range(tableau.stages)]
-    step.append(f"th = th + {combination(tableau.b, kt, 'dt', constants)}")
-    step.append(f"om = om + {combination(tableau.b, ko, 'dt', constants)}")
+    step.append(f"th = {fused('th', tableau.b, kt, 'dt', constants)}")
+    step.append(f"om = {fused('om', tableau.b, ko, 'dt', constants)}")
     if tangent(spec):
         for m in (1, 2):
             for x, q in (("u", "u"), ("v", "v")):
                 names = [f"q{j + 1}{q}{m}" for j in range(tableau.stages)]
-                step.append(f"ly_{x}{m} = ly_{x}{m} + "
-                            f"{combination(tableau.b, names, 'dt', constants)}")
+                step.append(f"ly_{x}{m} = {fused(f'ly_{x}{m}', tableau.b, names, 'dt', constants)}")
     return {"preamble": list(constants.values()), "drive_init": init,
             "drive_step": nodes, "drive_carry": pairs, "before": [], "step": step,
             "carried": list(TANGENT) if tangent(spec) else []}
@@ -167,9 +181,9 @@ def symplectic_stepper(spec: KernelSpec, method) -> dict[str, list[str]]:
             if stale:
                 step.append(force)
                 stale = False
-            step.append(f"om = om + {scaled('kick', kick)} * acc")
+            step.append(f"om = vfma({scaled('kick', kick)}, acc, om)")
         if drift != 0:
-            step.append(f"th = th + {scaled('drift', drift)} * om")
+            step.append(f"th = vfma({scaled('drift', drift)}, om, th)")
             stale = True
     if stale:
         step.append(force)

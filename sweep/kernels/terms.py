@@ -55,10 +55,12 @@ def accel_source(spec: KernelSpec) -> str:
 
 
 def _acceleration(spec: KernelSpec, f_theta: str) -> str:
-    """theta'' as an expression: gravity, then each effect's term in canonical order,
-    with ``f_theta`` the source of f(theta)."""
-    return " ".join(["-w0sq * " + f_theta] + [effect.term.replace("FTH", f_theta)
-                                              for effect in spec.effects])
+    """theta'' as an expression: the effects' terms in canonical order, then gravity
+    fused onto them, ``vfma(-w0sq, f_theta, terms)`` (one rounding, written explicitly:
+    the kernels let LLVM fuse nothing itself, `sweep._config.FASTMATH`), with
+    ``f_theta`` the source of f(theta)."""
+    terms = " ".join(effect.term.replace("FTH", f_theta) for effect in spec.effects)
+    return f"vfma(-w0sq, {f_theta}, {terms or '0.0'})"
 
 
 def accel_jacobian_source(spec: KernelSpec) -> str:

@@ -3,43 +3,54 @@
 numba >= 0.62 has no SVML, so ``math.sin``/``np.sin`` in a numba loop is a scalar call
 into libm and the loop is never vectorised. `sin` here is straight-line arithmetic
 (no calls, no data-dependent branches), so LLVM can put one trajectory in each SIMD
-lane when the kernel's lane loop is innermost.
+lane when the kernel's lane loop is innermost; and its dependency chain is short, so
+one trajectory alone (whose steps wait on each other's sines) runs fast too.
 
 Algorithm
 ---------
-1. Quadrant: ``k = rint(x * 2/pi)`` by the round-to-nearest "magic number" trick
-   (``(y + 1.5 * 2**52) - 1.5 * 2**52``; valid for ``|y| < 2**51``; needs IEEE
-   evaluation order, i.e. no ``reassoc`` fast-math flag).
-2. Cody-Waite reduction ``r = ((x - k P1) - k P2) - k P3`` with pi/2 = P1 + P2 + P3 +
-   4.3e-35: P1 and P2 hold 27 significant bits each, P3 is the rest rounded to 53 bits.
-   For ``|k| < 2**26`` (``|x| < 2**26 pi/2 ~ 1.05e8``) the products ``k P1``, ``k P2``
-   are exact, ``x - k P1`` is exact (both on a grid no finer than ``ulp(x)``, result
-   below 1), and near a multiple of pi/2 the next subtraction cancels exactly
-   (Sterbenz), so ``r`` carries at most ~1 ulp(r) of rounding plus ``|k| * 4.3e-35``
-   of truncated pi/2: the reduction is as good as the argument itself up to ~1e8.
-   Beyond, ``k P1`` rounds and the absolute error grows like ``|x| * 2**-53`` (the
-   conditioning of sin for an argument that is only known to ulp(x)); results stay
-   finite and bounded by 1 in magnitude (approximately) but should not be trusted past
-   ~1e8 (and the quadrant trick fails past ~2**51).
-3. ``sin r`` and ``cos r`` on [-pi/4, pi/4] with the fdlibm minimax polynomials
-   (``__kernel_sin``/``__kernel_cos``, error < 2**-58 on the interval), cos with
-   fdlibm's compensated ``1 - z/2`` so it keeps full precision near pi/4.
-4. Select ``sin r``, ``cos r``, ``-sin r``, ``-cos r`` by ``k mod 4`` with ternary
-   selects (compiled to blend instructions, not branches).
+1. Quadrant: ``y = x * 2/pi + 1.5 * 2**52`` rounds ``x * 2/pi`` to the integer ``k``
+   ("magic number"; valid for ``|x * 2/pi| < 2**51``; needs IEEE evaluation order,
+   i.e. no ``reassoc`` fast-math flag): ``kf = y - 1.5 * 2**52`` exactly, and the low
+   bits of ``y``'s IEEE pattern are ``k mod 4`` (two's complement), so the quadrant
+   needs no float-to-integer conversion.
+2. Cody-Waite reduction with two fused multiply-adds (`fma`, LLVM's ``llvm.fma``: one
+   rounding, whatever the fast-math flags or the CPU), ``r = fma(-kf, PIO2_LO,
+   fma(-kf, PIO2_HI, x))`` with ``pi/2 = PIO2_HI + PIO2_LO + ~1.5e-33``. Each FMA forms
+   the product exactly and rounds once, so ``r`` is within about one ulp of
+   ``x - k pi/2`` (|r| <~ pi/4); the truncated pi/2 costs ``|k| * 1.5e-33``. Up to
+   |x| ~ 1e12 that is all (tested); past ~1e13 the rounded ``x * 2/pi`` may choose the
+   neighbouring quadrant, so |r| exceeds pi/4 a little and the error grows (1.9e-14
+   measured at 3e15); past ``2**51 pi/2 ~ 3.5e15`` the quadrant trick fails and the
+   results are not sines (finite up to ~4e39, NaN beyond).
+3. One polynomial, by quadrant: ``sin r = r + r z P_s(z)`` on even quadrants and
+   ``cos r = 1 + z P_c(z)`` on odd ones (``z = r^2``), with fdlibm's minimax
+   coefficients (``__kernel_sin``/``__kernel_cos``, error < 2**-58 on [-pi/4, pi/4]);
+   the coefficients, ``r`` or 1 and ``r z`` or ``z`` are chosen by ternary selects
+   (blend instructions, not branches), so each call evaluates one polynomial, not two.
+   The polynomial of degree 6 in ``z`` is evaluated by Estrin's scheme (pairs, then
+   ``z^2``, ``z^4``): depth 3 multiply-adds instead of Horner's 6.
+4. The sign: negated on quadrants 2 and 3 (a select).
+
+Measured on this project's Zen 4: one call waits about 38 cycles for its argument (the
+previous sine, which reduced with three Cody-Waite terms, converted the quadrant to an
+integer, evaluated both polynomials by Horner and compensated ``1 - z/2``, waited about
+59), and vectorised it gives 1.4x the sines per second (``benchmarks/run_all.py``
+times both inside the kernels). Error: at most 1.1e-16 from ``np.sin`` (one ulp of
+values below 1; the roundings of ``r``, of the polynomial and of its last multiply-add
+add up to at most ~1.7e-16 from the true sine) for |x| <= 1e4, and the same up to 1e12
+(``tests/test_vecmath.py``).
 
 Compiled on its own with the kernels' fast-math flags (``contract``: multiply-adds may
 be fused into FMAs, which round once instead of twice; never ``reassoc``, which would
 break the reduction), and inlined into the kernels by LLVM, where the lane loop is
-vectorised. (Compiled without ``contract`` it is about 8 % slower inside the kernel.)
-Not marked ``inline="always"`` for numba: inlining its IR into every stage of a
-kernel doubled the compile time (3.7 s to 1.8 s for the full-scene kernel), for the
-same speed.
+vectorised. Not marked ``inline="always"`` for numba: inlining its IR into every stage
+of a kernel doubled the compile time, for the same speed.
 
 NaN and +-inf give NaN (``inf - inf`` in the reduction). The sign of zero is not kept
 (``sin(-0.0)`` gives ``+0.0``), as under the ``nsz`` fast-math flag anyway.
-`sincos` returns both from one reduction (the tangent dynamics read the cosine at
-every stage beside the sine). Measured (``tests/test_vecmath.py``): max abs error against ``np.sin`` about 2.2e-16
-(half an ulp of 1) for |x| <= 1e4, and the same out to 1e8.
+`cos` is the same polynomial one quadrant on, and `sincos` returns both from one
+reduction with the bits of `sin` and `cos` (the tangent dynamics read the cosine at
+every stage beside the sine).
 """
 
 from __future__ import annotations
@@ -55,14 +66,18 @@ from .. import _config
 #: sine fuses its multiply-adds as the kernel around it does.
 _JIT = _config.jit_options()
 
-__all__ = ["P1", "P2", "P3", "cos", "cos32", "inverse_fifth_root", "sin", "sin32", "sincos",
-           "sincos32"]
+__all__ = ["P1", "P2", "PIO2_HI", "PIO2_LO", "cos", "cos32", "fma", "inverse_fifth_root", "sin",
+           "sin32", "sincos", "sincos32"]
 
 TWO_OVER_PI = 0.6366197723675814
-#: pi/2 = P1 + P2 + P3 (+ 4.3e-35): 27 + 27 + 53 significant bits.
+#: pi/2 = PIO2_HI + PIO2_LO (+ 1.5e-33): the float64 reduction's two parts.
+PIO2_HI = 1.5707963267948966   # 0x1.921fb54442d18p+0
+PIO2_LO = 6.123233995736766e-17  # 0x1.1a62633145c07p-54
+#: pi/2 = P1 + P2 (+ 5.7e-18): 27 + 27 significant bits, so that ``k P1`` and ``k P2``
+#: are exact products for |k| < 2**26 without an FMA (the float32 sine's reduction, and
+#: the GPU's in `sweep.kernels.cuda`).
 P1 = 1.570796325802803        # 0x1.921fb54p+0
 P2 = 9.920935739593517e-10    # 0x1.10b461p-30
-P3 = 5.721188726109832e-18    # 0x1.a62633145c06ep-58
 _MAGIC = 6755399441055744.0   # 1.5 * 2**52: adding and subtracting it rounds to integer
 
 # fdlibm __kernel_sin / __kernel_cos minimax coefficients on [-pi/4, pi/4]
@@ -80,64 +95,30 @@ C5 = 2.08757232129817482790e-09
 C6 = -1.13596475577881948265e-11
 
 
-@njit(cache=True, **_JIT)
-def _reduce(x):
-    """(r, q): x = q pi/2 + r with |r| <~ pi/4, q the integer quadrant (int64)."""
-    kf = (x * TWO_OVER_PI + _MAGIC) - _MAGIC
-    r = ((x - kf * P1) - kf * P2) - kf * P3
-    # NaN/inf give kf = NaN/inf; the conversion is then undefined but r is NaN anyway
-    q = int(kf) if abs(kf) < 4.0e15 else 0
-    return r, q
+@intrinsic
+def fma(typingctx, a, b, c):
+    """``a * b + c`` rounded once: LLVM's ``llvm.fma`` (an FMA instruction, or libm's
+    exact ``fma`` on a CPU without one), whatever the fast-math flags.
+
+    The kernels write every fused multiply-add they want this way (as ``vfma``) and let
+    LLVM fuse nothing else: which product of ``a * b + c * d`` LLVM's contraction would
+    fuse depends on the code around it, which differs between a vectorised block, an
+    unrolled one and a lone trajectory, and so would the last bits. Arguments float32
+    or float64 (ints are widened); with any float64 the operation is float64.
+    """
+    kinds = (a, b, c)
+    if not all(isinstance(t, (types.Float, types.Integer)) for t in kinds):
+        return None
+    result = types.float32 if all(t == types.float32 for t in kinds) else types.float64
+
+    def codegen(context, builder, signature, args):
+        values = [context.cast(builder, v, t, result) for v, t in zip(args, signature.args)]
+        return builder.fma(*values)
+
+    return result(a, b, c), codegen
 
 
-@njit(cache=True, **_JIT)
-def _sin_poly(r):
-    z = r * r
-    v = z * r
-    p = S2 + z * (S3 + z * (S4 + z * (S5 + z * S6)))
-    return r + v * (S1 + z * p)
-
-
-@njit(cache=True, **_JIT)
-def _cos_poly(r):
-    z = r * r
-    p = z * (C1 + z * (C2 + z * (C3 + z * (C4 + z * (C5 + z * C6)))))
-    hz = 0.5 * z
-    w = 1.0 - hz
-    return w + (((1.0 - w) - hz) + z * p)
-
-
-@njit(cache=True, **_JIT)
-def _quadrant(s, c, q):
-    """(sin x, cos x) from ``s = sin r``, ``c = cos r`` of the reduced argument and the
-    quadrant ``q`` (x = q pi/2 + r), by selects: sin x is +-s or +-c by ``q mod 4``, and
-    cos(x) = sin(x + pi/2), i.e. quadrant q + 1 (the polynomials swapped, the sign
-    flipped on quadrants 1 and 2). Both precisions use it."""
-    v = c if (q & 1) else s
-    w = s if (q & 1) else c
-    return (-v if (q & 2) else v), (-w if ((q + 1) & 2) else w)
-
-
-@njit(cache=True, **_JIT)
-def sin(x):
-    """sin(x) in float64, branch-free (vectorisable); accurate for |x| < ~1e8."""
-    r, q = _reduce(x)
-    return _quadrant(_sin_poly(r), _cos_poly(r), q)[0]
-
-
-@njit(cache=True, **_JIT)
-def cos(x):
-    """cos(x) = sin(x + pi/2) through the same reduction (quadrant shifted by one)."""
-    r, q = _reduce(x)
-    return _quadrant(_sin_poly(r), _cos_poly(r), q)[1]
-
-
-@njit(cache=True, **_JIT)
-def sincos(x):
-    """(sin(x), cos(x)) from one argument reduction: the same bits as `sin` and `cos`
-    (the tangent dynamics of `sweep.kernels` need both at every stage)."""
-    r, q = _reduce(x)
-    return _quadrant(_sin_poly(r), _cos_poly(r), q)
+_fma = fma  # the float64 sine's own name for it
 
 
 @intrinsic
@@ -156,6 +137,58 @@ def _float_of(typingctx, bits):
         return builder.bitcast(args[0], ir.DoubleType())
 
     return types.float64(types.int64), codegen
+
+
+@njit(cache=True, **_JIT)
+def _reduce(x):
+    """(r, q): x = k pi/2 + r with |r| <~ pi/4; ``q`` an int64 whose two low bits are
+    ``k mod 4`` (the bits of the magic-number sum)."""
+    y = _fma(x, TWO_OVER_PI, _MAGIC)
+    kf = y - _MAGIC
+    r = _fma(-kf, PIO2_LO, _fma(-kf, PIO2_HI, x))
+    return r, _bits_of(y)
+
+
+@njit(cache=True, **_JIT)
+def _sine_of_reduced(r, q):
+    """sin(k pi/2 + r) from the reduced argument and ``q`` (``k mod 4`` in its low
+    bits): sin r on even quadrants, cos r on odd ones, negated on quadrants 2 and 3."""
+    odd = (q & 1) != 0
+    z = r * r
+    z2 = z * z
+    z4 = z2 * z2
+    c0 = -0.5 if odd else S1
+    c1 = C1 if odd else S2
+    c2 = C2 if odd else S3
+    c3 = C3 if odd else S4
+    c4 = C4 if odd else S5
+    c5 = C5 if odd else S6
+    c6 = C6 if odd else 0.0
+    p = _fma(z4, _fma(z2, c6, _fma(z, c5, c4)), _fma(z2, _fma(z, c3, c2), _fma(z, c1, c0)))
+    y = _fma(z if odd else z * r, p, 1.0 if odd else r)
+    return -y if (q & 2) else y
+
+
+@njit(cache=True, **_JIT)
+def sin(x):
+    """sin(x) in float64, branch-free (vectorisable); accurate for |x| <~ 1e12."""
+    r, q = _reduce(x)
+    return _sine_of_reduced(r, q)
+
+
+@njit(cache=True, **_JIT)
+def cos(x):
+    """cos(x) = sin(x + pi/2): the same reduction, one quadrant on."""
+    r, q = _reduce(x)
+    return _sine_of_reduced(r, q + 1)
+
+
+@njit(cache=True, **_JIT)
+def sincos(x):
+    """(sin(x), cos(x)) from one argument reduction: the same bits as `sin` and `cos`
+    (the tangent dynamics of `sweep.kernels` need both at every stage)."""
+    r, q = _reduce(x)
+    return _sine_of_reduced(r, q), _sine_of_reduced(r, q + 1)
 
 
 #: ``x ** -0.2`` read off the bits: a float64's bits are ``2**52 (log2 x + 1023 - s)``
@@ -205,12 +238,12 @@ def inverse_fifth_root(x):
 #    float32 an angle of 4000 rad is known only to 2.4e-4), and a drive's phase
 #    ``W t + phi`` is formed from the float64 clock. A float32 argument is widened
 #    exactly.
-# 2. ``k = rint(x * 2/pi)`` and ``r = (x - k P1) - k P2`` in float64 (the float64
-#    sine's first two Cody-Waite terms: exact products for |x| < ~1e8, and the dropped
-#    ``k P3`` is below 1e-9 there, far under float32's resolution), then ``r`` is
-#    rounded once to float32.
+# 2. ``k = rint(x * 2/pi)`` and ``r = (x - k P1) - k P2`` in float64 (two Cody-Waite
+#    terms of 27 bits: exact products for |x| < ~1e8 without an FMA, and the dropped
+#    rest of pi/2, ``k * 5.7e-18``, is below 1e-9 there, far under float32's
+#    resolution), then ``r`` is rounded once to float32.
 # 3. Cephes' sinf/cosf polynomials on [-pi/4, pi/4] in float32 (relative error ~ 1 ulp
-#    of float32); the same quadrant selects as the float64 sine.
+#    of float32), both evaluated, then chosen and signed by quadrant (`_quadrant`).
 # Four float64 operations and two conversions per call; the rest of the sine, and of
 # the kernel around it, is float32. Measured (``tests/test_vecmath.py``): max abs error
 # against float64 ``np.sin`` 9.3e-8 (about 1.5 float32 ulps below 1; NumPy's own
@@ -249,6 +282,17 @@ def _sin_poly32(r):
 def _cos_poly32(r):
     z = r * r
     return (_ONE32 - _HALF32 * z) + z * z * (CF1 + z * (CF2 + z * CF3))
+
+
+@njit(cache=True, **_JIT)
+def _quadrant(s, c, q):
+    """(sin x, cos x) from ``s = sin r``, ``c = cos r`` of the reduced argument and the
+    quadrant ``q`` (x = q pi/2 + r), by selects: sin x is +-s or +-c by ``q mod 4``, and
+    cos(x) = sin(x + pi/2), i.e. quadrant q + 1 (the polynomials swapped, the sign
+    flipped on quadrants 1 and 2)."""
+    v = c if (q & 1) else s
+    w = s if (q & 1) else c
+    return (-v if (q & 2) else v), (-w if ((q + 1) & 2) else w)
 
 
 @njit(cache=True, **_JIT)
