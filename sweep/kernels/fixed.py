@@ -6,7 +6,8 @@ block); the time loop is outside and the lane loop inside, so the lane loop is
 straight-line arithmetic that LLVM vectorises (``vsin`` is branch-free). A partial last
 block is padded with copies of the last trajectory, so every lane runs the same code
 whatever the number of trajectories, blocks, chunks or threads: the results do not
-depend on how the work is cut. Per-lane state lives in small arrays ``lane_<name>``;
+depend on how the work is cut. Per-lane state lives in small arrays ``lane_<name>``
+(plain variables in a kernel of one lane per block, `sweep.kernels.lanes.scalar_lanes`);
 observables write a per-block row buffer ``obuf``.
 
 Non-finite states are detected once, at the end (or when a trajectory stops early): a
@@ -21,7 +22,7 @@ import textwrap
 from dataclasses import dataclass, field
 
 from ..observables import OBSERVABLES
-from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet
+from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet, scalar_lanes
 from .precision import float64_symbols
 from .snippets import finite_test, renormalisations, snippets, stop_source
 from .spec import KernelSpec, Status, n_columns
@@ -207,7 +208,7 @@ def fixed_kernel(spec: KernelSpec, method) -> str:
     renormalise_blocks = NL.join(head + NL + lane_loop(code, lane, level=1)
                                  for head, code in renormalise)
     finish_loop = lane_loop(finish, lane, level=2, stores=[], count="n_real")
-    return f'''
+    kernel = f'''
 BLOCK = {spec.block}
 
 
@@ -236,3 +237,4 @@ def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
 {indent(_SAVE_BLOCK if spec.save else "", 3)}
 {finish_loop}
 '''
+    return scalar_lanes(kernel) if spec.block == 1 else kernel

@@ -8,7 +8,7 @@ import re
 import textwrap
 
 __all__ = ["ASSIGNED", "IDENTIFIER", "allocate", "indent", "lane_loop", "lane_snippet",
-           "skip_unless"]
+           "scalar_lanes", "skip_unless"]
 
 IDENTIFIER = re.compile(r"\b[A-Za-z_]\w*\b")
 ASSIGNED = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:[-+*/]?=)(?!=)", re.MULTILINE)
@@ -48,3 +48,41 @@ def allocate(lane: dict[str, str]) -> list[str]:
 def skip_unless(flag: str) -> str:
     """A `lane_loop` head that skips the lanes whose boolean ``lane_<flag>`` is False."""
     return f"    if not lane_{flag}[j]:\n        continue\n"
+
+
+_ALLOCATION = re.compile(r"^\s*lane_(\w+) = np\.empty\(BLOCK, dtype=np\.\w+\)\n", re.MULTILINE)
+_LOAD_OR_STORE = re.compile(r"^\s*(?:(\w+) = lane_\1\[j\]|lane_(\w+)\[j\] = \2)\n",
+                            re.MULTILINE)
+_LANE = re.compile(r"\blane_(\w+)\[j\]")
+_LANE_LOOP = re.compile(r"^(\s*)for j in range\((?:BLOCK|n_real)\):$", re.MULTILINE)
+_SKIP = re.compile(r"^(\s*)if True:\n\1    if (\w+):\n\1        continue\n", re.MULTILINE)
+_BLOCK_START = re.compile(r"^(\s*)base = b \* BLOCK\n", re.MULTILINE)
+
+
+def scalar_lanes(kernel: str) -> str:
+    """A fixed-step kernel of one lane per block (``BLOCK = 1``, the narrow path of a
+    handful of trajectories) with its lanes turned into plain variables: allocations
+    and the loads and stores that copy ``lane_<name>[j]`` to and from ``<name>`` are
+    dropped, any other ``lane_<name>[j]`` reads ``<name>``, and each one-lane loop
+    ``for j in range(...)`` becomes ``if True:`` with ``j = 0`` (a skipped lane's
+    ``continue`` becomes ``if not <flag>:``).
+
+    The same operations on the same values, so the same bits (``tests/test_blocks.py``);
+    but the state stays in registers from one step to the next instead of making a
+    round trip through memory on every step's critical path (one trajectory alone is
+    latency-bound). The loops go too because numba's ``prange`` lowering mishandled
+    variables that live from one inner loop to the next (measured: other bits). Exact
+    for the fixed-step kernel, whose every lane loop loads what it reads at its start
+    and stores what it changes at its end (`lane_loop`); not for kernels that read a
+    lane array after changing the variable without storing it (a rejected adaptive
+    step).
+    """
+    kernel = _ALLOCATION.sub("", kernel)
+    kernel = _LOAD_OR_STORE.sub("", kernel)
+    kernel = _LANE.sub(r"\1", kernel)
+    kernel = _LANE_LOOP.sub(r"\1if True:", kernel)
+    kernel = _SKIP.sub(r"\1if not \2:\n", kernel)
+    kernel = _BLOCK_START.sub(r"\g<0>\1j = 0\n", kernel)
+    if re.search(r"\bcontinue\b|\blane_\w+\[", kernel):
+        raise AssertionError("a one-lane kernel kept a lane array or a lane's continue")
+    return kernel
