@@ -30,6 +30,12 @@
  *                  (x * 2/pi + 1.5 * 2**52) instead of converting kf to int64: the
  *                  same quadrant for |x| < 2**51 (where the magic-number rounding is
  *                  valid at all), one integer AND instead of a float -> int64 convert
+ *   SIN_VARIANT 4  the polynomial sin of sweep/kernels/vecmath.py since 2026-11-25
+ *                  (2 and 3 are its predecessor): quadrant from the bits as 3, the
+ *                  reduction by pi/2 in two fused multiply-adds (C's fma(), one
+ *                  rounding each), and one polynomial per call, the sine's or the
+ *                  cosine's by quadrant (coefficients chosen by selects), evaluated by
+ *                  Estrin's scheme; the same operations in the same order
  *
  * Build (benchmarks/run_all.py does this and sweeps the options):
  *   gcc -O3 -march=native -fopenmp -shared -fPIC [-mprefer-vector-width=512]
@@ -57,7 +63,7 @@
 #pragma omp declare simd notinbranch
 extern double sin(double);
 #define SIN(x) sin(x)
-#elif SIN_VARIANT == 2 || SIN_VARIANT == 3
+#elif SIN_VARIANT == 2 || SIN_VARIANT == 3 || SIN_VARIANT == 4
 static const double TWO_OVER_PI = 0.6366197723675814;
 static const double P1 = 1.570796325802803, P2 = 9.920935739593517e-10,
                     P3 = 5.721188726109832e-18, MAGIC = 6755399441055744.0;
@@ -67,6 +73,25 @@ static const double S1 = -1.66666666666666324348e-01, S2 = 8.3333333333224894612
 static const double C1 = 4.16666666666666019037e-02, C2 = -1.38888888888741095749e-03,
                     C3 = 2.48015872894767294178e-05, C4 = -2.75573143513906633035e-07,
                     C5 = 2.08757232129817482790e-09, C6 = -1.13596475577881948265e-11;
+#if SIN_VARIANT == 4
+static const double PIO2_HI = 1.5707963267948966, PIO2_LO = 6.123233995736766e-17;
+/* vecmath._reduce and _sine_of_reduced, operation for operation */
+static inline double vsin(double x) {
+    const double y = x * TWO_OVER_PI + MAGIC;
+    const double kf = y - MAGIC;
+    const double r = fma(-kf, PIO2_LO, fma(-kf, PIO2_HI, x));
+    int64_t q;
+    memcpy(&q, &y, sizeof q);
+    const int odd = (q & 1) != 0;
+    const double z = r * r, z2 = z * z, z4 = z2 * z2;
+    const double c0 = odd ? -0.5 : S1, c1 = odd ? C1 : S2, c2 = odd ? C2 : S3,
+                 c3 = odd ? C3 : S4, c4 = odd ? C4 : S5, c5 = odd ? C5 : S6,
+                 c6 = odd ? C6 : 0.0;
+    const double p = ((c0 + z * c1) + z2 * (c2 + z * c3)) + z4 * ((c4 + z * c5) + z2 * c6);
+    const double v = (odd ? 1.0 : r) + (odd ? z : z * r) * p;
+    return (q & 2) ? -v : v;
+}
+#else
 static inline double vsin(double x) {
     const double y = x * TWO_OVER_PI + MAGIC;
     const double kf = y - MAGIC;
@@ -88,6 +113,7 @@ static inline double vsin(double x) {
     const double v = (q & 1) ? c : s;
     return (q & 2) ? -v : v;
 }
+#endif
 #define SIN(x) vsin(x)
 #else
 #define SIN(x) sin(x)
