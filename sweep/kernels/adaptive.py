@@ -9,7 +9,8 @@ steps whose results are never used) until the block's last lane is done. A lane'
 arithmetic is the same operations whatever the block, so the results do not depend on
 the block or the thread count, bit for bit (``tests/test_blocks.py``). Against the
 one-trajectory kernel of sweep 0.1 the step counts are the same and the states agree to
-rounding (LLVM contracts the error norm into FMAs differently; ``tests/test_effects.py``).
+rounding (sweep 0.1 let LLVM choose which products to fuse into FMAs; the kernels now
+fuse only those they write, ``vfma``; ``tests/test_effects.py``).
 
 A block costs BLOCK times the most step attempts of its trajectories
 (`sweep._config.ADAPTIVE_BLOCK`). Measured by ``benchmarks/work_precision.py`` (its

@@ -67,10 +67,9 @@ def _drives(parts: dict) -> _Drives:
 def _parameters(spec: KernelSpec) -> tuple[list[str], list[str]]:
     """Kernel symbols read per lane and per block.
 
-    Every parameter is read per lane (no slower, and a product such as A * sin(...) is
-    then never hoisted out of the lane loop, which would change where LLVM contracts
-    it into an FMA, and the last bits of the result), except each drive's frequency
-    and phase when the drive sines are shared by the block.
+    Every parameter is read per lane (no slower, and the lane loop's arithmetic is
+    then the same whatever the block shares), except each drive's frequency and phase
+    when the drive sines are shared by the block.
     """
     per_lane, shared = ["L", "g", "w0sq"], []
     for effect in spec.effects:

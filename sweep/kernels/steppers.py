@@ -35,6 +35,28 @@ def at_node(drives: dict, c) -> dict[str, str]:
 _MAX_COMMON_DENOMINATOR = 1000
 
 
+def _sum(parts: list[tuple[str | None, str]]) -> str:
+    """Source of the sum of ``parts`` (``(coefficient, name)``, the coefficient a signed
+    float literal, or None for +1, or "-" for -1), left to right, each term with a
+    coefficient fused onto the sum so far: ``vfma(c3, x3, vfma(c2, x2, c1 * x1))``.
+
+    One rounding per term, as LLVM's contraction used to give (it is written out
+    because the kernels let LLVM fuse nothing, `sweep._config.FASTMATH`); where the
+    products are exact (RK4's ``2.0 * k2``) the result is the same as unfused.
+    """
+    coefficient, name = parts[0]
+    text = name if coefficient is None else \
+        f"-{name}" if coefficient == "-" else f"{coefficient} * {name}"
+    for coefficient, name in parts[1:]:
+        if coefficient is None:
+            text = f"{text} + {name}"
+        elif coefficient == "-":
+            text = f"{text} - {name}"
+        else:
+            text = f"vfma({coefficient}, {name}, {text})"
+    return text if len(parts) == 1 else f"({text})"
+
+
 def _factored(coeffs, names, scale: str, constants: dict[str, str] | None):
     """``(factor, sum)`` with ``factor * sum`` = ``scale * sum(coeffs[j] * names[j])``
     over the non-zero coefficients, or None when they are all zero (see
@@ -54,19 +76,10 @@ def _factored(coeffs, names, scale: str, constants: dict[str, str] | None):
             parts = []
             for x, name in terms:
                 n = int(x * denominator)
-                sign = "-" if n < 0 else "+"
-                body = name if abs(n) == 1 else f"{float(abs(n))!r} * {name}"
-                parts.append((sign, body))
-            text = ("-" if parts[0][0] == "-" else "") + parts[0][1]
-            for sign, body in parts[1:]:
-                text += f" {sign} {body}"
-            return factor, (text if len(parts) == 1 else f"({text})")
-    text = ""
-    for x, name in terms:
-        body = f"{float_literal(abs(x))} * {name}"
-        text += (("-" if x < 0 else "") + body) if not text else \
-            (f" - {body}" if x < 0 else f" + {body}")
-    return scale, f"({text})"
+                parts.append((None if n == 1 else "-" if n == -1 else repr(float(n)), name))
+            return factor, _sum(parts)
+    return scale, f"({_sum([(float_literal(x), name) for x, name in terms])})" \
+        if len(terms) == 1 else _sum([(float_literal(x), name) for x, name in terms])
 
 
 def combination(coeffs, names, scale: str, constants: dict[str, str] | None):
