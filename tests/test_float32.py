@@ -209,18 +209,20 @@ def test_strobe_early_stop_in_float32_stops():
     reference = maps.basins(sweep.run(scene, grid, t_end=300 * period, **kwargs)).values.ravel()
     assert (reference >= 0).all() and len(set(reference)) == 3 == len(set(labels))
     # the same partition of the starts (the catalogues may list the attractors in
-    # another order), except at starts within float32's resolution of a basin
-    # boundary: there float64 itself ends in another attractor when theta0 moves by a
-    # float32 ulp (this grid has one such start, (-3, 0), next to the inverted
-    # position), so float32's rounding may too
+    # another order), except at starts on a fractal basin boundary, where float64 itself
+    # ends elsewhere when theta0 moves by 1e-5 rad: the size float32's roundings (6e-8
+    # relative per step) reach as a random walk over the 30,000 steps. Every start that
+    # float32 labels differently must be such a start (this grid has two: (-3, 0), next
+    # to the inverted position, and (0, 1)); they are few, but how few depends on the
+    # last bits, so the count is only bounded (a quarter of the starts)
     pairs = list(zip(labels, reference))
     match = {a: max(set(reference), key=lambda b: pairs.count((a, b))) for a in set(labels)}
     differ = np.flatnonzero([match[a] != b for a, b in pairs])
-    assert len(differ) <= 2
+    assert len(differ) <= len(pairs) // 4
     theta0, omega0 = np.meshgrid(np.linspace(-3, 3, 7), [-1.0, 0.0, 1.0], indexing="ij")
     for k in differ:
-        th = theta0.ravel()[k] + np.spacing(np.float32(theta0.ravel()[k])) * np.arange(-4, 5)
-        near = sweep.run(scene, sweep.Grid(theta0=th, omega0=[omega0.ravel()[k]]),
+        near = sweep.run(scene, sweep.Grid(theta0=theta0.ravel()[k] + 1e-5 * np.arange(-4, 5),
+                                           omega0=[omega0.ravel()[k]]),
                          t_end=300 * period, **kwargs)
         assert len(set(maps.basins(near).values.ravel())) > 1
     source = kernels.source(KernelSpec("nonlinear", ("damping", "forcing"), ("strobe",),
@@ -286,14 +288,16 @@ def test_float32_kernel_computes_in_float32_vectors(tmp_path):
         kernel(params, 0.0, 0.01, 10, 0, 1, out, np.empty(64, dtype=np.int8),
                np.empty((0, 2, 0)))
         ir = "".join(kernel.__globals__["kernel_single"].inspect_llvm().values())
-        print(len(re.findall(r"fmul[^\\n]*<\\d+ x float>", ir)),
-              len(re.findall(r"fmul[^\\n]*<\\d+ x double>", ir)))
+        # multiplies and fused multiply-adds (the kernels write theirs: llvm.fma)
+        print(len(re.findall(r"(?:fmul[^\\n]*<\\d+ x float>|@llvm\\.fma\\.v\\d+f32\\()", ir)),
+              len(re.findall(r"(?:fmul[^\\n]*<\\d+ x double>|@llvm\\.fma\\.v\\d+f64\\()", ir)))
     """)
     env = dict(os.environ, SWEEP_CACHE_DIR=str(tmp_path))
     result = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
                             text=True, check=True)
     single, double = map(int, result.stdout.split())
-    # measured: 60 float32 and 12 float64 vector multiplies
+    # measured: 57 float32 (16 multiplies, 41 FMAs) and 17 float64 (12 and 5), each
+    # FMA declaration counted once too
     assert single > 0 and single > 3 * double
 
 

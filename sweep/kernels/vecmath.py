@@ -243,7 +243,9 @@ def inverse_fifth_root(x):
 #    rest of pi/2, ``k * 5.7e-18``, is below 1e-9 there, far under float32's
 #    resolution), then ``r`` is rounded once to float32.
 # 3. Cephes' sinf/cosf polynomials on [-pi/4, pi/4] in float32 (relative error ~ 1 ulp
-#    of float32), both evaluated, then chosen and signed by quadrant (`_quadrant`).
+#    of float32), Horner with the multiply-adds fused explicitly (`fma`: the kernels
+#    let LLVM fuse nothing; unfused, the float32 kernel ran 16 % slower), both
+#    evaluated, then chosen and signed by quadrant (`_quadrant`).
 # Four float64 operations and two conversions per call; the rest of the sine, and of
 # the kernel around it, is float32. Measured (``tests/test_vecmath.py``): max abs error
 # against float64 ``np.sin`` 9.3e-8 (about 1.5 float32 ulps below 1; NumPy's own
@@ -275,13 +277,13 @@ def _reduce32(x):
 @njit(cache=True, **_JIT)
 def _sin_poly32(r):
     z = r * r
-    return r + r * z * (SF1 + z * (SF2 + z * SF3))
+    return fma(r * z, fma(z, fma(z, SF3, SF2), SF1), r)
 
 
 @njit(cache=True, **_JIT)
 def _cos_poly32(r):
     z = r * r
-    return (_ONE32 - _HALF32 * z) + z * z * (CF1 + z * (CF2 + z * CF3))
+    return fma(z * z, fma(z, fma(z, CF3, CF2), CF1), fma(-_HALF32, z, _ONE32))
 
 
 @njit(cache=True, **_JIT)
