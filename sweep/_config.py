@@ -35,8 +35,8 @@ SMALL_BLOCK = 64
 #: Lanes per block of the adaptive kernel (`sweep.kernels.adaptive`). A block tries
 #: steps until its slowest trajectory is done, so it costs BLOCK x the most attempts
 #: of its trajectories. ``benchmarks/work_precision.py`` (its last table, 8192
-#: trajectories): blocks of 16 are 11-21 % slower than blocks of 64 on the four
-#: work-precision scenes and 6-9 % slower on an uneven grid (the phase plane with omega0
+#: trajectories): blocks of 16 are 16-24 % slower than blocks of 64 on the four
+#: work-precision scenes and 12-14 % slower on an uneven grid (the phase plane with omega0
 #: in [-20, 20] along the block); a block of 8 is left scalar by LLVM.
 ADAPTIVE_BLOCK = 64
 
@@ -59,9 +59,12 @@ REFILL = True
 SINE_TABLE_STEPS = 1 << 21
 
 #: Grids of fewer trajectories than this run one trajectory per block (no padding
-#: lanes): one trajectory x 10^6 RK4 steps of the full scene ran at 21 M useful steps/s
-#: alone, 3.5 M/s in a block of 8 and 2.1 M/s in a block of 64 (quiet machine), while
-#: 16 trajectories run faster in blocks of 8-64 (24-27 M/s against 19 M/s, busy cores).
+#: lanes, the lanes plain variables: `sweep.kernels.lanes.scalar_lanes`): one trajectory
+#: x 10^6 RK4 steps of the full scene ran at 33 M useful steps/s alone, 2.1 M/s in a
+#: block of 64 (``benchmarks/run_all.py``, 2026-11-25; 21 M/s alone before the sine and
+#: the one-lane kernel changed), while 16 trajectories ran faster in blocks of 8-64
+#: (24-27 M/s against 19 M/s one per block, busy cores; measured before that change, so
+#: the crossover may now be higher).
 NARROW_BELOW = 8
 
 #: numba ``boundscheck``: off in production; tests index-check through the oracle.
