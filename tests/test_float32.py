@@ -157,8 +157,9 @@ def test_lyapunov_exponents_in_float32():
     must find it though its trajectory departs from float64's within a few periods.
     float64 over 128 starts gives a spread of ~0.008 (tests/test_lyapunov.py); asserted:
     the float32 mean within 0.02 of float64's (2.5 spreads), and the sum of both
-    exponents -c to 1e-3 (float32 Gram-Schmidt loses ~u per renormalisation, 1e5 steps
-    / 64 x u ~ 1e-4 relative)."""
+    exponents -c to 1e-3 (the tangent vectors' stages are float32 arithmetic, losing ~u
+    per renormalisation interval, though the vectors and sums are kept in float64:
+    1e5 steps / 64 x u ~ 1e-4 relative)."""
     scene = sweep.Scene(gravity=1.0, length=1.0, effects=(
         sweep.Damping(0.5), sweep.Forcing(1.5, 2 / 3)))
     grid = sweep.Grid(theta0=np.linspace(-1.0, 1.0, 16), omega0=[0.0])
@@ -251,6 +252,25 @@ def test_refill_gives_the_same_bits_as_waiting_lanes_in_float32():
 
 
 # ------------------------------------------------------------------ bits, chunks, code
+@pytest.mark.parametrize("model", ["nonlinear", "linear"])
+def test_one_trajectory_alone_gives_the_bits_of_a_block(model):
+    """The narrow path (a block of one lane, its lanes plain variables:
+    `sweep.kernels.lanes.scalar_lanes`) converts each lane variable as the lane arrays
+    do, so the observables that keep float64 state in a float32 kernel (lyapunov's
+    tangent vectors and sums, omega_mean's steady angle) stay float64 there too: the
+    same bits as in blocks of 8 and 64, saved samples included."""
+    from test_blocks import _call, _table
+
+    params = _table(12)
+    observe = ("final", "omega_mean", "energy", "lyapunov")
+    specs = [KernelSpec(model, ("damping", "forcing"), observe, save=True, block=block,
+                        dtype="float32") for block in (1, 8, 64)]
+    alone = _call(specs[0], params, save_every=7)
+    for spec in specs[1:]:
+        for a, b in zip(alone, _call(spec, params, save_every=7)):
+            np.testing.assert_array_equal(a, b)
+
+
 def test_chunks_and_threads_do_not_change_the_bits():
     grid = sweep.Grid(theta0=np.linspace(-3, 3, 37), omega0=[0.0, 2.0])
     kwargs = dict(t_end=5.0, dt=0.01, dtype="float32", progress=False,

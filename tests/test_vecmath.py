@@ -1,12 +1,13 @@
 """The vectorisable sin of `sweep.kernels.vecmath` against NumPy's (glibc's) sin.
 
 Tolerance: 2**-52 = 2.2e-16 absolute, two ulps of values just below 1: the issue's
-target for |x| <= 1e4. The bound behind it: the two fused multiply-adds of the
-reduction leave ``r`` within one ulp of ``x - k pi/2`` (two roundings, at most 1.1e-16
-for |r| near pi/4, times |cos r| <= 0.88 where |r| >= 0.5), the fdlibm polynomials are
-accurate to 2**-58, their last multiply-add rounds by at most half an ulp of the result
-(5.6e-17) and the rest of their evaluation by less than 2e-17: at most ~1.7e-16 from the
-true sine, and glibc's np.sin is within half an ulp (5.6e-17) of it. Measured: 1.1e-16.
+target for |x| <= 1e4. The bound behind it: the reduction's first fused multiply-add is
+exact and its second rounds once, leaving ``r`` within half an ulp of ``x - k pi/2``
+(at most 5.6e-17 for |r| near pi/4, times |cos r| <= 0.88 where |r| >= 0.5), the fdlibm
+polynomials are accurate to 2**-58, their last multiply-add rounds by at most half an
+ulp of the result (5.6e-17) and the rest of their evaluation by less than 2e-17: at most
+~1.3e-16 from the true sine, and glibc's np.sin is within half an ulp (5.6e-17) of it.
+Measured: 1.1e-16.
 The truncated pi/2 (1.5e-33 per unit of k) keeps the same bound up to |x| ~ 1e12 (tested
 to there, hard spots next to multiples of pi/2 included); past ~1e13 the rounded
 ``x * 2/pi`` may pick the neighbouring quadrant and the error grows (tested as a bound,
@@ -23,8 +24,9 @@ from sweep.kernels import vecmath as _vecmath
 TOL = 2.0 ** -52
 
 
-# called as the kernels call it, from a loop with their fast-math flags (the sine is
-# compiled with them too: FMA contraction); `_vsin_strict` is a caller without them
+# called as the kernels call it, from a loop with their fast-math flags (none since
+# 2026-11-25; the sine is compiled with them too, its FMAs written out); `_vsin_contract`
+# is a caller that lets LLVM fuse its own multiply-adds
 KERNEL_FLAGS = set(_config.FASTMATH)
 
 
@@ -36,8 +38,8 @@ def _vsin(x):
     return out
 
 
-@njit(parallel=True, cache=True)
-def _vsin_strict(x):
+@njit(parallel=True, cache=True, fastmath={"contract"})
+def _vsin_contract(x):
     out = np.empty_like(x)
     for i in prange(x.size):
         out[i] = _vecmath.sin(x[i])
@@ -96,9 +98,9 @@ def test_near_zero_relative():
     x = _neighbours(np.array([np.pi, -np.pi, 2 * np.pi, 1e4 * np.pi / 2]), 64)
     got, want = _vsin(x), np.sin(x)
     # sin is ~1e-16 .. 1e-12 here: the error must be small relative to the value too.
-    # The reduction's first FMA forms x - k PIO2_HI exactly and rounds it relative to
-    # its own size, the second adds -k PIO2_LO with one more such rounding, and the
-    # truncated pi/2 costs |k| 1.5e-33: 2 ulp of the value is a bound with margin.
+    # The reduction's first FMA gives x - k PIO2_HI exactly, the second adds -k PIO2_LO
+    # with one rounding relative to the result's own size, and the truncated pi/2 costs
+    # |k| 1.5e-33: 2 ulp of the value is a bound with margin.
     assert np.all(np.abs(got - want) <= 4.5e-16 * np.abs(want))
 
 
@@ -154,12 +156,14 @@ def test_nan_and_inf_propagate():
 
 
 
-def test_without_fast_math_flags_too(rng):
-    """Without FMA contraction (every product rounded) the bound holds as well, on
-    random arguments and next to multiples of pi/2."""
+def test_a_caller_with_fma_contraction_gets_the_same_bits(rng):
+    """The sine's fused multiply-adds are explicit (`vecmath.fma`) and its own code has
+    no fast-math flags, so a caller that lets LLVM contract its own products gets the
+    same bits, on random arguments and next to multiples of pi/2."""
     x = np.concatenate([rng.uniform(-1e4, 1e4, 10**6),
                         _neighbours(np.arange(-6366, 6367) * (np.pi / 2))])
-    assert _max_error(x, f=_vsin_strict) <= TOL
+    np.testing.assert_array_equal(_vsin_contract(x), _vsin(x))
+    assert _max_error(x, f=_vsin_contract) <= TOL
 
 
 @njit(parallel=True, cache=True, fastmath=KERNEL_FLAGS)

@@ -32,10 +32,11 @@
  *                  valid at all), one integer AND instead of a float -> int64 convert
  *   SIN_VARIANT 4  the polynomial sin of sweep/kernels/vecmath.py since 2026-11-25
  *                  (2 and 3 are its predecessor): quadrant from the bits as 3, the
- *                  reduction by pi/2 in two fused multiply-adds (C's fma(), one
- *                  rounding each), and one polynomial per call, the sine's or the
- *                  cosine's by quadrant (coefficients chosen by selects), evaluated by
- *                  Estrin's scheme; the same operations in the same order
+ *                  reduction by pi/2 in two fused multiply-adds, and one polynomial
+ *                  per call, the sine's or the cosine's by quadrant (coefficients
+ *                  chosen by selects), evaluated by Estrin's scheme; every
+ *                  multiply-add that sweep fuses written as C's fma(), so the same
+ *                  operations in the same order whatever -ffp-contract says
  *
  * Build (benchmarks/run_all.py does this and sweeps the options):
  *   gcc -O3 -march=native -fopenmp -shared -fPIC [-mprefer-vector-width=512]
@@ -43,9 +44,9 @@
  *       [-DLINEAR] pendulum.c -o lib.so -lm
  * Never -ffast-math: reassociation would break the magic-number rounding and the
  * exact Cody-Waite reduction, and change RK4's sums. -ffp-contract=fast (gcc's
- * default for GNU C) fuses a*b + c into FMAs as sweep's kernels let LLVM do
- * (fast-math flag `contract`); -ffp-contract=off keeps every product rounded, which
- * with SIN_VARIANT 0 reproduces numba-without-fastmath to the last bit.
+ * default for GNU C) fuses any a*b + c into an FMA, where sweep's kernels fuse only
+ * what they write (vfma) and let LLVM fuse nothing; -ffp-contract=off keeps every
+ * product rounded but the explicit fma() calls.
  */
 #include <math.h>
 #include <stdint.h>
@@ -77,7 +78,7 @@ static const double C1 = 4.16666666666666019037e-02, C2 = -1.3888888888874109574
 static const double PIO2_HI = 1.5707963267948966, PIO2_LO = 6.123233995736766e-17;
 /* vecmath._reduce and _sine_of_reduced, operation for operation */
 static inline double vsin(double x) {
-    const double y = x * TWO_OVER_PI + MAGIC;
+    const double y = fma(x, TWO_OVER_PI, MAGIC);
     const double kf = y - MAGIC;
     const double r = fma(-kf, PIO2_LO, fma(-kf, PIO2_HI, x));
     int64_t q;
@@ -87,8 +88,9 @@ static inline double vsin(double x) {
     const double c0 = odd ? -0.5 : S1, c1 = odd ? C1 : S2, c2 = odd ? C2 : S3,
                  c3 = odd ? C3 : S4, c4 = odd ? C4 : S5, c5 = odd ? C5 : S6,
                  c6 = odd ? C6 : 0.0;
-    const double p = ((c0 + z * c1) + z2 * (c2 + z * c3)) + z4 * ((c4 + z * c5) + z2 * c6);
-    const double v = (odd ? 1.0 : r) + (odd ? z : z * r) * p;
+    const double p = fma(z4, fma(z2, c6, fma(z, c5, c4)),
+                         fma(z2, fma(z, c3, c2), fma(z, c1, c0)));
+    const double v = fma(odd ? z : z * r, p, odd ? 1.0 : r);
     return (q & 2) ? -v : v;
 }
 #else

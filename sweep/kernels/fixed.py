@@ -50,8 +50,8 @@ def _drives(parts: dict) -> _Drives:
     that form the values ``<value> = A * s<value>``.
 
     Either way (block or lane) the step loop reads them as plain values and forms the
-    product itself, so LLVM fuses the same products into FMAs and both forms give the
-    same bits (a test checks it).
+    product itself, with the same operations, so both forms give the same bits (a test
+    checks it).
     """
     drives = _Drives()
     for key, triples in (("init", parts["drive_init"]), ("step", parts["drive_step"])):
@@ -236,4 +236,4 @@ def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
 {indent(_SAVE_BLOCK if spec.save else "", 3)}
 {finish_loop}
 '''
-    return scalar_lanes(kernel) if spec.block == 1 else kernel
+    return scalar_lanes(kernel, lane) if spec.block == 1 else kernel

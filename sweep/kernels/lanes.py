@@ -51,38 +51,78 @@ def skip_unless(flag: str) -> str:
 
 
 _ALLOCATION = re.compile(r"^\s*lane_(\w+) = np\.empty\(BLOCK, dtype=np\.\w+\)\n", re.MULTILINE)
-_LOAD_OR_STORE = re.compile(r"^\s*(?:(\w+) = lane_\1\[j\]|lane_(\w+)\[j\] = \2)\n",
-                            re.MULTILINE)
+_LOAD = re.compile(r"^\s*(\w+) = lane_\1\[j\]\n", re.MULTILINE)
+_STORE = re.compile(r"^(\s*)lane_(\w+)\[j\] = \2$", re.MULTILINE)
 _LANE = re.compile(r"\blane_(\w+)\[j\]")
 _LANE_LOOP = re.compile(r"^(\s*)for j in range\((?:BLOCK|n_real)\):$", re.MULTILINE)
 _SKIP = re.compile(r"^(\s*)if True:\n\1    if (\w+):\n\1        continue\n", re.MULTILINE)
 _BLOCK_START = re.compile(r"^(\s*)base = b \* BLOCK\n", re.MULTILINE)
+_LOOP_STATEMENT = re.compile(r"^(\s*)(?:for|while)\b")
+_EXIT = re.compile(r"^(\s*)(break|continue)\b")
 
 
-def scalar_lanes(kernel: str) -> str:
+def _lane_body_exits(kernel: str) -> list[str]:
+    """The ``break``/``continue`` statements that belong to a one-lane loop itself
+    (not to a loop inside its body), other than the skip head ``if <flag>: continue``."""
+    found, stack = [], []  # stack: (indent of a loop statement, is a lane loop)
+    lines = kernel.splitlines()
+    for k, line in enumerate(lines):
+        if not line.strip():
+            continue
+        depth = len(line) - len(line.lstrip())
+        while stack and depth <= stack[-1][0]:
+            stack.pop()
+        exit_ = _EXIT.match(line)
+        if exit_ and stack and stack[-1][1]:
+            head = lines[k - 1].strip() if k else ""
+            skip = exit_.group(2) == "continue" and head.startswith("if ") and \
+                depth == stack[-1][0] + 8
+            if not skip:
+                found.append(line.strip())
+        loop = _LOOP_STATEMENT.match(line)
+        if loop:
+            stack.append((depth, bool(_LANE_LOOP.match(line))))
+    return found
+
+
+def scalar_lanes(kernel: str, dtypes: dict[str, str]) -> str:
     """A fixed-step kernel of one lane per block (``BLOCK = 1``, the narrow path of a
     handful of trajectories) with its lanes turned into plain variables: allocations
-    and the loads and stores that copy ``lane_<name>[j]`` to and from ``<name>`` are
-    dropped, any other ``lane_<name>[j]`` reads ``<name>``, and each one-lane loop
-    ``for j in range(...)`` becomes ``if True:`` with ``j = 0`` (a skipped lane's
-    ``continue`` becomes ``if not <flag>:``).
+    and the loads from ``lane_<name>[j]`` are dropped, each store becomes the
+    conversion the array did (``name = np.<dtype>(name)``, ``dtypes`` as `allocate`
+    got them: a float32 kernel keeps observables' state in float64), any other
+    ``lane_<name>[j]`` reads ``<name>``, and each one-lane loop ``for j in
+    range(...)`` becomes ``if True:`` with ``j = 0`` (a skipped lane's ``continue``
+    becomes ``if not <flag>:``).
 
-    The same operations on the same values, so the same bits (``tests/test_blocks.py``);
-    but the state stays in registers from one step to the next instead of making a
-    round trip through memory on every step's critical path (one trajectory alone is
-    latency-bound). The loops go too because numba's ``prange`` lowering mishandled
-    variables that live from one inner loop to the next (measured: other bits). Exact
-    for the fixed-step kernel, whose every lane loop loads what it reads at its start
-    and stores what it changes at its end (`lane_loop`); not for kernels that read a
-    lane array after changing the variable without storing it (a rejected adaptive
-    step).
+    The same operations on the same values, so the same bits (``tests/test_blocks.py``,
+    ``tests/test_float32.py``); but the state stays in registers from one step to the
+    next instead of making a round trip through memory on every step's critical path
+    (one trajectory alone is latency-bound). The loops go too because numba's
+    ``prange`` lowering mishandled variables that live from one inner loop to the next
+    (measured: other bits). Exact for the fixed-step kernel, whose every lane loop
+    loads what it reads at its start and stores what it changes at its end
+    (`lane_loop`); not for kernels that read a lane array after changing the variable
+    without storing it (a rejected adaptive step).
+
+    Raises
+    ------
+    AssertionError
+        If a lane loop's own body leaves it with ``break`` or ``continue`` (other than
+        the skip head), which ``if True:`` would turn into an exit from the step loop.
     """
+    exits = _lane_body_exits(kernel)
+    if exits:
+        raise AssertionError(f"a one-lane loop's body has {exits[0]!r}: it cannot become "
+                             "plain code")
     kernel = _ALLOCATION.sub("", kernel)
-    kernel = _LOAD_OR_STORE.sub("", kernel)
+    kernel = _LOAD.sub("", kernel)
+    kernel = _STORE.sub(lambda m: f"{m.group(1)}{m.group(2)} = "
+                                  f"np.{dtypes[m.group(2)]}({m.group(2)})", kernel)
     kernel = _LANE.sub(r"\1", kernel)
     kernel = _LANE_LOOP.sub(r"\1if True:", kernel)
     kernel = _SKIP.sub(r"\1if not \2:\n", kernel)
     kernel = _BLOCK_START.sub(r"\g<0>\1j = 0\n", kernel)
-    if re.search(r"\bcontinue\b|\blane_\w+\[", kernel):
-        raise AssertionError("a one-lane kernel kept a lane array or a lane's continue")
+    if re.search(r"\blane_\w+\[", kernel):
+        raise AssertionError("a one-lane kernel kept a lane array")
     return kernel

@@ -25,9 +25,10 @@ What stays float64, on purpose:
   and float32 would hold it only to ulp(|theta|) / 2: 3e-5 at 500 rad, 2.4e-4 past
   4000 rad, an absolute rounding of the angle at every step that grows with time and
   made every rotating attractor of a forced map unresolvable after a few hundred
-  periods. In float64 only the increments ``dt * k`` (float32, each rounded relative
-  to itself) carry float32's rounding. The stage angles ``th + dt/2 k1`` and the
-  update are float64 additions; `vecmath.sin32` reduces its float64 argument in
+  periods. In float64 only the increments ``k`` (float32, each rounded relative to
+  itself) carry float32's rounding. The stage angles ``th + dt/2 k1`` and the update
+  are float64 fused multiply-adds (``vfma`` widens its float32 factors, so the product
+  is exact); `vecmath.sin32` reduces its float64 argument in
   float64 and evaluates in float32. (The linear model's ``th`` is a coordinate, not an
   angle, and stays float32.)
 - the drives' phases ``W t + phi``: frequency and phase stay float64 and the clock

@@ -43,8 +43,8 @@ def _accel_args(effect: EffectDeclaration, jacobian: bool = False) -> list[str]:
 
 
 def accel_source(spec: KernelSpec) -> str:
-    """``accel(th, om, w0sq, ...)``: theta'' with only the scene's terms, gravity first,
-    then each effect's term in canonical order."""
+    """``accel(th, om, w0sq, ...)``: theta'' with only the scene's terms: each effect's
+    term in canonical order, then gravity fused onto their sum (`_acceleration`)."""
     args = ["th", "om", "w0sq"] + [a for effect in spec.effects for a in _accel_args(effect)]
     f_theta = "vsin(th)" if spec.model == "nonlinear" else "th"
     return (

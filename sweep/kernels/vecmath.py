@@ -15,9 +15,10 @@ Algorithm
    needs no float-to-integer conversion.
 2. Cody-Waite reduction with two fused multiply-adds (`fma`, LLVM's ``llvm.fma``: one
    rounding, whatever the fast-math flags or the CPU), ``r = fma(-kf, PIO2_LO,
-   fma(-kf, PIO2_HI, x))`` with ``pi/2 = PIO2_HI + PIO2_LO + ~1.5e-33``. Each FMA forms
-   the product exactly and rounds once, so ``r`` is within about one ulp of
-   ``x - k pi/2`` (|r| <~ pi/4); the truncated pi/2 costs ``|k| * 1.5e-33``. Up to
+   fma(-kf, PIO2_HI, x))`` with ``pi/2 = PIO2_HI + PIO2_LO - ~1.5e-33``. The first
+   FMA is exact (``x`` and ``k PIO2_HI`` are multiples of 2**-52 or finer, and their
+   difference is below 1), the second rounds once, so ``r`` is within half an ulp of
+   ``x - k pi/2`` (|r| <~ pi/4) but for the truncated pi/2, ``|k| * 1.5e-33``. Up to
    |x| ~ 1e12 that is all (tested); past ~1e13 the rounded ``x * 2/pi`` may choose the
    neighbouring quadrant, so |r| exceeds pi/4 a little and the error grows (1.9e-14
    measured at 3e15); past ``2**51 pi/2 ~ 3.5e15`` the quadrant trick fails and the
@@ -36,14 +37,14 @@ previous sine, which reduced with three Cody-Waite terms, converted the quadrant
 integer, evaluated both polynomials by Horner and compensated ``1 - z/2``, waited about
 59), and vectorised it gives 1.4x the sines per second (``benchmarks/run_all.py``
 times both inside the kernels). Error: at most 1.1e-16 from ``np.sin`` (one ulp of
-values below 1; the roundings of ``r``, of the polynomial and of its last multiply-add
-add up to at most ~1.7e-16 from the true sine) for |x| <= 1e4, and the same up to 1e12
+values below 1; the rounding of ``r``, of the polynomial and of its last multiply-add
+add up to at most ~1.3e-16 from the true sine) for |x| <= 1e4, and the same up to 1e12
 (``tests/test_vecmath.py``).
 
-Compiled on its own with the kernels' fast-math flags (``contract``: multiply-adds may
-be fused into FMAs, which round once instead of twice; never ``reassoc``, which would
-break the reduction), and inlined into the kernels by LLVM, where the lane loop is
-vectorised. Not marked ``inline="always"`` for numba: inlining its IR into every stage
+Compiled on its own with the kernels' fast-math flags (none since 2026-11-25: its
+fused multiply-adds are written as `fma`, so its bits do not depend on what LLVM
+would fuse; never ``reassoc``, which would break the reduction), and inlined into the
+kernels by LLVM, where the lane loop is vectorised. Not marked ``inline="always"`` for numba: inlining its IR into every stage
 of a kernel doubled the compile time, for the same speed.
 
 NaN and +-inf give NaN (``inf - inf`` in the reduction). The sign of zero is not kept
@@ -62,15 +63,15 @@ from numba.core.extending import intrinsic
 
 from .. import _config
 
-#: The kernels' JIT flags (`sweep._config.FASTMATH`: FMA contraction), so the inlined
-#: sine fuses its multiply-adds as the kernel around it does.
+#: The kernels' JIT flags (`sweep._config.FASTMATH`: none; the multiply-adds to fuse
+#: are written as `fma`), the same for the sine as for the kernels it is inlined into.
 _JIT = _config.jit_options()
 
 __all__ = ["P1", "P2", "PIO2_HI", "PIO2_LO", "cos", "cos32", "fma", "inverse_fifth_root", "sin",
            "sin32", "sincos", "sincos32"]
 
 TWO_OVER_PI = 0.6366197723675814
-#: pi/2 = PIO2_HI + PIO2_LO (+ 1.5e-33): the float64 reduction's two parts.
+#: pi/2 = PIO2_HI + PIO2_LO (- 1.5e-33): the float64 reduction's two parts.
 PIO2_HI = 1.5707963267948966   # 0x1.921fb54442d18p+0
 PIO2_LO = 6.123233995736766e-17  # 0x1.1a62633145c07p-54
 #: pi/2 = P1 + P2 (+ 5.7e-18): 27 + 27 significant bits, so that ``k P1`` and ``k P2``
