@@ -71,15 +71,6 @@ def vcos(x):
 @cuda.jit(device=True)
 def vsincos(x):
     return math.sin(x), math.cos(x)
-
-
-@cuda.jit(device=True)
-def vfma(a, b, c):
-    # the CPU kernels' explicit fused multiply-add. NVVM fuses a * b + c into one FMA
-    # by default when all three share a type; the float32 kernel's angle steps (float32
-    # factors, float64 angle) round the product to float32 first, where the CPU's fma
-    # widens it and forms it exactly (not measured on a GPU since: none was lent)
-    return a * b + c
 '''
 
 
@@ -122,25 +113,29 @@ def vcos(x):
 def vsincos(x):
     r, q = _reduce(x)
     return _quadrant(math.sin(r), math.cos(r), q)
+'''
 
+
+# the CPU kernels' explicit fused multiply-add, in both precisions. NVVM fuses a * b + c
+# into one FMA by default when all three share a type; the float32 kernel's angle steps
+# (float32 factors, float64 angle) round the product to float32 first, where the CPU's
+# fma widens it and forms it exactly (not measured on a GPU since: none was lent)
+_DEVICE_FMA = '''
 
 @cuda.jit(device=True)
 def vfma(a, b, c):
-    # the CPU kernels' explicit fused multiply-add. NVVM fuses a * b + c into one FMA
-    # by default when all three share a type; the float32 kernel's angle steps (float32
-    # factors, float64 angle) round the product to float32 first, where the CPU's fma
-    # widens it and forms it exactly (not measured on a GPU since: none was lent)
     return a * b + c
 '''
 
 
 def device_functions(text: str, dtype: str = "float64") -> str:
     """CPU physics functions (``@njit(**JIT)``) as CUDA device functions, after the
-    device's ``vsin``, ``vcos`` and ``vsincos``: CUDA's ``sin``/``cos`` in float64; in
+    device's ``vsin``, ``vcos``, ``vsincos`` and ``vfma``: CUDA's ``sin``/``cos`` in float64; in
     float32 CUDA's ``sinf``/``cosf`` of the argument reduced in float64 (as
     `sweep.kernels.vecmath.sin32` does; see `sweep.kernels.precision`)."""
     math = _DEVICE_MATH if dtype == "float64" else _DEVICE_MATH32
-    return math + "\n\n" + text.replace("@njit(**JIT)", "@cuda.jit(device=True)")
+    device = text.replace("@njit(**JIT)", "@cuda.jit(device=True)")
+    return math + _DEVICE_FMA + "\n\n" + device
 
 
 # one parameter of the thread's row of the table, from the chunk's description (see

@@ -78,8 +78,8 @@ def _factored(coeffs, names, scale: str, constants: dict[str, str] | None):
                 n = int(x * denominator)
                 parts.append((None if n == 1 else "-" if n == -1 else repr(float(n)), name))
             return factor, _sum(parts)
-    return scale, f"({_sum([(float_literal(x), name) for x, name in terms])})" \
-        if len(terms) == 1 else _sum([(float_literal(x), name) for x, name in terms])
+    text = _sum([(float_literal(x), name) for x, name in terms])
+    return scale, text if len(terms) > 1 else f"({text})"  # one term: scale * (c * x)
 
 
 def combination(coeffs, names, scale: str, constants: dict[str, str] | None):

@@ -44,8 +44,9 @@ add up to at most ~1.3e-16 from the true sine) for |x| <= 1e4, and the same up t
 Compiled on its own with the kernels' fast-math flags (none since 2026-11-25: its
 fused multiply-adds are written as `fma`, so its bits do not depend on what LLVM
 would fuse; never ``reassoc``, which would break the reduction), and inlined into the
-kernels by LLVM, where the lane loop is vectorised. Not marked ``inline="always"`` for numba: inlining its IR into every stage
-of a kernel doubled the compile time, for the same speed.
+kernels by LLVM, where the lane loop is vectorised. Not marked ``inline="always"`` for
+numba: inlining its IR into every stage of a kernel doubled the compile time, for the
+same speed.
 
 NaN and +-inf give NaN (``inf - inf`` in the reduction). The sign of zero is not kept
 (``sin(-0.0)`` gives ``+0.0``), as under the ``nsz`` fast-math flag anyway.
@@ -119,9 +120,6 @@ def fma(typingctx, a, b, c):
     return result(a, b, c), codegen
 
 
-_fma = fma  # the float64 sine's own name for it
-
-
 @intrinsic
 def _bits_of(typingctx, x):
     """The IEEE 754 bits of a float64, as an int64 (a reinterpretation: no instruction)."""
@@ -144,9 +142,9 @@ def _float_of(typingctx, bits):
 def _reduce(x):
     """(r, q): x = k pi/2 + r with |r| <~ pi/4; ``q`` an int64 whose two low bits are
     ``k mod 4`` (the bits of the magic-number sum)."""
-    y = _fma(x, TWO_OVER_PI, _MAGIC)
+    y = fma(x, TWO_OVER_PI, _MAGIC)
     kf = y - _MAGIC
-    r = _fma(-kf, PIO2_LO, _fma(-kf, PIO2_HI, x))
+    r = fma(-kf, PIO2_LO, fma(-kf, PIO2_HI, x))
     return r, _bits_of(y)
 
 
@@ -165,8 +163,8 @@ def _sine_of_reduced(r, q):
     c4 = C4 if odd else S5
     c5 = C5 if odd else S6
     c6 = C6 if odd else 0.0
-    p = _fma(z4, _fma(z2, c6, _fma(z, c5, c4)), _fma(z2, _fma(z, c3, c2), _fma(z, c1, c0)))
-    y = _fma(z if odd else z * r, p, 1.0 if odd else r)
+    p = fma(z4, fma(z2, c6, fma(z, c5, c4)), fma(z2, fma(z, c3, c2), fma(z, c1, c0)))
+    y = fma(z if odd else z * r, p, 1.0 if odd else r)
     return -y if (q & 2) else y
 
 
