@@ -197,7 +197,8 @@ def test_strobe_early_stop_in_float32_stops():
 
     scene = sweep.Scene(gravity=1.0, length=1.0, effects=(
         sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, np.pi / 2)))  # three attractors
-    grid = sweep.Grid(theta0=np.linspace(-3, 3, 7), omega0=[-1.0, 0.0, 1.0])
+    axes = dict(theta0=np.linspace(-3, 3, 7), omega0=[-1.0, 0.0, 1.0])
+    grid = sweep.Grid(**axes)
     period = 2 * np.pi
     kwargs = dict(dt=period / 100, t_transient=20 * period, observe=("strobe",),
                   progress=False)
@@ -220,7 +221,7 @@ def test_strobe_early_stop_in_float32_stops():
     match = {a: max(set(reference), key=lambda b: pairs.count((a, b))) for a in set(labels)}
     differ = np.flatnonzero([match[a] != b for a, b in pairs])
     assert len(differ) <= len(pairs) // 4
-    theta0, omega0 = np.meshgrid(np.linspace(-3, 3, 7), [-1.0, 0.0, 1.0], indexing="ij")
+    theta0, omega0 = np.meshgrid(axes["theta0"], axes["omega0"], indexing="ij")
     for k in differ:
         near = sweep.run(scene, sweep.Grid(theta0=theta0.ravel()[k] + 1e-5 * np.arange(-4, 5),
                                            omega0=[omega0.ravel()[k]]),
