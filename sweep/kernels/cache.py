@@ -1,23 +1,48 @@
 """Build a kernel: write its generated module once to the cache folder (named by the
 hash of its text), import it, and let numba cache the machine code beside it, so a
 fresh process loads the compiled kernel from disk. Built kernels are memoised in the
-process too."""
+process too.
+
+The cache folder holds code that is executed (the modules, Python's bytecode and
+numba's pickled machine code in ``__pycache__``), so it is used only if nobody else
+can change it: the folder, its ``__pycache__`` and the configured cache root must be
+owned by the user and not writable by group or others, and every folder above them
+owned by the user or root and not writable by others unless sticky (like ``/tmp``);
+a symlink on the way must be the user's or root's. Folders sweep creates are 0700.
+An unsafe folder is refused with one `UnsafeCacheWarning` per process and kernels
+go to a private folder of the process (`tempfile.mkdtemp`), compiled anew by each
+process.
+"""
 
 from __future__ import annotations
 
+import atexit
 import functools
 import hashlib
 import importlib.util
 import os
+import shutil
+import stat
 import sys
 import tempfile
+import threading
+import warnings
 from pathlib import Path
 
 from .. import _config
 from .source import source
 from .spec import KernelSpec
 
-__all__ = ["build"]
+__all__ = ["UnsafeCacheWarning", "build"]
+
+
+class UnsafeCacheWarning(UserWarning):
+    """The kernel cache folder could be changed by another user, so it is not used."""
+
+
+_lock = threading.Lock()
+_private: Path | None = None  # this process's fallback folder, made once
+_warned = False
 
 
 def _write_once(path: Path, text: str) -> None:
@@ -25,24 +50,130 @@ def _write_once(path: Path, text: str) -> None:
     (rewriting would change its mtime and invalidate numba's cache index)."""
     if path.exists() and path.read_text() == text:
         return
-    path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
     with os.fdopen(fd, "w") as handle:
         handle.write(text)
     os.replace(tmp, path)
 
 
+def _problem(path: Path, own: bool) -> str | None:
+    """What lets another user change the folder ``path``, or None.
+
+    Parameters
+    ----------
+    path : Path
+        An existing folder, or a symlink to one (NotADirectoryError otherwise).
+    own : bool
+        True for a folder of the cache itself (it must be the user's and writable by
+        the user alone), False for a folder above it (the user's or root's, and not
+        writable by others unless sticky).
+
+    Returns
+    -------
+    str or None
+        The problem (``"is owned by uid 1001 ..."``, ``"has mode 0777 ..."``), or None.
+    """
+    uid = os.getuid()
+    info = os.lstat(path)
+    if stat.S_ISLNK(info.st_mode):
+        if info.st_uid not in (uid, 0):
+            return f"is a symlink owned by uid {info.st_uid}"
+        info = os.stat(path)
+    if not stat.S_ISDIR(info.st_mode):
+        raise NotADirectoryError(f"{path} is not a folder")
+    if info.st_uid != uid and (own or info.st_uid != 0):
+        return f"is owned by uid {info.st_uid} (you are uid {uid})"
+    mode = stat.S_IMODE(info.st_mode)
+    if mode & 0o022 and (own or not mode & stat.S_ISVTX):
+        return f"has mode {mode:04o} (writable by others{'' if own else ', not sticky'})"
+    return None
+
+
+def _checked(folder: Path, root: Path) -> str | None:
+    """Create ``folder`` (each missing component 0700, once the one above it passed)
+    and check it, its ancestors and, through symlinks, the real ones.
+
+    Parameters
+    ----------
+    folder : Path
+        The folder to use.
+    root : Path
+        ``folder`` or a folder above it: it and the folders below it must be the user's
+        alone (``own``); the folders above it are checked as ancestors.
+
+    Returns
+    -------
+    str or None
+        ``"<path> <problem>"`` for the first unsafe component, None if all are safe.
+
+    Raises
+    ------
+    OSError
+        When a folder cannot be made (not writable, a file in the way).
+    """
+    if not hasattr(os, "getuid"):  # Windows: no POSIX owners and modes to check
+        folder.mkdir(parents=True, exist_ok=True)
+        return None
+    folder, root = Path(os.path.abspath(folder)), Path(os.path.abspath(root))
+    for lexical in (True, False):
+        if not lexical:  # the folders the path leads to, past any symlink
+            folder, root = Path(os.path.realpath(folder)), Path(os.path.realpath(root))
+        for path in (*reversed(folder.parents), folder):
+            if lexical and not os.path.lexists(path):
+                try:
+                    path.mkdir(mode=0o700)
+                except FileExistsError:  # made meanwhile: checked below
+                    pass
+            problem = _problem(path, own=path == root or root in path.parents)
+            if problem:
+                return f"{path} {problem}"
+    return None
+
+
+def _private_folder() -> Path:
+    """This process's own folder (0700, unpredictable name), made on first use and
+    removed at exit."""
+    global _private
+    if _private is None:
+        _private = Path(tempfile.mkdtemp(prefix="sweep-kernels-"))
+        atexit.register(shutil.rmtree, _private, ignore_errors=True)
+        (_private / "__pycache__").mkdir(mode=0o700)  # Python's and numba's caches
+    return _private
+
+
 def _module_dir() -> Path:
-    folder = _config.cache_dir() / "kernels"
+    """The folder of the generated modules: ``<cache_dir>/kernels``; if that cannot be
+    written, ``<tmp>/sweep-kernels-<uid>`` (checked the same way); if the one chosen is
+    unsafe, this process's private folder (with one warning per process)."""
+    global _warned
+    root = _config.cache_dir()
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        probe = folder / ".write-probe"
-        probe.touch()
-        probe.unlink()
+        folder = root / "kernels"
+        problem = _checked(folder / "__pycache__", root)
+        if not problem:
+            probe = folder / ".write-probe"
+            probe.touch()
+            probe.unlink()
     except OSError:
-        folder = Path(tempfile.gettempdir()) / f"sweep-kernels-{os.getuid()}"
-        folder.mkdir(parents=True, exist_ok=True)
-    return folder
+        root = folder = Path(tempfile.gettempdir()) / f"sweep-kernels-{os.getuid()}"
+        try:
+            problem = _checked(folder / "__pycache__", root)
+        except OSError as error:
+            problem = f"{folder} cannot be made ({error})"
+    if not problem:
+        return folder
+    with _lock:
+        private = _private_folder()
+        if not _warned:
+            _warned = True
+            warnings.warn(
+                f"sweep does not use the kernel cache folder: {problem}, so another user "
+                f"could plant code that sweep runs. Kernels go to {private} instead, for "
+                f"this process only (compiled anew by every process). To fix: make it a "
+                f"folder of yours that only you can write (chmod 700), inside folders "
+                f"others cannot change, or set SWEEP_CACHE_DIR to one.",
+                UnsafeCacheWarning, stacklevel=3)
+    return private
 
 
 @functools.lru_cache(maxsize=None)
@@ -59,6 +190,12 @@ def build(spec: KernelSpec):
         The ``kernel`` of the generated module, compiled on first call: a numba
         dispatcher, or for a refill kernel (`sweep.kernels.refill`) a Python function
         that reads the thread count and calls one.
+
+    Warns
+    -----
+    UnsafeCacheWarning
+        Once per process, when the cache folder could be changed by another user (see
+        the module's docstring); kernels are then built in a private folder.
     """
     text = source(spec)
     digest = hashlib.sha1(text.encode()).hexdigest()[:16]
