@@ -42,6 +42,93 @@ def check_real(
     return value
 
 
+class ArgumentTypeError(TypeError, ValueError):
+    """A parameter of the wrong type (a str, a bool, None, a float where an int is
+    meant), raised by `check_count` and `check_quantity`.
+
+    A TypeError, which is what it is, and a ValueError too: the checks these replace in
+    `sweep.maps` (`check_positive_int`, ``check_tolerance``, the continuation's) refused
+    a value of the wrong type with a ValueError, so code that catches ValueError keeps
+    catching it.
+    """
+
+
+def _got(value: Any) -> str:
+    """``'3' (str)``: the repr and the type of a value of the wrong type."""
+    return f"{value!r} ({type(value).__name__})"
+
+
+def check_count(
+    name: str,
+    value: Any,
+    *,
+    minimum: int = 1,
+    maximum: int | None = None,
+    accepted: str | None = None,
+) -> int:
+    """Return ``value`` as an int in ``[minimum, maximum]``: a count, a size, a number
+    of periods, samples or bins.
+
+    Only integers are counts: booleans (``True`` would count as 1), floats (even
+    ``2.0``), strings and None are refused.
+
+    Raises
+    ------
+    ArgumentTypeError
+        (a TypeError and a ValueError) ``"{name} must be {accepted}, got {value!r}
+        ({type})"`` for a value that is not an int.
+    ValueError
+        ``"{name} must be {accepted}, got {value!r}"`` for one out of range.
+    """
+    if accepted is None:
+        accepted = (f"an int >= {minimum}" if maximum is None
+                    else f"an int from {minimum} to {maximum}")
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+        raise ArgumentTypeError(f"{name} must be {accepted}, got {_got(value)}")
+    if value < minimum or (maximum is not None and value > maximum):
+        raise ValueError(f"{name} must be {accepted}, got {value!r}")
+    return int(value)
+
+
+def check_quantity(
+    name: str,
+    value: Any,
+    *,
+    minimum: float | None = None,
+    strict: bool = False,
+    allow_inf: bool = False,
+    accepted: str = "a finite number",
+) -> float:
+    """Return ``value`` as a float: a tolerance, a threshold, a fraction, a size.
+
+    As `check_real` (NaN and -inf always refused; ``minimum`` excluded when
+    ``strict``), except that ``+inf`` passes when ``allow_inf`` ("no threshold") and
+    that a value of the wrong type raises `ArgumentTypeError`, a ValueError as well as
+    a TypeError.
+
+    Raises
+    ------
+    ArgumentTypeError
+        For a value that is not a real number: booleans, strings, None, complex
+        numbers, arrays.
+    ValueError
+        ``"{name} must be {accepted}, got {value!r}"`` for NaN, an infinity not
+        allowed, or a value below ``minimum`` (or equal to it, when ``strict``).
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ArgumentTypeError(f"{name} must be {accepted}, got {_got(value)}")
+    try:
+        number = float(value)
+    except OverflowError:  # an int beyond the float range
+        raise ValueError(f"{name} must be {accepted}, got {value!r} (beyond the float "
+                         "range)") from None
+    finite = math.isfinite(number) or (allow_inf and number == math.inf)
+    if not finite or (minimum is not None
+                      and (number < minimum or (strict and number == minimum))):
+        raise ValueError(f"{name} must be {accepted}, got {value!r}")
+    return number
+
+
 def check_positive_int(name: str, value: Any, accepted: str = "an int >= 1") -> int:
     """Return ``value`` as an int if it is an integer >= 1 (booleans refused).
 

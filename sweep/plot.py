@@ -16,6 +16,7 @@ Conventions
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import secrets
@@ -23,6 +24,8 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
+
+from ._validate import check_quantity
 
 __all__ = ["basin_fractions", "basins", "map", "orbit_diagram", "period_map", "save_figure",
            "select", "trajectory"]
@@ -139,7 +142,8 @@ def select(obj, **sel):
     Raises
     ------
     ValueError
-        On a name that is not a dimension of ``obj``.
+        On a name that is not a dimension of ``obj``, or a value that is NaN or
+        infinite (the nearest point to it is no point in particular).
     TypeError
         On a value that is not a number.
     """
@@ -151,6 +155,13 @@ def select(obj, **sel):
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float,
                                                                          np.number)):
             raise TypeError(f"selection {name}={value!r}: accepted: a number "
+                             f"({obj[name].attrs.get('units', 'coordinate units')})")
+        try:
+            finite = math.isfinite(value)
+        except OverflowError:  # an int beyond the float range
+            finite = False
+        if not finite:
+            raise ValueError(f"selection {name}={value!r}: accepted: a finite number "
                              f"({obj[name].attrs.get('units', 'coordinate units')})")
         obj = obj.sel({name: float(value)}, method="nearest")
     return obj
@@ -473,6 +484,7 @@ def orbit_diagram(ds, along="forcing_amplitude", variable="theta", ax=None, degr
         Angles (and an angle axis ``along``) in degrees.
     title : str, optional
     markersize : float, default 0.6
+        Size of each point [pt]; > 0.
 
     Returns
     -------
@@ -483,8 +495,11 @@ def orbit_diagram(ds, along="forcing_amplitude", variable="theta", ax=None, degr
     ------
     ValueError
         Without stroboscopic samples, for an ``along`` that is not a grid axis of
-        ``ds`` (the message lists them), or an unknown ``variable``.
+        ``ds`` (the message lists them), an unknown ``variable`` or a ``markersize``
+        that is not a finite number > 0.
     """
+    markersize = check_quantity("markersize", markersize, minimum=0.0, strict=True,
+                                accepted="a finite number > 0 (points)")
     import matplotlib.pyplot as plt
 
     from .maps.labels import strobe_axes
@@ -534,7 +549,8 @@ def period_map(periods, lyapunov=None, ax=None, degrees=True, threshold=0.0, tit
     degrees : bool, default True
         As in `map`.
     threshold : float, default 0
-        Exponent [1/s] above which a cell counts as chaotic.
+        Exponent [1/s] above which a cell counts as chaotic; a finite number >= 0
+        (checked even without ``lyapunov``).
     title : str, optional
 
     Returns
@@ -542,7 +558,16 @@ def period_map(periods, lyapunov=None, ax=None, degrees=True, threshold=0.0, tit
     matplotlib.figure.Figure
         The map; the colour bar names each category ("period 1", ..., "none",
         "chaotic").
+
+    Raises
+    ------
+    ValueError
+        For ``periods`` or ``lyapunov`` that are not 2-D maps of the same shape, or a
+        ``threshold`` that is not a finite number >= 0.
     """
+    threshold = check_quantity("threshold", threshold, minimum=0.0,
+                               accepted="a finite number >= 0 (1/s: the Lyapunov exponent "
+                                        "above which a cell counts as chaotic)")
     import matplotlib.pyplot as plt
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
@@ -654,7 +679,7 @@ def save_figure(fig, path, dpi=150):
         Output file; its suffix picks the format (``.png`` when it has none).
         The folder must exist.
     dpi : float, default 150
-        Resolution in dots per inch.
+        Resolution in dots per inch; a finite number > 0.
 
     Returns
     -------
@@ -663,14 +688,17 @@ def save_figure(fig, path, dpi=150):
     Raises
     ------
     ValueError
-        If the folder does not exist or is not writable, or the suffix is not a
-        format matplotlib writes.
+        If the folder does not exist or is not writable, the suffix is not a format
+        matplotlib writes, or ``dpi`` is not a finite number > 0 (checked before the
+        path; the figure is closed in every case).
     """
     import matplotlib.pyplot as plt
 
     from .io import check_output_path
 
     try:
+        dpi = check_quantity("dpi", dpi, minimum=0.0, strict=True,
+                             accepted="a finite number > 0 (dots per inch)")
         path = check_output_path(path)
         fmt = path.suffix.lstrip(".").lower() or "png"
         supported = fig.canvas.get_supported_filetypes()

@@ -15,8 +15,9 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .labels import (UNRESOLVED, check_tolerance, identify_attractors, strobe_axes,
-                     strobe_table)
+from .._validate import check_quantity
+from .labels import (UNRESOLVED, check_max_period, check_tolerance, identify_attractors,
+                     strobe_axes, strobe_table)
 from .period import NO_PERIOD
 
 __all__ = ["continuation", "set_distance"]
@@ -80,23 +81,14 @@ def _match(previous, current, threshold):
     return matched
 
 
-def _number(value) -> bool:
-    return (isinstance(value, (int, float, np.integer, np.floating))
-            and not isinstance(value, (bool, np.bool_)))
-
-
-def _check_options(along, max_period, tol, threshold) -> None:
-    """Refuse bad options before any work, naming what is accepted."""
+def _check_options(along, max_period, tol, threshold) -> tuple[int, float, float]:
+    """Refuse bad options before any work, naming what is accepted; return
+    ``max_period``, ``tol`` and ``threshold`` as an int and floats."""
     if not isinstance(along, str):
         raise ValueError(f"along must be the name of a grid axis (a str), got {along!r}")
-    if not (isinstance(max_period, (int, np.integer))
-            and not isinstance(max_period, (bool, np.bool_)) and max_period >= 1):
-        raise ValueError(f"max_period must be an int >= 1 (forcing periods), got "
-                         f"{max_period!r}")
-    check_tolerance(tol)
-    if not (_number(threshold) and threshold > 0):
-        raise ValueError(f"threshold must be a number > 0 (rad, rad/s; inf for no "
-                         f"threshold), got {threshold!r}")
+    return (check_max_period(max_period), check_tolerance(tol),
+            check_quantity("threshold", threshold, minimum=0.0, strict=True, allow_inf=True,
+                           accepted="a number > 0 (rad, rad/s; inf for no threshold)"))
 
 
 def continuation(ds: xr.Dataset, along: str, *, max_period: int = 8, tol: float = 1e-3,
@@ -171,7 +163,7 @@ def continuation(ds: xr.Dataset, along: str, *, max_period: int = 8, tol: float 
     increasing distance (greedy, as Attractors.jl does), so an attractor that vanishes
     while another appears far away hands its label on unless ``threshold`` forbids it.
     """
-    _check_options(along, max_period, tol, threshold)
+    max_period, tol, threshold = _check_options(along, max_period, tol, threshold)
     axes = strobe_axes(ds, "continuation", along)
     n_values = ds.sizes[along]
     if n_values < 2:

@@ -21,7 +21,7 @@ import xarray as xr
 
 from ..kernels import Status
 from .._timesteps import transient_steps
-from .._validate import check_real
+from .._validate import check_count, check_numbers, check_quantity
 from . import _strobe
 
 __all__ = ["motion", "well", "basins", "attractor_catalogue", "amplitude", "inverted",
@@ -68,6 +68,18 @@ def _steady_window(ds: xr.Dataset) -> float:
     return (int(ds.attrs["n_steps"]) - n_transient) * dt
 
 
+def check_min_turns(min_turns) -> float:
+    """``min_turns`` (net full turns) as a float; ValueError unless a finite number > 0."""
+    return check_quantity("min_turns", min_turns, minimum=0.0, strict=True,
+                          accepted="a finite number > 0 (net full turns)")
+
+
+def check_max_period(max_period) -> int:
+    """``max_period`` (forcing periods) as an int; ValueError unless an int >= 1."""
+    return check_count("max_period", max_period, minimum=1,
+                       accepted="an int >= 1 (forcing periods)")
+
+
 def motion(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
     """Rotation versus libration, with the sense of rotation.
 
@@ -83,7 +95,7 @@ def motion(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
         ``"final"`` (in that order of preference: the net turns from ``theta0`` to
         ``theta_final`` are the winding).
     min_turns : float, default 1
-        Net full turns that count as rotation.
+        Net full turns that count as rotation; a finite number > 0.
 
     Returns
     -------
@@ -99,6 +111,7 @@ def motion(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
     misclassified starts has relative width about ``16 exp(-omega_n T / (min_turns + 1))``
     for a window of duration ``T``.
     """
+    min_turns = check_min_turns(min_turns)
     if "omega_mean" in ds:
         turns = ds["omega_mean"] * _steady_window(ds) / (2 * np.pi)
         source = "omega_mean over the steady window"
@@ -139,8 +152,8 @@ def inverted(ds: xr.Dataset, *, tolerance: float = 0.5) -> xr.DataArray:
         True where every steady-window angle is within ``tolerance`` of the top; False
         elsewhere, and for trajectories that failed (``status`` not ok).
     """
-    tolerance = check_real("tolerance", tolerance, minimum=0.0, strict=True,
-                           accepted="a finite number in (0, pi) (rad)")
+    tolerance = check_quantity("tolerance", tolerance, minimum=0.0, strict=True,
+                               accepted="a finite number in (0, pi) (rad)")
     if tolerance >= np.pi:
         raise ValueError(f"tolerance must be a finite number in (0, pi) (rad), got "
                          f"{tolerance!r}")
@@ -214,7 +227,8 @@ def basins(ds: xr.Dataset, *, rest_position: bool = False, max_period: int = 8,
     rest_position : bool, default False
         Unforced scenes: identify wells modulo 2 pi.
     max_period, tol
-        Forced scenes: passed to `identify_attractors`.
+        Forced scenes: passed to `identify_attractors` (an int >= 1 and a finite number
+        > 0; checked for every scene).
 
     Returns
     -------
@@ -225,6 +239,8 @@ def basins(ds: xr.Dataset, *, rest_position: bool = False, max_period: int = 8,
         ``attractor_period`` [forcing periods], ``attractor_turns_per_period``,
         ``attractor_size`` [trajectories]).
     """
+    max_period = check_max_period(max_period)  # checked whichever path is taken below
+    tol = check_tolerance(tol)
     if "strobe_theta" in ds:
         return _forced_basins(ds, max_period=max_period, tol=tol)
     if "forcing" in str(ds.attrs.get("effects", "")).split():
@@ -288,12 +304,10 @@ def strobe_axes(ds: xr.Dataset, what: str, along: str | None = None) -> list[str
 
 
 def check_tolerance(tol) -> float:
-    """``tol`` [rad and rad/s] as a float; ValueError unless a finite number > 0."""
-    if isinstance(tol, (bool, np.bool_)) or not isinstance(tol, (int, float, np.integer,
-                                                                 np.floating)) \
-            or not np.isfinite(tol) or tol <= 0:
-        raise ValueError(f"tol must be a finite number > 0 (rad and rad/s), got {tol!r}")
-    return float(tol)
+    """``tol`` [rad and rad/s] as a float; ValueError unless a finite number > 0 (one
+    that is not a number: `ArgumentTypeError`, a ValueError and a TypeError)."""
+    return check_quantity("tol", tol, minimum=0.0, strict=True,
+                          accepted="a finite number > 0 (rad and rad/s)")
 
 
 def strobe_table(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
@@ -408,6 +422,8 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
         the map to come, with ``stop_early``).
     labels : xarray.DataArray, optional
         `basins` of ``ds`` (computed with ``max_period`` and ``tol`` if not given).
+    max_period, tol
+        As in `basins` (checked even when ``labels`` is given).
 
     Returns
     -------
@@ -419,8 +435,10 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
     Raises
     ------
     ValueError
-        If the run found no attractor.
+        If the run found no attractor, or for ``max_period`` or ``tol`` out of range.
     """
+    max_period = check_max_period(max_period)
+    tol = check_tolerance(tol)
     flat_theta, flat_omega, dims = strobe_table(ds)
     if labels is None:
         labels = basins(ds, max_period=max_period, tol=tol)
@@ -452,7 +470,7 @@ def amplitude(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
     ds : xarray.Dataset
         A run observing ``amplitude`` and ``omega_mean`` (or ``winding``).
     min_turns : float, default 1
-        Passed to `motion`.
+        Passed to `motion`; a finite number > 0.
 
     Returns
     -------
@@ -460,6 +478,7 @@ def amplitude(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
         Half peak-to-peak of theta over ``t >= t0 + t_transient``; NaN where `motion`
         says rotation or the trajectory failed.
     """
+    min_turns = check_min_turns(min_turns)
     _require(ds, ("amplitude",), "amplitude", "amplitude map")
     code = motion(ds, min_turns=min_turns)
     out = ds["amplitude"].where(code == 0)
@@ -486,6 +505,21 @@ def _same_orbit(a: np.ndarray, b: np.ndarray, tol: float) -> bool:
     return False
 
 
+def _check_weights(weights, n: int) -> np.ndarray:
+    """``weights`` of `identify_attractors` as a float64 array of n whole numbers >= 1."""
+    accepted = (f"a 1-D array of n = {n} whole numbers >= 1 (the trajectories each row "
+                "stands for)")
+    values = check_numbers("weights", weights)
+    if values.shape != (n,):
+        raise ValueError(f"weights must be {accepted}, got shape {values.shape}")
+    bad = ~np.isfinite(values) | (values < 1) | (values != np.round(values))
+    if bad.any():
+        index = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"weights must be {accepted}, got {float(values[index])!r} at index "
+                         f"{index}")
+    return values
+
+
 def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int = 8,
                         tol: float = 1e-3, weights: np.ndarray | None = None):
     """Group trajectories by the periodic attractor their stroboscopic samples sit on.
@@ -495,12 +529,12 @@ def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int
     theta, omega : ndarray, shape (n, P)
         Last P stroboscopic samples per trajectory, oldest first.
     max_period : int, default 8
-        Longest period (in forcing periods) that is looked for.
+        Longest period (in forcing periods) that is looked for; >= 1.
     tol : float, default 1e-3
-        Repetition and identity tolerance, in rad and rad/s.
+        Repetition and identity tolerance, in rad and rad/s; > 0.
     weights : ndarray of int, shape (n,), optional
-        How many trajectories each row stands for (default one each): basin sizes, and
-        the order of the labels, count them so.
+        How many trajectories each row stands for (default one each), whole numbers
+        >= 1: basin sizes, and the order of the labels, count them so.
 
     Returns
     -------
@@ -517,13 +551,23 @@ def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int
     Orbits are first bucketed by (period, turns, quantised orbit point of least
     wrapped angle), then buckets whose orbits coincide up to a cyclic shift within
     ``tol`` are merged, so quantisation edges do not split an attractor.
+
+    Raises
+    ------
+    ValueError
+        For ``theta`` and ``omega`` of different shapes, or ``max_period``, ``tol`` or
+        ``weights`` out of range.
     """
+    max_period = check_max_period(max_period)
+    tol = check_tolerance(tol)
     theta = np.ascontiguousarray(theta, dtype=np.float64)
     omega = np.ascontiguousarray(omega, dtype=np.float64)
     if theta.ndim != 2 or theta.shape != omega.shape:
         raise ValueError(f"theta and omega must be 2-D arrays of the same shape (n, P), "
                          f"got {theta.shape} and {omega.shape}")
-    period, turns = _strobe.periods(theta, omega, int(max_period), float(tol))
+    if weights is not None:
+        weights = _check_weights(weights, theta.shape[0])
+    period, turns = _strobe.periods(theta, omega, max_period, tol)
     n = theta.shape[0]
     labels = np.full(n, UNRESOLVED, dtype=np.int32)
     resolved = np.flatnonzero(period > 0)
@@ -554,7 +598,7 @@ def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int
     roots, inverse, sizes = np.unique(attractor_of_bucket, return_inverse=True,
                                       return_counts=True)
     if weights is not None:
-        sizes = np.bincount(inverse.ravel(), weights=np.asarray(weights)[resolved],
+        sizes = np.bincount(inverse.ravel(), weights=weights[resolved],
                             minlength=roots.size).round().astype(np.int64)
     order = np.argsort(-sizes, kind="stable")
     rank = np.empty_like(order)

@@ -185,6 +185,21 @@ def _check_int(name: str, value: Any, low: int, high: int | None, accepted: str)
     return value
 
 
+def _check_rng(rng: Any) -> np.random.Generator:
+    """Return ``numpy.random.default_rng(rng)`` or raise ValueError naming ``rng``.
+
+    Booleans are refused (``default_rng(True)`` would seed with 1)."""
+    accepted = ("None, a seed (an int >= 0 or a sequence of them), a numpy.random."
+                "Generator, BitGenerator or SeedSequence")
+    if isinstance(rng, (bool, np.bool_, str, bytes)):
+        # ValueError, not TypeError, as in _check_int
+        raise ValueError(f"rng must be {accepted}, got {rng!r}")  # noqa: TRY004
+    try:
+        return np.random.default_rng(rng)
+    except (TypeError, ValueError):
+        raise ValueError(f"rng must be {accepted}, got {rng!r}") from None
+
+
 def _check_sizes(name: str, values: Any, low: int, high: int, accepted: str) -> list[int]:
     """Return a sorted list of distinct ints in ``[low, high]`` (at least two)."""
     if isinstance(values, (numbers.Number, str, bytes)):
@@ -448,8 +463,9 @@ def uncertainty_exponent(
     ValueError
         If ``labels`` is empty or not integer-valued, if ``epsilons`` holds fewer than
         two distinct radii or a radius outside ``[1, (min(labels.shape) - 1) // 2]``,
-        if the default radii do not fit (an axis shorter than 32 cells), or if
-        ``n_samples`` is not a positive integer.
+        if the default radii do not fit (an axis shorter than 32 cells), if
+        ``n_samples`` is not a positive integer, or if ``rng`` is not a generator or a
+        seed (checked even when ``n_samples`` is None).
 
     Notes
     -----
@@ -500,6 +516,9 @@ def uncertainty_exponent(
     1.0
     """
     array = _check_labels(labels)
+    if n_samples is not None:
+        n_samples = _check_int("n_samples", n_samples, 1, None, "a positive integer or None")
+    generator = _check_rng(rng)
     shape = array.shape
     smallest = min(shape)
     largest_eps = (smallest - 1) // 2
@@ -529,10 +548,7 @@ def uncertainty_exponent(
     interior_shape = tuple(n - 2 * margin for n in shape)
     n_interior = math.prod(interior_shape)
 
-    if n_samples is not None:
-        n_samples = _check_int("n_samples", n_samples, 1, None, "a positive integer or None")
     if n_samples is not None and n_samples < n_interior:
-        generator = np.random.default_rng(rng)
         flat = generator.choice(n_interior, size=n_samples, replace=False)
         points = tuple(
             idx + margin for idx in np.unravel_index(flat, interior_shape)

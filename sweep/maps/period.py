@@ -7,7 +7,8 @@ import numpy as np
 import xarray as xr
 
 from . import _strobe
-from .labels import check_tolerance, strobe_table
+from .._validate import check_count
+from .labels import check_tolerance, strobe_axes, strobe_table
 
 __all__ = ["NO_PERIOD", "period"]
 
@@ -46,19 +47,18 @@ def period(ds: xr.Dataset, *, max_period: int | None = None, tol: float = 1e-3
     ValueError
         Without stroboscopic samples, or for ``max_period``/``tol`` out of range.
     """
-    theta, omega, dims = strobe_table(ds)
-    samples = theta.shape[1]
+    tol = check_tolerance(tol)
+    strobe_axes(ds, "stroboscopic analysis")  # before reading the number of samples
+    samples = ds["strobe_theta"].sizes["strobe"]
     largest = samples // 2
     if max_period is None:
         max_period = largest
-    if isinstance(max_period, (bool, np.bool_)) or not isinstance(max_period,
-                                                                  (int, np.integer)) \
-            or not 1 <= max_period <= largest:
-        raise ValueError(f"max_period must be an int from 1 to {largest} (half the "
-                         f"{samples} stroboscopic samples), got {max_period!r}; more "
-                         "samples: sweep.run(..., strobe_samples=N)")
-    tol = check_tolerance(tol)
-    found, _ = _strobe.periods(theta, omega, int(max_period), tol)
+    max_period = check_count("max_period", max_period, minimum=1, maximum=largest,
+                             accepted=f"an int from 1 to {largest} (half the {samples} "
+                                      "stroboscopic samples; more samples: sweep.run(..., "
+                                      "strobe_samples=N))")
+    theta, omega, dims = strobe_table(ds)
+    found, _ = _strobe.periods(theta, omega, max_period, tol)
     found = np.where(found > 0, found, NO_PERIOD).astype(np.int32)
     shape = tuple(ds.sizes[d] for d in dims)
     out = xr.DataArray(found.reshape(shape), coords={d: ds[d] for d in dims}, dims=dims,

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import engine
-from .._validate import check_positive_int
+from .._validate import check_count
 from ..engine import INITIAL_AXES
 from ..grid import Grid
 from ..physics import Scene
@@ -29,11 +29,9 @@ def pilot_grid(grid: Grid, points: int) -> Grid:
     ValueError
         If the grid varies anything but the initial conditions, or ``points`` < 2.
     """
-    points = check_positive_int("pilot", points,
-                                "an int >= 2 (points per initial-condition axis)")
-    if points < 2:
-        raise ValueError(f"pilot must be an int >= 2 (points per initial-condition axis), "
-                         f"got {points!r}")
+    # named "pilot", as the option of the command line and of a run file that sets it
+    points = check_count("pilot", points, minimum=2,
+                         accepted="an int >= 2 (points per initial-condition axis)")
     engine.check_one_scene(grid)
     axes = {}
     for name, values in grid.axes.items():

@@ -10,7 +10,7 @@ import xarray as xr
 
 from .. import engine
 from . import labels as maps
-from .._validate import check_axis, check_choice, check_positive_int, check_real
+from .._validate import check_axis, check_choice, check_count, check_quantity
 from ..grid import Grid
 from ..physics import Forcing, Scene
 
@@ -49,6 +49,7 @@ def frequency_response(
         Initial state of the first point [rad, rad/s].
     direction : {"up", "down", "both"}
     periods_transient, periods_measure, steps_per_period : int
+        Each >= 1 (booleans and floats such as ``20.0`` are refused).
 
     Returns
     -------
@@ -65,12 +66,12 @@ def frequency_response(
     frequencies = np.sort(check_axis("frequencies", frequencies))
     if frequencies[0] <= 0:
         raise ValueError(f"frequencies must be > 0 (rad/s), got {float(frequencies[0])!r}")
-    theta0 = check_real("theta0", theta0)
-    omega0 = check_real("omega0", omega0)
+    theta0 = check_quantity("theta0", theta0)
+    omega0 = check_quantity("omega0", omega0)
     check_choice("direction", direction, _DIRECTIONS)
-    periods_transient = check_positive_int("periods_transient", periods_transient)
-    periods_measure = check_positive_int("periods_measure", periods_measure)
-    steps_per_period = check_positive_int("steps_per_period", steps_per_period)
+    periods_transient = check_count("periods_transient", periods_transient)
+    periods_measure = check_count("periods_measure", periods_measure)
+    steps_per_period = check_count("steps_per_period", steps_per_period)
     directions = ("up", "down") if direction == "both" else (direction,)
 
     names = ("amplitude", "omega_mean", "motion", "theta_final", "omega_final")
