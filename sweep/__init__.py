@@ -19,7 +19,11 @@ from .physics import Scene as Scene
 
 #: Submodules imported on first use, so that ``import sweep`` stays cheap (no
 #: matplotlib): ``sweep.plot``, ``sweep.maps``, ... ``sweep.metrics`` and
-#: ``sweep.response`` are the modules of the same name in `sweep.maps`.
+#: ``sweep.response`` are the modules of the same name in `sweep.maps`: as attributes
+#: they are kept and do not warn. Their 0.1 module paths (``import sweep.metrics``,
+#: ``from sweep.response import ...``), like those of ``sweep.scene`` and
+#: ``sweep.checkpoint``, are deprecated shims (sweep/metrics.py, ...) that warn once
+#: and give the same module object as the attribute.
 _LAZY_MODULES = {"plot": "plot", "io": "io", "cli": "cli", "maps": "maps",
                  "metrics": "maps.metrics", "response": "maps.response",
                  "methods": "methods", "accuracy": "accuracy"}

@@ -1,7 +1,8 @@
 """Numeric parameters of the maps, metrics and plots (tolerances, thresholds, counts,
 sizes, periods, seeds) are checked at the top of each public function, on every path,
 before any work, with a message naming the parameter, the bad value and what is
-accepted.
+accepted; and the 0.1 module paths (``sweep.metrics``, ...) import again, with a
+DeprecationWarning.
 
 Every case below was accepted, or refused only after some work, or refused with a
 ValueError alone for a value of the wrong type, before these checks. Cases that were
@@ -13,6 +14,8 @@ functions that fail the test if called.
 """
 
 import importlib
+import subprocess
+import sys
 
 import matplotlib.figure
 import matplotlib.pyplot as plt
@@ -295,3 +298,73 @@ def test_the_checks_accept_what_they_say(no_work):
         check_count("n", 9, maximum=8)
     # continuation's threshold still takes inf ("no threshold")
     assert continuation._check_options("theta0", 8, 1e-3, INF) == (8, 1e-3, INF)
+
+
+# ------------------------------------------------------------------- 0.1 module paths
+SHIMS = {"metrics": "sweep.maps.metrics", "response": "sweep.maps.response",
+         "scene": "sweep.physics.scene", "checkpoint": "sweep.execution.checkpoint"}
+
+
+def _python(*args, **kwargs):
+    return subprocess.run([sys.executable, *args], capture_output=True, text=True,
+                          timeout=120, **kwargs)
+
+
+@pytest.mark.parametrize("old", sorted(SHIMS))
+def test_an_old_module_path_warns_naming_the_new_one(old):
+    strict = _python("-W", "error::DeprecationWarning", "-c", f"import sweep.{old}")
+    assert strict.returncode != 0
+    assert (f"DeprecationWarning: the module path sweep.{old} is deprecated and will be "
+            f"removed in 0.3; import {SHIMS[old]} instead") in strict.stderr
+    # default filters show a DeprecationWarning only when it points at __main__: it
+    # does, since it points at the importing line
+    default = _python("-c", f"import sweep.{old}")
+    assert default.returncode == 0, default.stderr
+    assert f"import {SHIMS[old]} instead" in default.stderr
+
+
+OLD_PATHS = """\
+import importlib
+import sys
+import warnings
+
+import sweep  # run with -W error: the package warns nothing
+
+assert not {"sweep.metrics", "sweep.response", "sweep.scene", "sweep.checkpoint"} & set(
+    sys.modules)  # and imports no shim
+alias = sweep.metrics  # the package's aliases stay, and warn nothing
+from sweep import metrics, response
+assert alias is metrics is importlib.import_module("sweep.maps.metrics")
+assert response is importlib.import_module("sweep.maps.response")
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    import sweep.metrics
+    from sweep.response import frequency_response
+    from sweep.scene import MODELS, Scene
+    from sweep.checkpoint import open_checkpoint
+import sweep.execution.checkpoint
+import sweep.maps.metrics
+import sweep.physics.scene
+assert sweep.metrics is sweep.maps.metrics is alias
+assert sweep.metrics.basin_entropy is sweep.maps.metrics.basin_entropy
+assert frequency_response is sweep.maps.response.frequency_response
+assert Scene is sweep.Scene is sweep.physics.scene.Scene
+assert MODELS is sweep.physics.scene.MODELS
+assert open_checkpoint is sweep.execution.checkpoint.open_checkpoint
+for warning in caught:
+    print(warning.category.__name__, warning.filename, warning.lineno)
+import sweep.metrics  # imported already: no second warning
+"""
+
+
+def test_old_module_paths_give_the_new_modules_and_the_package_warns_nothing(tmp_path):
+    script = tmp_path / "old_paths.py"
+    script.write_text(OLD_PATHS)
+    done = _python("-W", "error", str(script), cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    # one warning per old path, each pointing at its own import line in the script
+    lines = [number for number, text in enumerate(OLD_PATHS.splitlines(), start=1)
+             if text.startswith("    ") and "import" in text and "sweep." in text]
+    assert len(lines) == 4
+    assert done.stdout.splitlines() == [f"DeprecationWarning {script} {line}"
+                                        for line in lines]

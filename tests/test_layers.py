@@ -26,6 +26,9 @@ LAYERS = {
     "sweep.maps": 5, "sweep.accuracy": 5, "sweep.plot": 5, "sweep.toml_spec": 5,
     "sweep.distributed": 5,
     "sweep.cli": 6, "sweep.__main__": 7,
+    # deprecated shims at the 0.1 module paths (removed in 0.3): each sits in the layer
+    # of the module it forwards to
+    "sweep.metrics": 5, "sweep.response": 5, "sweep.scene": 1, "sweep.checkpoint": 3,
 }
 
 
