@@ -249,8 +249,10 @@ def _energy_speed_bound(scene: Scene, grid: Grid, p: dict) -> float:
     w2 = largest("gravity", p["gravity"]) / float(np.min(grid.axes.get("length",
                                                                        [p["length"]])))
     omega0, theta0 = largest("omega0", 0.0), largest("theta0", 0.0)
-    potential = 4.0 * w2 if scene.model == "nonlinear" else w2 * theta0 ** 2
-    return math.sqrt(omega0 ** 2 + potential)
+    # sqrt(omega0^2 + potential) as a hypotenuse: no overflow for huge starts (a
+    # start of 1e300 rad/s gives a bound of 1e300, not an OverflowError)
+    reach = 2.0 * math.sqrt(w2) if scene.model == "nonlinear" else math.sqrt(w2) * theta0
+    return math.hypot(omega0, reach)
 
 
 def _speed_bound(scene: Scene, grid: Grid, effects, corner: dict, energy: float) -> float:
@@ -279,7 +281,8 @@ def _check_stable_step(scene: Scene, grid: Grid, settings, effects) -> None:
     value) and ``C`` the sum of their ``linear_damping``; both are checked at every
     corner of the grid's parameter ranges (exact for the declared terms, which are
     monotone in each parameter). ``omega_max`` in a declaration is `_speed_bound` at
-    that corner."""
+    that corner. Then each drive's largest frequency on the grid must be resolved by
+    ``dt`` (`sweep.stability.check_drive`)."""
     p = scene.parameters()
     names = ["gravity", "length"] + [a for effect in effects for a in effect.axes]
     values = {name: np.asarray(grid.axes.get(name, [p[name]]), dtype=np.float64)
@@ -298,6 +301,9 @@ def _check_stable_step(scene: Scene, grid: Grid, settings, effects) -> None:
         stiffnesses.add(k)
     _stability.check(settings.integrator, settings.dt, sorted({min(dampings), max(dampings)}),
                      sorted({min(stiffnesses), max(stiffnesses)}))
+    drives = [_drive_axes(effect)[0] for effect in effects if effect.drive is not None]
+    _stability.check_drive(settings.integrator, settings.dt,
+                           [(axis, float(np.max(np.abs(values[axis])))) for axis in drives])
 
 
 def check_strobe_samples(strobe_samples, names) -> None:
@@ -441,7 +447,23 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         dtype=dtype,
         attractors=orbits,
     )
+    _check_angle_range(grid, spec)
     return settings, spec, int(chunk_size)
+
+
+def _check_angle_range(grid: Grid, spec: KernelSpec) -> None:
+    """Refuse starts beyond the range where the kernel's sine of the angle is accurate
+    (`KernelSpec.angle_limit`); a trajectory that leaves it during the run is flagged
+    ``ANGLE_OUT_OF_RANGE`` by the kernel instead."""
+    limit = spec.angle_limit
+    theta0 = np.asarray(grid.axes.get("theta0", [0.0]), dtype=np.float64)
+    if limit is None or theta0.size == 0 or np.max(np.abs(theta0)) <= limit:
+        return
+    index = int(np.argmax(np.abs(theta0)))
+    raise ValueError(
+        f"theta0 = {float(theta0[index])!r} rad (index {index}) is beyond the range where "
+        f"the kernel's sine is accurate ({spec.dtype}); accepted: |theta0| <= {limit:g} "
+        "rad (in the nonlinear model theta0 % (2 * np.pi) gives the same motion)")
 
 
 #: The grid axes an attractor catalogue may be used across: initial conditions only.
@@ -597,8 +619,12 @@ def run(
         RK4: ``dt |lambda| <= 2.785`` on the real axis, ``<= 2.828`` on the imaginary
         axis; Verlet ``w dt < 2``). It covers the scene's linear stiffness, not the
         nonlinear pendulum's physical instability near the top nor the accuracy of fast
-        rotation. Adaptive methods are never checked. False integrates anyway: unstable
-        trajectories then grow, overflow and are flagged non-finite (for tests).
+        rotation. Adaptive methods are never checked for stability. It also refuses a
+        ``dt`` that does not resolve a drive (`sweep.stability.check_drive`: the largest
+        forcing or pivot frequency ``W`` on the grid must have ``W dt`` within the
+        method's 1 % limit on a sinusoid; RK4: ``W dt <= 1.70``, 3.7 steps per period;
+        DOPRI5's largest step: 3.24). False integrates anyway: unstable trajectories then
+        grow, overflow and are flagged non-finite (for tests).
     stop_early : bool, default False
         Stop each trajectory as soon as its answer is settled: for ``capture`` (the
         well of an unforced pendulum, final once its energy is below the separatrix)

@@ -45,8 +45,10 @@ def _assert_close(gpu, cpu, tol=TOL):
 @pytest.mark.parametrize("method", ["euler", "heun", "rk4", "rk38"])
 def test_every_explicit_method_matches_the_cpu(method):
     grid = sweep.Grid(theta0=[-2.0, 0.5, 3.0], omega0=[0.0, 1.5], forcing_frequency=[1.5, 2.0])
+    # Euler resolves W = 2 rad/s to 1 % only from 628 steps per period (the drive guard):
+    # the devices are compared here, not the accuracy
     gpu, cpu = _pair(FULL, grid, t_end=3.0, dt=0.01, observe=("final", "winding"),
-                     method=method)
+                     method=method, check_stability=method != "euler")
     _assert_close(gpu, cpu)
 
 

@@ -243,8 +243,8 @@ def test_dataset_layout_units_and_provenance(small_grid):
     np.testing.assert_allclose(ds.time, [0.0, 0.5, 1.0, 1.5, 2.0])
     assert ds.theta0.attrs["units"] == "rad" and ds.omega0.attrs["units"] == "rad s-1"
     assert "long_name" in ds.theta0.attrs
-    assert ds.status.attrs["flag_meanings"] == "ok nonfinite step_underflow"
-    np.testing.assert_array_equal(ds.status.attrs["flag_values"], [0, 1, 2])
+    assert ds.status.attrs["flag_meanings"] == "ok nonfinite step_underflow angle_out_of_range"
+    np.testing.assert_array_equal(ds.status.attrs["flag_values"], [0, 1, 2, 3])
     assert ds.attrs["effects"] == "damping" and ds.attrs["damping"] == 0.2
     assert "forcing_amplitude" not in ds.attrs  # no forcing was simulated
     # a file alone says how it was made: rebuild and rerun

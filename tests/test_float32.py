@@ -109,8 +109,10 @@ def test_every_explicit_method_with_every_effect_is_float64_to_rounding(method):
     run to rounding. Bound: 300 steps x u x |state| (<= 10) x a flow amplification of
     a few over 3 s = ~2e-4 worst case; measured ~1e-6. Asserted 1e-4 (rad and rad/s)."""
     grid = sweep.Grid(theta0=[-2.0, 0.5, 3.0], omega0=[0.0, 1.5], forcing_frequency=[1.5, 2.0])
+    # Euler resolves W = 2 rad/s to 1 % only from 628 steps per period (the drive guard):
+    # the precisions are compared here, not the accuracy
     single, double = _pair(FULL, grid, t_end=3.0, dt=0.01, method=method,
-                           observe=("final", "winding"))
+                           observe=("final", "winding"), check_stability=method != "euler")
     for name in double.data_vars:
         np.testing.assert_allclose(single[name], double[name], rtol=0, atol=1e-4,
                                    err_msg=name)

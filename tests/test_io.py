@@ -42,7 +42,7 @@ def test_ncdump_reads_the_file(dataset, tmp_path):
     header = subprocess.run(["ncdump", "-h", str(path)], capture_output=True, text=True,
                             check=True).stdout
     assert "double theta_final(theta0, omega0, forcing_amplitude)" in header
-    assert 'status:flag_meanings = "ok nonfinite step_underflow"' in header
+    assert 'status:flag_meanings = "ok nonfinite step_underflow angle_out_of_range"' in header
     assert ':Conventions = "CF-1.10"' in header
 
 

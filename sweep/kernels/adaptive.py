@@ -187,14 +187,18 @@ def _finish(spec: KernelSpec) -> str:
     """A lane's trajectory is done (or its step underflowed): statistics, status,
     observables' final values, copy to ``out``."""
     width = n_columns(spec)
+    limit = spec.angle_limit  # an accepted state is finite: only its angle's range
+    in_range = f" and abs(th) <= {limit!r}" if limit is not None else ""
+    failed = f"{int(Status.STEP_UNDERFLOW)}" if limit is None else \
+        f"{int(Status.ANGLE_OUT_OF_RANGE)} if ok else {int(Status.STEP_UNDERFLOW)}"
     return f"""i = base + j
 stats[i, 0] = accepted
 stats[i, 1] = rejected
-if ok:
+if ok{in_range}:
     status[i] = {int(Status.OK)}
 {indent(lane_snippet(snippets(spec, "final")), 1) or "    pass"}
 else:
-    status[i] = {int(Status.STEP_UNDERFLOW)}
+    status[i] = {failed}
     for col in range({width}):
         obuf[j, col] = math.nan
 for col in range({width}):

@@ -27,9 +27,10 @@ from __future__ import annotations
 
 import re
 
-from .fixed import _FAIL_SAVED, NL, _drives
+from .fixed import NL, _drives
 from .lanes import indent
-from .snippets import finite_test, renormalisations, snippets, stop_source
+from .snippets import (failed_samples, failed_status, ok_test, renormalisations, snippets,
+                       stop_source)
 from .spec import KernelSpec, Status, n_columns
 from .steppers import STEPPERS
 from .terms import load_lines
@@ -185,12 +186,12 @@ def cuda_kernel(spec: KernelSpec, method) -> str:
     if spec.save:
         first += ["saved[i, 0, 0] = th", "saved[i, 1, 0] = om"]
     first += parts["before"] + drives.init
-    finish = [f"if {finite_test(spec)}:", f"    status[i] = {int(Status.OK)}",
+    finish = [f"if {ok_test(spec)}:", f"    status[i] = {int(Status.OK)}",
               indent(snippets(spec, "final"), 1), "else:",
-              f"    status[i] = {int(Status.NONFINITE)}", f"    for col in range({width}):",
+              f"    status[i] = {failed_status(spec)}", f"    for col in range({width}):",
               "        out[i, col] = math.nan"]
     if spec.save:
-        finish += [indent(_FAIL_SAVED, 1)]
+        finish += [indent(failed_samples(spec), 1)]
     body = NL.join(["i = cuda.grid(1)", "if i >= out.shape[0]:", "    return",
                     "flat = first + i", "TWO_PI = 2.0 * math.pi", "k_state = 0"]
                    + parts["preamble"] + first

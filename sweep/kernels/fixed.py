@@ -24,7 +24,8 @@ from dataclasses import dataclass, field
 from ..observables import OBSERVABLES
 from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet, scalar_lanes
 from .precision import float64_symbols
-from .snippets import finite_test, renormalisations, snippets, stop_source
+from .snippets import (failed_samples, failed_status, ok_test, renormalisations, snippets,
+                       stop_source)
 from .spec import KernelSpec, Status, n_columns
 from .steppers import STEPPERS
 from .terms import column_of, drive_sine
@@ -127,13 +128,6 @@ _SAVE_BLOCK = textwrap.dedent("""\
             saved[base + j, 0, k_save] = lane_th[j]
             saved[base + j, 1, k_save] = lane_om[j]""")
 
-_FAIL_SAVED = textwrap.dedent("""\
-    for k_save in range(saved.shape[2]):
-        for q in range(2):
-            if not math.isfinite(saved[i, q, k_save]):
-                saved[i, q, k_save] = math.nan""")
-
-
 def _finish(spec: KernelSpec, index: str = "i = base + j\n", frozen: bool | None = None) -> str:
     """Per real lane: status, observables' final values, copy to ``out`` (row ``i``, set
     by the line ``index``); ``frozen``: a settled lane's state was kept in th_stop,
@@ -142,14 +136,14 @@ def _finish(spec: KernelSpec, index: str = "i = base + j\n", frozen: bool | None
     final = lane_snippet(snippets(spec, "final"))
     frozen = spec.stop_early if frozen is None else frozen
     stop_state = "if done:\n    th = th_stop\n    om = om_stop\n" if frozen else ""
-    return f"""{index}{stop_state}if {finite_test(spec)}:
+    return f"""{index}{stop_state}if {ok_test(spec)}:
     status[i] = {int(Status.OK)}
 {indent(final, 1) or "    pass"}
 else:
-    status[i] = {int(Status.NONFINITE)}
+    status[i] = {failed_status(spec)}
     for col in range({width}):
         obuf[j, col] = math.nan
-{indent(_FAIL_SAVED if spec.save else "", 1)}
+{indent(failed_samples(spec) if spec.save else "", 1)}
 for col in range({width}):
     out[i, col] = obuf[j, col]"""
 

@@ -7,10 +7,11 @@ import re
 from ..observables import (ATTRACTOR_MATCHES, ATTRACTOR_TOL, OBSERVABLES, STROBE_TOL,
                            STROBE_TOL_FLOAT32)
 from .lanes import indent
-from .spec import KernelSpec
+from .spec import KernelSpec, Status
 from .terms import tension_terms
 
-__all__ = ["finite_test", "renormalisations", "snippets", "stop_source"]
+__all__ = ["failed_samples", "failed_status", "finite_test", "ok_test", "renormalisations",
+           "snippets", "stop_source"]
 
 
 def _counts(code: str, spec: KernelSpec) -> str:
@@ -109,6 +110,36 @@ def renormalisations(spec: KernelSpec) -> list[tuple[str, str]]:
                     "or k_state == n_steps:\n    keep = k_state > n_transient")
             found.append((head, f"# {name}\n" + obs.renormalise))
     return found
+
+
+def ok_test(spec: KernelSpec) -> str:
+    """The condition for a trajectory to end ``OK``: `finite_test`, and the final angle
+    within `KernelSpec.angle_limit` (where the kernel takes its sine)."""
+    limit = spec.angle_limit
+    return finite_test(spec) + (f" and abs(th) <= {limit!r}" if limit is not None else "")
+
+
+def failed_status(spec: KernelSpec) -> str:
+    """The status code of a trajectory that failed `ok_test`, as an expression:
+    ``ANGLE_OUT_OF_RANGE`` if it is finite, else ``NONFINITE``."""
+    if spec.angle_limit is None:
+        return str(int(Status.NONFINITE))
+    return (f"{int(Status.ANGLE_OUT_OF_RANGE)} if {finite_test(spec)} "
+            f"else {int(Status.NONFINITE)}")
+
+
+def failed_samples(spec: KernelSpec) -> str:
+    """Source that sets NaN in the sampled trajectory ``saved[i]`` of a failed
+    trajectory where a sample is non-finite or its angle is beyond the limit (the
+    samples before are kept: they were computed with accurate sines)."""
+    limit = spec.angle_limit
+    beyond = f"\n    if not abs(saved[i, 0, k_save]) <= {limit!r}:\n" \
+             "        saved[i, 0, k_save] = math.nan\n" \
+             "        saved[i, 1, k_save] = math.nan" if limit is not None else ""
+    return ("for k_save in range(saved.shape[2]):\n"
+            "    for q in range(2):\n"
+            "        if not math.isfinite(saved[i, q, k_save]):\n"
+            "            saved[i, q, k_save] = math.nan" + beyond)
 
 
 def finite_test(spec: KernelSpec) -> str:

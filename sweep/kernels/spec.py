@@ -33,6 +33,7 @@ class Status(enum.IntEnum):
     OK = 0
     NONFINITE = 1
     STEP_UNDERFLOW = 2
+    ANGLE_OUT_OF_RANGE = 3
 
     @property
     def message(self) -> str:
@@ -45,6 +46,9 @@ _STATUS_MESSAGES = {
     Status.NONFINITE: "state became non-finite (overflow or NaN); integration stopped",
     Status.STEP_UNDERFLOW: "the adaptive step shrank below 16 eps |t| (the solution blows "
                            "up, or is too stiff for the tolerances); integration stopped",
+    Status.ANGLE_OUT_OF_RANGE: "the angle ended beyond the range where the kernel's sine is "
+                               "accurate (|theta| <= 1e12 rad, 1e8 in float32: "
+                               "KernelSpec.angle_limit); outputs are NaN",
 }
 
 
@@ -216,6 +220,18 @@ class KernelSpec:
     def drives(self) -> tuple[EffectDeclaration, ...]:
         """Its effects that have a harmonic drive."""
         return tuple(effect for effect in self.effects if effect.drive is not None)
+
+    @property
+    def angle_limit(self) -> float | None:
+        """Largest ``|theta|`` [rad] the kernel's sine of the angle is guaranteed for
+        (`sweep.kernels.vecmath.SIN_RANGE`, or ``SIN32_RANGE`` in float32; the same on
+        the GPU, so a status never depends on the device); None when the kernel takes no
+        sine or cosine of the angle (the linear model without ``tension``)."""
+        if self.model == "linear" and "tension" not in self.observe:
+            return None
+        from .vecmath import SIN32_RANGE, SIN_RANGE  # numba: not at `import sweep`
+
+        return SIN_RANGE if self.dtype == "float64" else SIN32_RANGE
 
     def describe(self) -> str:
         """A one-line description for the generated module's docstring."""

@@ -68,8 +68,8 @@ from .. import _config
 #: are written as `fma`), the same for the sine as for the kernels it is inlined into.
 _JIT = _config.jit_options()
 
-__all__ = ["P1", "P2", "PIO2_HI", "PIO2_LO", "cos", "cos32", "fma", "inverse_fifth_root", "sin",
-           "sin32", "sincos", "sincos32"]
+__all__ = ["P1", "P2", "PIO2_HI", "PIO2_LO", "SIN32_RANGE", "SIN_RANGE", "cos", "cos32", "fma",
+           "inverse_fifth_root", "sin", "sin32", "sincos", "sincos32"]
 
 TWO_OVER_PI = 0.6366197723675814
 #: pi/2 = PIO2_HI + PIO2_LO (- 1.5e-33): the float64 reduction's two parts.
@@ -81,6 +81,14 @@ PIO2_LO = 6.123233995736766e-17  # 0x1.1a62633145c07p-54
 P1 = 1.570796325802803        # 0x1.921fb54p+0
 P2 = 9.920935739593517e-10    # 0x1.10b461p-30
 _MAGIC = 6755399441055744.0   # 1.5 * 2**52: adding and subtracting it rounds to integer
+#: Largest |x| [rad] up to which `sin`/`cos` are guaranteed as accurate as libm's
+#: (within 2**-52, tested to there; past ~1e13 the quadrant may slip, past 3.5e15 the
+#: values are not sines): the kernels refuse starts beyond it and flag a trajectory
+#: whose angle ends beyond it (`sweep.kernels.Status.ANGLE_OUT_OF_RANGE`).
+SIN_RANGE = 1e12
+#: The same for `sin32`/`cos32` and the GPU's float32 sine (their ``P1``/``P2``
+#: reduction is exact and its dropped rest below 1e-9 up to |x| ~ 1e8; tested to there).
+SIN32_RANGE = 1e8
 
 # fdlibm __kernel_sin / __kernel_cos minimax coefficients on [-pi/4, pi/4]
 S1 = -1.66666666666666324348e-01
