@@ -10,14 +10,19 @@
     sweep --version
 
 Every error is one line on stderr, ``sweep: error: ...``, and exit status 2; no
-output file is written when a command fails.
+output file is written when a command fails. ``sweep run`` stopped by Ctrl-C (SIGINT)
+exits with 130, by SIGTERM (how batch systems stop a job) with 143, after one line
+that says how to resume.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
+import signal
 import sys
+import threading
 import time
 import warnings
 from pathlib import Path
@@ -31,6 +36,19 @@ __all__ = ["DEMO", "build_parser", "main"]
 
 #: Exit status of every error (the same as argparse's usage errors).
 EXIT_ERROR = 2
+
+#: Exit status of ``sweep run`` stopped by Ctrl-C (SIGINT): 128 + 2, as a shell reports.
+EXIT_INTERRUPTED = 130
+
+#: Exit status of ``sweep run`` stopped by SIGTERM: 128 + 15, what a shell or a batch
+#: system reports for a process that signal ended.
+EXIT_TERMINATED = 128 + int(signal.SIGTERM)
+
+#: Seconds ``sweep run`` waits after SIGTERM for the chunk being computed to end (a chunk
+#: boundary) before it stops without it (`_Sigterm`). Chunks last about a second by
+#: default; Slurm sends SIGKILL 30 s after SIGTERM by default (KillWait), as Kubernetes
+#: does (terminationGracePeriodSeconds), so the process is gone well before.
+TERMINATE_WAIT_S = 10.0
 
 #: The demo sweep: a damped, unforced, nonlinear pendulum over the phase plane.
 #: With c = 0.3 1/s the energy decays by exp(-c t) ~ 6e-6 by t_end = 40 s, so every
@@ -151,7 +169,8 @@ def main(argv: list[str] | None = None) -> int:
     -------
     int
         Exit status: 0 on success, 2 on any error (one line on stderr starting
-        ``sweep: error:``), 130 when interrupted.
+        ``sweep: error:``), 130 when interrupted (Ctrl-C), 143 when ``sweep run`` is
+        stopped by SIGTERM.
     """
     parser = build_parser()
     try:
@@ -164,7 +183,7 @@ def main(argv: list[str] | None = None) -> int:
         return _error(exc)
     except KeyboardInterrupt:
         print("sweep: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
 
 
 def _error(exc: BaseException) -> int:
@@ -213,8 +232,9 @@ def _command_run(args: argparse.Namespace) -> int:
     """``sweep run``: read the run file, check the output path, run, save atomically.
 
     With ``--checkpoint``/``--resume`` each finished chunk is kept in the checkpoint
-    folder until the output file is saved; Ctrl-C then exits with status 130 and one
-    line that says how to resume. The output file is only ever written whole, at the end.
+    folder until the output file is saved; Ctrl-C then exits with status 130, SIGTERM
+    with 143 (`_Sigterm`), each with one line that says how to resume. The output file
+    is only ever written whole, at the end.
     """
     from .execution import checkpoint as _checkpoint
     from .io import check_output_path, save
@@ -239,17 +259,21 @@ def _command_run(args: argparse.Namespace) -> int:
         pilot_grid(grid, pilot)  # refuse a bad pilot before any compute
     scheduler = args.scheduler if args.scheduler is not None else options.get("scheduler")
     client = _connect(scheduler) if scheduler is not None else None
+    bar = "\n" if args.progress or (args.progress is None and sys.stderr.isatty()) else ""
+    stop = _Sigterm(lambda: f"{bar}sweep: terminated (the running chunk did not end within "
+                    f"{TERMINATE_WAIT_S:g} s of SIGTERM and was abandoned); "
+                    f"{_resume_hint(args, folder, output)}")
     try:
-        if pilot is not None:  # after the scheduler answered: no pilot for a dead one
-            kwargs["attractors"] = pilot_catalogue(scene, grid, pilot, **kwargs)
-        ds, seconds = _run_quietly(scene, grid, progress=args.progress, client=client,
-                                   **kwargs)
-        save(ds, output)
-    except KeyboardInterrupt:
-        if args.progress or (args.progress is None and sys.stderr.isatty()):
-            sys.stderr.write("\n")  # end the progress line
-        print(f"sweep: interrupted; {_resume_hint(args, folder, output)}", file=sys.stderr)
-        return 130
+        with stop:
+            if pilot is not None:  # after the scheduler answered: no pilot for a dead one
+                kwargs["attractors"] = pilot_catalogue(scene, grid, pilot, **kwargs)
+            ds, seconds = _run_quietly(scene, grid, progress=args.progress, client=client,
+                                       **kwargs)
+            save(ds, output)
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM (Terminated)
+        word = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        stop.say(f"{bar}sweep: {word}; {_resume_hint(args, folder, output)}")
+        return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
     finally:
         if client is not None:
             client.close()
@@ -257,6 +281,126 @@ def _command_run(args: argparse.Namespace) -> int:
         _checkpoint.remove(folder)
     print(f"wrote {output}: {_summary(ds, grid, seconds)}")
     return 0
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM stopped ``sweep run`` (raised at the next chunk boundary: `_Sigterm`).
+
+    A KeyboardInterrupt, so that everything that cleans up after Ctrl-C (the checkpoint,
+    its lock, a half-written output file) does so after SIGTERM too.
+    """
+
+
+class _Sigterm:
+    """SIGTERM stops ``sweep run`` as Ctrl-C does, within `TERMINATE_WAIT_S` seconds:
+    in effect in a ``with`` block (main thread, POSIX; elsewhere it does nothing).
+
+    Python runs a signal handler in the main thread between two bytecodes, so while a
+    chunk's compiled kernel runs, the handler waits for the kernel to return: a chunk
+    boundary. The handler raises `Terminated`, which unwinds the run exactly as Ctrl-C
+    does: the chunks already stored stay in the checkpoint (the one that was running is
+    dropped and recomputed on resume), the checkpoint's lock is released, a half-written
+    output file is deleted, and ``sweep run`` prints the resume command and exits with
+    `EXIT_TERMINATED`.
+
+    A chunk lasts about a second by default (`sweep.engine.default_chunk_size`), but a
+    large ``chunk_size`` can make one last minutes, past a batch system's grace period
+    (then SIGKILL: no message, a stale lock file). So a watchdog thread, woken by the
+    signal itself (`signal.set_wakeup_fd`: the interpreter writes the signal's number
+    to a pipe at once, whatever the main thread does; the kernels release the GIL, so
+    the thread runs beside them), waits `TERMINATE_WAIT_S` seconds for the block to
+    end. If it has not, the thread prints the line, releases the checkpoint locks
+    (`sweep.execution.lock.release_all`), deletes a half-written output file
+    (`sweep.io.discard_partial_files`) and ends the process with ``os._exit``. The
+    stored chunks are whole files at any moment (each is renamed into place complete).
+
+    A SIGTERM the parent process ignores stays ignored; the previous handler and wakeup
+    fd are restored when the block ends. A second SIGTERM changes nothing.
+
+    Parameters
+    ----------
+    line : callable
+        ``line()`` -> the message of a stop forced by the watchdog.
+    """
+
+    def __init__(self, line) -> None:
+        self._line = line
+        self._said = False
+        self._say_lock = threading.Lock()
+        self._done = threading.Event()
+        self._raised = False
+        self._armed = False
+
+    def __enter__(self) -> _Sigterm:
+        if (os.name != "posix" or threading.current_thread() is not threading.main_thread()
+                or signal.getsignal(signal.SIGTERM) == signal.SIG_IGN):
+            return self
+        self._wait_s = float(TERMINATE_WAIT_S)
+        self._read, self._write = os.pipe()
+        os.set_blocking(self._write, False)  # set_wakeup_fd needs a non-blocking fd
+        self._watchdog = threading.Thread(target=self._watch, name="sweep-sigterm",
+                                          daemon=True)
+        self._watchdog.start()
+        self._previous_fd = signal.set_wakeup_fd(self._write, warn_on_full_buffer=False)
+        self._armed = True
+        self._previous = signal.signal(signal.SIGTERM, self._handle)
+        return self
+
+    def __exit__(self, *exc_info) -> bool:
+        if self._armed:
+            self._armed = False
+            self._done.set()
+            signal.signal(signal.SIGTERM, self._previous if self._previous is not None
+                          else signal.SIG_DFL)
+            signal.set_wakeup_fd(self._previous_fd)
+            os.close(self._write)  # the watchdog's read returns: it ends
+            self._watchdog.join(timeout=1.0)
+            os.close(self._read)
+        return False
+
+    def _handle(self, signum, frame) -> None:
+        if not self._raised:  # the first SIGTERM stops the run; later ones change nothing
+            self._raised = True
+            raise Terminated
+
+    def _watch(self) -> None:
+        while True:
+            try:
+                data = os.read(self._read, 64)
+            except OSError:
+                return
+            if not data:  # the block ended
+                return
+            if int(signal.SIGTERM) in data:  # one byte per signal caught
+                if not self._done.wait(self._wait_s):
+                    self._force()
+                return
+
+    def _force(self) -> None:
+        """End the process now: the main thread did not stop in time."""
+        try:
+            if self._say_lock.acquire(timeout=1.0):  # never wait on a stuck main thread
+                if not self._said:
+                    self._said = True
+                    try:
+                        line = self._line()
+                    except Exception:  # noqa: BLE001 - the exit must not depend on it
+                        line = "sweep: terminated"
+                    os.write(2, (line + "\n").encode())
+            from .execution import lock as _lock
+            from .io import discard_partial_files
+
+            _lock.release_all()
+            discard_partial_files()
+        finally:
+            os._exit(EXIT_TERMINATED)
+
+    def say(self, text: str) -> None:
+        """Print ``text`` on stderr unless the watchdog has printed its line."""
+        with self._say_lock:
+            if not self._said:
+                self._said = True
+                print(text, file=sys.stderr, flush=True)
 
 
 #: Seconds to wait for a Dask scheduler to answer before giving up.

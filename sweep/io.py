@@ -29,6 +29,10 @@ COMPLEVEL = 1
 #: map row or one point does not decompress much more than it needs.
 CHUNK_BYTES = 1 << 20
 
+# Temporary files of saves in progress (`save`): `discard_partial_files` deletes them
+# for a process that ends without unwinding.
+_PARTIAL: set[str] = set()
+
 
 def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Dataset:
     """Wrap flat kernel outputs into a labelled, self-describing Dataset.
@@ -256,20 +260,47 @@ def save(ds: xr.Dataset, path) -> Path:
     Path
     """
     path = check_output_path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a saved file gets the usual mode
+    tmp = _temporary(path)
     try:
         ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4",
                      encoding=netcdf_encoding(ds))
         os.replace(tmp, path)
     except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+        _discard(tmp)
         raise
+    _PARTIAL.discard(tmp)
     return path
+
+
+def _temporary(path: Path) -> str:
+    """A new empty file next to ``path`` with the usual mode, registered in `_PARTIAL`."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    os.close(fd)
+    _PARTIAL.add(tmp)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a saved file gets the usual mode
+    return tmp
+
+
+def _discard(tmp: str) -> None:
+    """Delete the temporary file ``tmp`` if it is there."""
+    _PARTIAL.discard(tmp)
+    try:
+        os.unlink(tmp)
+    except FileNotFoundError:
+        pass
+
+
+def discard_partial_files() -> None:
+    """Delete the temporary files of the saves this process has in progress: for a
+    process about to end without unwinding (``os._exit``), so that it leaves no
+    half-written file behind."""
+    for tmp in list(_PARTIAL):
+        try:
+            _discard(tmp)
+        except OSError:
+            pass
 
 
 def load(path) -> xr.Dataset:

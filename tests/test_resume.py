@@ -1,4 +1,4 @@
-"""Long sweeps survive interruption: chunk checkpoints, --resume, real SIGINT/SIGKILL.
+"""Long sweeps survive interruption: chunk checkpoints, --resume, real SIGINT/SIGTERM/SIGKILL.
 
 A resumed run must give a dataset bit-identical to an uninterrupted one (the kernel is
 deterministic and chunk-size independent), a checkpoint of another run must be refused
@@ -401,28 +401,34 @@ def _interrupt(run_file, out, folder, sig):
     return code, stderr, len(chunk_files(folder)), time.monotonic() - sent
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL], ids=["SIGINT", "SIGKILL"])
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL],
+                         ids=["SIGINT", "SIGTERM", "SIGKILL"])
 def test_real_killed_run_resumes_to_a_bit_identical_file(sig, slow_run, tmp_path):
     run_file, reference = slow_run
     out, folder = tmp_path / "out.nc", tmp_path / "ck"
     # The signal is sent once 2 of the 150 chunks are checkpointed (about 5 s of work
-    # left). SIGKILL ends the process at once; SIGINT raises KeyboardInterrupt as soon
-    # as the running chunk's compiled kernel returns to the interpreter (a chunk is
-    # ~20 ms: numba code does not look at signals), so the run stops within a chunk
-    # or two, never at the end.
+    # left). SIGKILL ends the process at once; SIGINT raises KeyboardInterrupt, and
+    # SIGTERM (a batch system's stop) its subclass cli.Terminated, as soon as the
+    # running chunk's compiled kernel returns to the interpreter (a chunk is ~20 ms:
+    # numba code does not look at signals), so the run stops within a chunk or two,
+    # never at the end.
     code, stderr, done, waited = _interrupt(run_file, out, folder, sig)
     assert 2 <= done < 150, f"interrupted part way (exit {code}): {stderr[-500:]}"
     assert waited < WAIT_S
     assert not out.exists()
     assert not list(tmp_path.glob(".out.nc.*"))  # no half-written output either
-    if sig == signal.SIGINT:
-        assert code == 130, stderr
-        line = stderr.strip().splitlines()[-1]
-        assert line == (f"sweep: interrupted; {done} finished chunks are checkpointed in "
-                        f"'{folder}'; resume with: sweep run {run_file} -o {out} "
-                        f"--checkpoint {folder} --resume")
-    else:
+    if sig == signal.SIGKILL:
         assert code == -signal.SIGKILL
+    else:
+        assert code == {signal.SIGINT: 130, signal.SIGTERM: 143}[sig], stderr
+        word = {signal.SIGINT: "interrupted", signal.SIGTERM: "terminated"}[sig]
+        assert stderr.count("\n") == 1, stderr  # one line, no traceback
+        assert stderr == (f"sweep: {word}; {done} finished chunks are checkpointed in "
+                          f"'{folder}'; resume with: sweep run {run_file} -o {out} "
+                          f"--checkpoint {folder} --resume\n")
+        assert not (folder / "lock").exists()  # the next run need not take it over
+        if sig == signal.SIGTERM:  # at a chunk boundary, well within the watchdog's wait
+            assert waited < cli.TERMINATE_WAIT_S
     code, _, stderr = _finish(_sweep("run", run_file, "-o", out, "--checkpoint", folder,
                                      "--resume"))
     assert code == 0, stderr

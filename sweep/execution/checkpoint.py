@@ -14,9 +14,9 @@ Layout of a checkpoint folder::
 
 Every file is written to a temporary file in the folder, fsynced and renamed into place
 (`os.replace`, then the folder is fsynced): a chunk file either exists complete or not
-at all, whatever kills the process (Ctrl-C, SIGKILL, power loss). Temporary files a
-killed process left behind are ignored and cleaned up; a chunk file that cannot be read
-is recomputed.
+at all, whatever kills the process (Ctrl-C, SIGTERM, SIGKILL, power loss). Temporary
+files a killed process left behind are ignored and cleaned up; a chunk file that cannot
+be read is recomputed.
 
 One writer per folder: ``FOLDER/lock`` names the process (pid, host) whose run writes
 the folder, and a second run (another process, or another thread) is refused while

@@ -12,7 +12,9 @@ delete if that run is gone.
 The lock is released (file removed) when the run completes, and when it fails or is
 interrupted: explicitly by `sweep.run`, or when the `Checkpoint` holding it is
 collected; a later run in the same thread takes over a lock its own earlier, failed run
-still holds (an interactive session keeps the last traceback, and with it that run).
+still holds (an interactive session keeps the last traceback, and with it that run). A
+process about to end without unwinding (``os._exit``, which runs no finalizers: the
+``sweep run`` command stopped by SIGTERM during a long chunk) calls `release_all`.
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ try:  # POSIX; elsewhere only the pid check guards the folder
 except ImportError:  # pragma: no cover
     fcntl = None
 
-__all__ = ["LOCK", "CheckpointInUseError", "FolderLock", "acquire"]
+__all__ = ["LOCK", "CheckpointInUseError", "FolderLock", "acquire", "release_all"]
 
 #: Name of the lock file in a checkpoint folder.
 LOCK = "lock"
@@ -162,6 +164,16 @@ def acquire(folder) -> FolderLock:
     raise CheckpointInUseError(  # pragma: no cover
         f"checkpoint {str(folder)!r}: its lock file keeps changing; accepted: one run per "
         "checkpoint folder")
+
+
+def release_all() -> None:
+    """Release every checkpoint lock this process holds (any thread's): for a process
+    about to end with ``os._exit``, which would leave the lock files behind."""
+    with _HELD_GUARD:
+        locks = [ref() for ref, _ in _HELD.values()]
+    for lock in locks:
+        if lock is not None:
+            lock.release()
 
 
 def _thread_alive(ident: int) -> bool:
