@@ -186,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INTERRUPTED
 
 
-def _error(exc: BaseException) -> int:
+def _error(exc: BaseException | str) -> int:
     """Print ``exc`` as one ``sweep: error:`` line on stderr; return the exit status."""
     message = " ".join(str(exc).split()) or type(exc).__name__
     print(f"sweep: error: {message}", file=sys.stderr)
@@ -229,15 +229,18 @@ def default_checkpoint(output) -> Path:
 
 
 def _command_run(args: argparse.Namespace) -> int:
-    """``sweep run``: read the run file, check the output path, run, save atomically.
+    """``sweep run``: read the run file, check the output path and the free space, run,
+    save atomically.
 
     With ``--checkpoint``/``--resume`` each finished chunk is kept in the checkpoint
     folder until the output file is saved; Ctrl-C then exits with status 130, SIGTERM
-    with 143 (`_Sigterm`), each with one line that says how to resume. The output file
-    is only ever written whole, at the end.
+    with 143 (`_Sigterm`), each with one line that says how to resume. If the output
+    file cannot be written (a full disk), the line says how to write it from the
+    checkpoint, elsewhere if need be, without recomputing. The output file is only
+    ever written whole, at the end.
     """
     from .execution import checkpoint as _checkpoint
-    from .io import check_output_path, save
+    from .io import check_output_path, check_space, save
     from .toml_spec import load_run
 
     options = {}
@@ -257,23 +260,32 @@ def _command_run(args: argparse.Namespace) -> int:
         from .maps.pilot import pilot_catalogue, pilot_grid
 
         pilot_grid(grid, pilot)  # refuse a bad pilot before any compute
+    else:  # with a pilot, after it: its catalogue adds variables
+        check_space(output, scene, grid, **kwargs)
     scheduler = args.scheduler if args.scheduler is not None else options.get("scheduler")
     client = _connect(scheduler) if scheduler is not None else None
     bar = "\n" if args.progress or (args.progress is None and sys.stderr.isatty()) else ""
     stop = _Sigterm(lambda: f"{bar}sweep: terminated (the running chunk did not end within "
                     f"{TERMINATE_WAIT_S:g} s of SIGTERM and was abandoned); "
                     f"{_resume_hint(args, folder, output)}")
+    saving = False
     try:
         with stop:
             if pilot is not None:  # after the scheduler answered: no pilot for a dead one
                 kwargs["attractors"] = pilot_catalogue(scene, grid, pilot, **kwargs)
+                check_space(output, scene, grid, **kwargs)
             ds, seconds = _run_quietly(scene, grid, progress=args.progress, client=client,
                                        **kwargs)
+            saving = True
             save(ds, output)
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM (Terminated)
         word = "terminated" if isinstance(exc, Terminated) else "interrupted"
         stop.say(f"{bar}sweep: {word}; {_resume_hint(args, folder, output)}")
         return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
+    except OSError as exc:  # a full disk: keep what the checkpoint holds, say how to use it
+        if folder is None or not (folder / _checkpoint.MANIFEST).is_file():
+            raise
+        return _error(f"{exc}; {_resume_hint(args, folder, output, elsewhere=saving)}")
     finally:
         if client is not None:
             client.close()
@@ -435,8 +447,13 @@ def _connect(address: str):
             from None
 
 
-def _resume_hint(args: argparse.Namespace, folder, output: Path) -> str:
-    """The end of the one-line interruption message: how to resume (or why one cannot)."""
+def _resume_hint(args: argparse.Namespace, folder, output: Path, *,
+                 elsewhere: bool = False) -> str:
+    """The end of the one-line interruption message: how to resume (or why one cannot).
+
+    ``elsewhere``: the output file could not be written; the command names the
+    checkpoint folder, so that it works with another ``-o`` too.
+    """
     import shlex
 
     from .execution.checkpoint import _CHUNK
@@ -446,15 +463,18 @@ def _resume_hint(args: argparse.Namespace, folder, output: Path) -> str:
                 "resumable")
     done = sum(1 for p in folder.iterdir() if _CHUNK.match(p.name)) if folder.is_dir() else 0
     command = ["sweep", "run", args.run_file, "-o", str(output)]
-    if args.checkpoint is not None and Path(args.checkpoint) != default_checkpoint(output):
-        command += ["--checkpoint", str(args.checkpoint)]
+    if elsewhere or (args.checkpoint is not None
+                     and Path(args.checkpoint) != default_checkpoint(output)):
+        command += ["--checkpoint", str(folder)]
     if getattr(args, "scheduler", None) is not None:
         command += ["--scheduler", args.scheduler]
     if getattr(args, "pilot", None) is not None:  # the same catalogue, the same run
         command += ["--pilot", str(args.pilot)]
     command.append("--resume")
+    where = (" (once there is room; another -o writes the file elsewhere, without "
+             "recomputing)") if elsewhere else ""
     return (f"{done} finished chunks are checkpointed in {str(folder)!r}; resume with: "
-            f"{shlex.join(command)}")
+            f"{shlex.join(command)}{where}")
 
 
 # ------------------------------------------------------------------------------- demo

@@ -67,6 +67,15 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     Returns
     -------
     pathlib.Path
+
+    Raises
+    ------
+    ValueError
+        Before any compute: bad arguments, or the file may not fit in the free space
+        of its folder (`sweep.io.check_space`: its uncompressed size is the bound).
+    OSError
+        The file could not be written (a full disk after all): one line naming it and
+        the cause (`sweep.io.write_error`); no partial file is left.
     """
     import contextlib
     import inspect
@@ -92,6 +101,7 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     if client is not None:
         check_client(client)
     path = io.check_output_path(path)
+    needed = io.check_space(path, scene, grid, **run_kwargs)
     first, *rest = grid.dims
     axes = grid.axes
     inner = grid.size // grid.shape[0]
@@ -109,24 +119,30 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     bar = closing.enter_context(progress_bar(progress, grid.size))
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
     os.close(fd)
+    io._PARTIAL.add(tmp)  # deleted by a process that must end at once (sweep run, SIGTERM)
     nc = None
+    failed = False
     counts = {}
     futures = {}
     try:
         def write(i0, i1, block):
-            nonlocal nc
-            if nc is None:  # the layout from the first block to arrive, 0 rows long
-                import netCDF4
+            nonlocal nc, failed
+            try:
+                if nc is None:  # the layout from the first block to arrive, 0 rows long
+                    import netCDF4
 
-                empty = block.isel({first: slice(0, 0)})
-                empty.to_netcdf(tmp, engine="netcdf4", format="NETCDF4",
-                                unlimited_dims=[first],  # compressed as `sweep.save`
-                                encoding=io.netcdf_encoding(empty, sizes=dict(
-                                    zip(grid.dims, grid.shape))))
-                nc = netCDF4.Dataset(tmp, "a")
-            for name, variable in block.variables.items():
-                if variable.dims[:1] == (first,):
-                    nc[name][i0:i1] = variable.values
+                    empty = block.isel({first: slice(0, 0)})
+                    empty.to_netcdf(tmp, engine="netcdf4", format="NETCDF4",
+                                    unlimited_dims=[first],  # compressed as `sweep.save`
+                                    encoding=io.netcdf_encoding(empty, sizes=dict(
+                                        zip(grid.dims, grid.shape))))
+                    nc = netCDF4.Dataset(tmp, "a")
+                for name, variable in block.variables.items():
+                    if variable.dims[:1] == (first,):
+                        nc[name][i0:i1] = variable.values
+            except (OSError, RuntimeError) as exc:  # a full disk: netCDF4's "HDF error"
+                failed = True
+                raise io.write_error(exc, path, tmp, needed) from None
             for code, k in status_counts(block.status.values).items():
                 counts[code] = counts.get(code, 0) + k
             bar.update(block.status.size)
@@ -147,18 +163,26 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
                 _, i0, i1 = futures.pop(future.key)
                 del future
                 write(i0, i1, block)
-        nc.close()
-        nc = None
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
+        try:
+            nc.close()
+            nc = None
+            os.chmod(tmp, 0o666 & ~_umask())
+            os.replace(tmp, path)
+        except (OSError, RuntimeError) as exc:
+            failed = True
+            raise io.write_error(exc, path, tmp, needed) from None
     finally:
         closing.close()
         if futures:
             client.cancel([f for f, _, _ in futures.values()])
+        io._discard(tmp)  # truncated first: a failed close below can then flush
         if nc is not None:
-            nc.close()
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+            try:
+                nc.close()
+            except (OSError, RuntimeError):  # the write failed already: that error stands
+                pass
+        if failed:
+            io.release_failed_writer()
     failures = failure_summary(counts, grid.size)
     if failures:
         warnings.warn(failures, RuntimeWarning, stacklevel=2)

@@ -3,9 +3,13 @@
 from __future__ import annotations
 
 import datetime
+import errno
+import gc
+import inspect
 import json
 import math
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -17,7 +21,8 @@ from .kernels import Status
 from .observables import OBSERVABLES
 from .physics import EFFECTS, Scene, parameter_info
 
-__all__ = ["to_dataset", "save", "load", "scene_from", "run_arguments", "netcdf_encoding"]
+__all__ = ["to_dataset", "save", "load", "scene_from", "run_arguments", "netcdf_encoding",
+           "estimate_size", "file_size_bound", "check_space"]
 
 #: zlib level of the variables `save` writes (with the byte shuffle filter), chosen by
 #: measurement (``python benchmarks/compression.py``): level 1 gets nearly all of the
@@ -29,8 +34,23 @@ COMPLEVEL = 1
 #: map row or one point does not decompress much more than it needs.
 CHUNK_BYTES = 1 << 20
 
-# Temporary files of saves in progress (`save`): `discard_partial_files` deletes them
-# for a process that ends without unwinding.
+#: Bytes `file_size_bound` allows for a file's structure besides its variables: the
+#: HDF5 superblock, the root group with the global attributes (counted on top), and the
+#: file system's rounding of the last block. Measured: 10-12 KiB for a file of one
+#: variable (netCDF4 1.7, HDF5 1.14).
+HEADER_BYTES = 32 * 1024
+
+#: Bytes `file_size_bound` allows per variable (object header, dimension-scale links,
+#: fill value; its attributes are counted on top). Measured: 2.5-3.5 KiB.
+VARIABLE_BYTES = 8 * 1024
+
+#: Bytes `file_size_bound` allows per compressed chunk for its entry in the variable's
+#: chunk index (HDF5 B-tree nodes hold 64 entries of ~50 bytes); zlib's worst-case
+#: expansion of incompressible data is counted on top (`_deflate_bound`).
+CHUNK_INDEX_BYTES = 128
+
+# Temporary files of saves in progress (`save`, `sweep.distributed.run_to_netcdf`):
+# `discard_partial_files` deletes them for a process that ends without unwinding.
 _PARTIAL: set[str] = set()
 
 
@@ -245,7 +265,8 @@ def netcdf_encoding(ds: xr.Dataset, *, complevel: int = COMPLEVEL,
 
 def save(ds: xr.Dataset, path) -> Path:
     """Write ``ds`` to netCDF4 atomically: a temporary file in the same folder, then
-    an atomic rename. An interrupted save leaves any previous file at ``path`` intact.
+    an atomic rename. An interrupted or failed save leaves no partial file, and any
+    previous file at ``path`` intact.
 
     Data variables are compressed (zlib level `COMPLEVEL`, byte shuffle) in chunks of
     about `CHUNK_BYTES` (`netcdf_encoding`); values read back bit-identical.
@@ -258,18 +279,45 @@ def save(ds: xr.Dataset, path) -> Path:
     Returns
     -------
     Path
+
+    Raises
+    ------
+    OSError
+        The file could not be written (a full disk, a quota, an I/O error): one line
+        naming the file and the cause, with its ``errno`` where known. netCDF4 reports
+        a full disk as ``RuntimeError: NetCDF: HDF error``; that is given as ENOSPC
+        when the folder's free space is less than the file may still need
+        (`write_error`).
     """
     path = check_output_path(path)
     tmp = _temporary(path)
+    error = None
     try:
         ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4",
                      encoding=netcdf_encoding(ds))
         os.replace(tmp, path)
+    except (OSError, RuntimeError) as exc:
+        error = write_error(exc, path, tmp, file_size_bound(ds))
     except BaseException:
         _discard(tmp)
         raise
+    if error is not None:
+        _discard(tmp)
+        release_failed_writer()
+        raise error
     _PARTIAL.discard(tmp)
     return path
+
+
+def release_failed_writer() -> None:
+    """Close the files of a failed netCDF4 write, once its partial file is discarded.
+
+    When a write fails (a full disk), netCDF4's close fails too and the file stays open
+    in HDF5, held by a reference cycle of the error's traceback, and with it the disk
+    space of the (deleted) file. `_discard` truncated the file, so a second close can
+    flush; collecting the cycle makes netCDF4 close it.
+    """
+    gc.collect()
 
 
 def _temporary(path: Path) -> str:
@@ -284,8 +332,13 @@ def _temporary(path: Path) -> str:
 
 
 def _discard(tmp: str) -> None:
-    """Delete the temporary file ``tmp`` if it is there."""
+    """Delete the temporary file ``tmp`` if it is there: truncated first, which frees
+    its space at once even if a failed writer still holds it open."""
     _PARTIAL.discard(tmp)
+    try:
+        os.truncate(tmp, 0)
+    except OSError:
+        pass
     try:
         os.unlink(tmp)
     except FileNotFoundError:
@@ -301,6 +354,254 @@ def discard_partial_files() -> None:
             _discard(tmp)
         except OSError:
             pass
+
+
+def write_error(exc: BaseException, path, tmp=None, needed: int | None = None) -> OSError:
+    """The one-line `OSError` for a failed write of the file ``path``.
+
+    Parameters
+    ----------
+    exc : OSError or RuntimeError
+        What the writer raised. netCDF4 reports a full disk (and any other HDF5 failure)
+        as ``RuntimeError: NetCDF: HDF error``, with no errno.
+    path : str or Path
+        The file being written (named in the message).
+    tmp : str, optional
+        The partial file, still in place: its size counts as written.
+    needed : int, optional
+        An upper bound of the whole file's size (`file_size_bound`). A RuntimeError
+        with less free space in the folder than the file may still need is reported
+        as ENOSPC (the likely cause; the message says how much was free).
+
+    Returns
+    -------
+    OSError
+        ``errno`` set where known; its text names the file, the cause and that
+        nothing was written.
+    """
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    code = exc.errno if isinstance(exc, OSError) else None
+    detail = (exc.strerror if isinstance(exc, OSError) and exc.strerror else
+              " ".join(str(exc).split()) or type(exc).__name__)
+    if code is None and needed is not None:
+        try:
+            free = shutil.disk_usage(folder).free
+            written = os.path.getsize(tmp) if tmp is not None and os.path.exists(tmp) else 0
+        except OSError:
+            free = written = None
+        if free is not None and free < needed - written:
+            code = errno.ENOSPC
+            detail = (f"{os.strerror(code)} (netCDF4 reported {detail!r} with "
+                      f"{_size(free)} free in {str(folder)!r}, less than the "
+                      f"{_size(needed - written)} the file could still need)")
+    text = f"cannot write {str(path)!r}: {detail}; nothing was written"
+    return OSError(code, text) if code is not None else OSError(text)
+
+
+def _size(n: float) -> str:
+    """``1536`` -> ``"1.5 KiB"``."""
+    for unit in ("bytes", "KiB", "MiB", "GiB", "TiB"):
+        if n < 1024 or unit == "TiB":
+            return f"{n:.0f} {unit}" if unit == "bytes" else f"{n:.1f} {unit}"
+        n /= 1024
+    return f"{n:.1f} TiB"  # pragma: no cover
+
+
+# ------------------------------------------------------------------ sizes and space
+def _prepared(scene, grid, run_kwargs: dict):
+    """``(settings, spec, chunk_size)`` of ``sweep.run(scene, grid, **run_kwargs)``:
+    validated in full as `sweep.run` does, nothing computed."""
+    from . import engine
+
+    bound = inspect.signature(engine.run).bind(scene, grid, **run_kwargs)
+    bound.apply_defaults()
+    wanted = inspect.signature(engine._prepare).parameters
+    return engine._prepare(**{name: value for name, value in bound.arguments.items()
+                              if name in wanted})
+
+
+def layout(scene, grid, **run_kwargs) -> xr.Dataset:
+    """The dataset ``sweep.run(scene, grid, **run_kwargs)`` returns, without computing
+    it: the same variables, dimensions, dtypes, coordinates and attributes, every
+    per-trajectory value a read-only broadcast zero (no memory, whatever the grid).
+
+    Built by the same `to_dataset` (and the engine's additions: step statistics of an
+    adaptive method, the attractor catalogue's attributes) from zero-stride arrays of
+    the shapes the kernel writes (`sweep.execution.local.allocate`).
+
+    Parameters
+    ----------
+    scene, grid, **run_kwargs
+        As for `sweep.run` (validated the same way).
+
+    Returns
+    -------
+    xarray.Dataset
+    """
+    settings, spec, _ = _prepared(scene, grid, run_kwargs)
+    return _layout(scene, grid, settings, spec, run_kwargs.get("attractors"))
+
+
+def _layout(scene, grid, settings, spec, attractors) -> xr.Dataset:
+    """`layout` of a run whose arguments `_prepared` has checked."""
+    from . import engine
+    from .execution.local import allocate
+
+    rows = allocate(spec, settings, 0)  # the kernel's arrays, 0 trajectories long
+    full = {name: np.broadcast_to(np.zeros((), array.dtype), (grid.size,) + array.shape[1:])
+            for name, array in rows.items()}
+    ds = to_dataset(scene=scene, grid=grid, settings=settings, spec=spec, out=full["out"],
+                    status=full["status"], saved=full.get("saved"))
+    ds.attrs.update(engine._catalogue_attrs(attractors))
+    if settings.adaptive:
+        engine._add_step_statistics(ds, grid, settings, full["stats"])
+    return ds
+
+
+def _deflate_bound(n: int) -> int:
+    """Most bytes zlib makes of ``n`` bytes (zlib's ``compressBound``): incompressible
+    data grows by its block headers."""
+    return n + (n >> 12) + (n >> 14) + (n >> 25) + 13
+
+
+def _attribute_bytes(attrs: dict) -> int:
+    total = 0
+    for name, value in attrs.items():
+        value = np.asarray(value)
+        total += len(str(name)) + (len(str(value).encode()) if value.dtype.kind in "OSU"
+                                   else value.nbytes)
+    return total
+
+
+def file_size_bound(ds: xr.Dataset) -> int:
+    """An upper bound, in bytes, of the file `save` writes for ``ds``.
+
+    Every variable's values uncompressed (compressed variables as their chunks store
+    them: whole chunks at the edges, zlib's worst case for incompressible data, their
+    chunk index), every attribute, and a margin for the file's structure
+    (`HEADER_BYTES`, `VARIABLE_BYTES` per variable). `save` compresses (zlib with the
+    byte shuffle), so the file is usually smaller -- 1.3-2x for float outputs, much
+    more for a map of few values -- but only the uncompressed size bounds it before
+    the values exist. For files of more than a few MiB the bound is within 1.05x of
+    the same dataset written uncompressed.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A dataset of `sweep.run`, or its `layout`.
+
+    Returns
+    -------
+    int
+    """
+    encoding = netcdf_encoding(ds)
+    total = HEADER_BYTES + _attribute_bytes(ds.attrs)
+    for name, variable in ds.variables.items():
+        total += VARIABLE_BYTES + _attribute_bytes(variable.attrs)
+        itemsize = variable.dtype.itemsize if variable.dtype.kind in "biuf" else 8
+        if name not in encoding:
+            total += math.prod(variable.shape) * itemsize
+            if variable.dtype.kind not in "biuf":  # strings: their text
+                total += sum(len(str(v).encode()) for v in np.ravel(variable.values))
+            continue
+        chunks = encoding[name]["chunksizes"]
+        count = math.prod(-(-n // c) for n, c in zip(variable.shape, chunks))
+        chunk_bytes = math.prod(chunks) * itemsize
+        total += count * (_deflate_bound(chunk_bytes) + CHUNK_INDEX_BYTES)
+    return total
+
+
+def estimate_size(scene, grid, **run_kwargs) -> int:
+    """An upper bound, in bytes, of the netCDF file `save` writes for the dataset of
+    ``sweep.run(scene, grid, **run_kwargs)``, found before (and without) any compute:
+    `file_size_bound` of its `layout`. The uncompressed size of the data variables and
+    coordinates plus a margin for the file's structure: a safe bound, since `save`
+    compresses (the file is usually 1.3-2x smaller, often much more).
+
+    Parameters
+    ----------
+    scene, grid, **run_kwargs
+        As for `sweep.run` (validated the same way: its errors are raised here).
+
+    Returns
+    -------
+    int
+    """
+    return file_size_bound(layout(scene, grid, **run_kwargs))
+
+
+def check_space(path, scene, grid, **run_kwargs) -> int:
+    """Refuse, before any compute, a run whose output file (and checkpoint) may not fit
+    in the free space of its file system (`shutil.disk_usage`).
+
+    The output file takes at most `estimate_size`; a checkpoint (``checkpoint=`` in
+    ``run_kwargs``) at most `sweep.execution.checkpoint.size_bound`, less the chunk
+    files already in it. The checkpoint stays until the output file is written, so
+    on one file system both must fit.
+
+    Parameters
+    ----------
+    path : str or Path
+        The output file (its folder exists: `check_output_path`).
+    scene, grid, **run_kwargs
+        As for `sweep.run`.
+
+    Returns
+    -------
+    int
+        `estimate_size` of the output file.
+
+    Raises
+    ------
+    ValueError
+        One line naming the sizes, the folder and its free space.
+    """
+    from .execution import checkpoint as _checkpoint
+
+    path = Path(path)
+    settings, spec, chunk_size = _prepared(scene, grid, run_kwargs)
+    output = file_size_bound(_layout(scene, grid, settings, spec,
+                                     run_kwargs.get("attractors")))
+    folder = path.parent if str(path.parent) else Path(".")
+    needs = {_device(folder): [folder, output, 0]}
+    checkpoint = run_kwargs.get("checkpoint")
+    if checkpoint is not None:
+        checkpoint = Path(checkpoint)
+        where = checkpoint if checkpoint.is_dir() else (
+            checkpoint.parent if str(checkpoint.parent) else Path("."))
+        if where.is_dir():  # else sweep.run refuses the folder itself, naming it
+            chunks = max(0, _checkpoint.size_bound(spec, settings, grid.size, chunk_size)
+                         - _checkpoint.stored_bytes(checkpoint))
+            needs.setdefault(_device(where), [where, 0, 0])[2] += chunks
+    for where, file_bytes, chunk_bytes in needs.values():
+        try:
+            free = shutil.disk_usage(where).free
+        except OSError:  # a file system that does not say: the write itself will tell
+            continue
+        if file_bytes + chunk_bytes <= free:
+            continue
+        parts = []
+        if file_bytes:
+            parts.append(f"the output file {str(path)!r} up to {_size(file_bytes)} (its "
+                         "uncompressed size: sweep compresses with zlib, so it is usually "
+                         "smaller, but that is the only safe bound before computing)")
+        if chunk_bytes:
+            parts.append(f"the checkpoint {str(checkpoint)!r} up to {_size(chunk_bytes)} "
+                         "(kept until the output file is written)")
+        raise ValueError(f"not enough free disk space: {' and '.join(parts)}, but "
+                         f"{str(where)!r} has {_size(free)} free; accepted: a folder with "
+                         f"at least {_size(file_bytes + chunk_bytes)} free, or a smaller "
+                         "run (fewer trajectories or observables, a larger save_every)")
+    return output
+
+
+def _device(folder: Path):
+    """The file system ``folder`` is on (its ``st_dev``; the folder itself if unknown)."""
+    try:
+        return os.stat(folder).st_dev
+    except OSError:
+        return str(folder)
 
 
 def load(path) -> xr.Dataset:

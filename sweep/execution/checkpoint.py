@@ -16,7 +16,8 @@ Every file is written to a temporary file in the folder, fsynced and renamed int
 (`os.replace`, then the folder is fsynced): a chunk file either exists complete or not
 at all, whatever kills the process (Ctrl-C, SIGTERM, SIGKILL, power loss). Temporary
 files a killed process left behind are ignored and cleaned up; a chunk file that cannot
-be read is recomputed.
+be read is recomputed. A failed write (a full disk) raises an OSError naming the file;
+the chunks stored before it stay.
 
 One writer per folder: ``FOLDER/lock`` names the process (pid, host) whose run writes
 the folder, and a second run (another process, or another thread) is refused while
@@ -48,7 +49,8 @@ import numpy as np
 
 from . import lock as _lock
 
-__all__ = ["Checkpoint", "fingerprint", "open_checkpoint", "remove"]
+__all__ = ["Checkpoint", "fingerprint", "open_checkpoint", "remove", "size_bound",
+           "stored_bytes"]
 
 MANIFEST = "manifest.json"
 
@@ -58,6 +60,14 @@ FORMAT = 1
 _CHUNK = re.compile(r"^chunk-(\d{12})-(\d{12})\.npz$")
 _TEMP_PREFIX = ".tmp-"
 
+#: Bytes `size_bound` allows per chunk file besides its arrays: the ``.npz`` archive's
+#: zip and ``.npy`` headers (988 bytes for four arrays, measured) and the file system's
+#: rounding up to a whole block (4 KiB).
+CHUNK_FILE_BYTES = 8 * 1024
+
+#: Bytes `size_bound` allows for the manifest and the lock file (2 KiB, each rounded up
+#: to a whole block).
+FOLDER_BYTES = 16 * 1024
 
 def _chunk_name(start: int, stop: int) -> str:
     return f"chunk-{start:012d}-{stop:012d}.npz"
@@ -151,8 +161,54 @@ def _short(value) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
+def size_bound(spec, settings, n: int, chunk_size: int) -> int:
+    """An upper bound, in bytes, of a complete checkpoint of a run of ``n`` trajectories
+    in chunks of ``chunk_size``: every chunk file (the rows of the arrays the kernel
+    writes, `sweep.execution.local.allocate`, stored uncompressed, plus
+    `CHUNK_FILE_BYTES`) and `FOLDER_BYTES`.
+
+    Parameters
+    ----------
+    spec : sweep.kernels.KernelSpec
+    settings : sweep.engine.RunSettings
+    n, chunk_size : int
+
+    Returns
+    -------
+    int
+    """
+    from .local import allocate
+
+    row = sum(array.dtype.itemsize * int(np.prod(array.shape[1:]))
+              for array in allocate(spec, settings, 0).values())
+    chunks = -(-int(n) // int(chunk_size))
+    return int(n) * row + chunks * CHUNK_FILE_BYTES + FOLDER_BYTES
+
+
+def stored_bytes(folder) -> int:
+    """Bytes of the chunk files in the checkpoint folder ``folder`` (0 if absent)."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        return 0
+    total = 0
+    for path in folder.iterdir():
+        if _CHUNK.match(path.name):
+            try:
+                total += path.stat().st_size
+            except OSError:
+                pass
+    return total
+
+
 def _write_atomically(folder: Path, name: str, write) -> None:
-    """``write(handle)`` into a temporary file in ``folder``, fsync, rename to ``name``."""
+    """``write(handle)`` into a temporary file in ``folder``, fsync, rename to ``name``.
+
+    Raises
+    ------
+    OSError
+        Naming the file (``folder / name``), with the errno of the failure (a full
+        disk: ENOSPC); the temporary file is gone.
+    """
     fd, tmp = tempfile.mkstemp(dir=folder, prefix=f"{_TEMP_PREFIX}{name}.")
     try:
         with os.fdopen(fd, "wb") as handle:
@@ -161,9 +217,12 @@ def _write_atomically(folder: Path, name: str, write) -> None:
             os.fsync(handle.fileno())
         os.replace(tmp, folder / name)
         _sync_folder(folder)
-    except BaseException:
+    except BaseException as exc:
         if os.path.exists(tmp):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and exc.errno is not None and exc.filename is None:
+            raise OSError(exc.errno, f"cannot write checkpoint file "
+                          f"{str(folder / name)!r}: {exc.strerror}") from None
         raise
 
 
