@@ -1,6 +1,6 @@
-"""Faults a long run meets: SIGTERM from a batch system during a long chunk, and a full
+"""Faults a long run meets: SIGTERM from a batch system during a long chunk, a full
 disk (refused before compute by the size estimate; a write that fails anyway keeps the
-checkpoint).
+checkpoint), and a damaged checkpoint chunk (recomputed, with a warning).
 
 SIGTERM at a chunk boundary is tested with SIGINT and SIGKILL in test_resume.py
 (test_real_killed_run_resumes_to_a_bit_identical_file). Every wait on a subprocess is
@@ -15,6 +15,7 @@ import signal
 import subprocess
 import sys
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -350,3 +351,33 @@ def test_a_streamed_file_that_cannot_be_written_leaves_nothing(tmp_path, monkeyp
     assert raised.value.errno == errno.ENOSPC
     assert list(tmp_path.iterdir()) == []
 
+
+# ------------------------------------------------------------ a damaged checkpoint
+def _flip_a_byte(chunk: Path) -> None:
+    """Flip one byte of the ``out`` array's values (its CRC-32 no longer matches)."""
+    data = bytearray(chunk.read_bytes())
+    with zipfile.ZipFile(chunk) as archive:
+        start = archive.getinfo("out.npy").header_offset
+    magic = data.index(b"\x93NUMPY", start)
+    header = int.from_bytes(data[magic + 8:magic + 10], "little")  # .npy format 1.0
+    data[magic + 10 + header + 3] ^= 0x40
+    chunk.write_bytes(bytes(data))
+
+
+def test_a_damaged_chunk_is_recomputed_with_a_warning_naming_it(tmp_path, monkeypatch):
+    run_file = _run_file(tmp_path)
+    out, folder = tmp_path / "out.nc", tmp_path / "ck"
+    Interrupt(monkeypatch, 3)
+    assert call("run", run_file, "-o", out, "--checkpoint", folder)[0] == 130
+    monkeypatch.undo()
+    damaged = folder / chunk_files(folder)[1]
+    _flip_a_byte(damaged)
+    counter = Interrupt(monkeypatch, None)
+    code, stdout, stderr = call("run", run_file, "-o", out, "--checkpoint", folder,
+                                "--resume")
+    assert code == 0 and stdout.startswith(f"wrote {out}")
+    assert stderr == (f"sweep: warning: checkpoint chunk '{damaged}' is damaged (BadZipFile: "
+                      "Bad CRC-32 for file 'out.npy'); it is recomputed\n")
+    assert counter.calls == 7 - 3 + 1
+    scene, grid, kwargs = load_run(run_file)
+    identical(sweep.load(out), sweep.run(scene, grid, **kwargs))

@@ -129,8 +129,9 @@ def test_damaged_chunk_and_stale_temporary_file_are_recomputed(tmp_path, monkeyp
     (folder / chunk_files(folder)[1]).write_bytes(b"PK\x03\x04 not a zip")
     (folder / ".tmp-chunk-000000000021-000000000028.npz.abc").write_bytes(b"half")
     counter = Interrupt(monkeypatch, None)
-    resumed = sweep.run(SCENE, GRID, chunk_size=CHUNK, checkpoint=folder, resume=True,
-                        keep_checkpoint=True, **KWARGS)
+    with pytest.warns(ckpt.DamagedChunkWarning, match=chunk_files(folder)[1]):
+        resumed = sweep.run(SCENE, GRID, chunk_size=CHUNK, checkpoint=folder, resume=True,
+                            keep_checkpoint=True, **KWARGS)
     assert counter.calls == 7 - 2
     identical(resumed, reference)
     assert not list(folder.glob(".tmp-*"))

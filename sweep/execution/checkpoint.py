@@ -15,9 +15,11 @@ Layout of a checkpoint folder::
 Every file is written to a temporary file in the folder, fsynced and renamed into place
 (`os.replace`, then the folder is fsynced): a chunk file either exists complete or not
 at all, whatever kills the process (Ctrl-C, SIGTERM, SIGKILL, power loss). Temporary
-files a killed process left behind are ignored and cleaned up; a chunk file that cannot
-be read is recomputed. A failed write (a full disk) raises an OSError naming the file;
-the chunks stored before it stay.
+files a killed process left behind are ignored and cleaned up. A chunk file that cannot
+be read (a damaged zip archive: numpy's ``.npz`` checks each array's CRC-32) or does not
+hold the expected shapes and dtypes is recomputed, with a `DamagedChunkWarning` naming
+the file and why. A failed write (a full disk) raises an OSError naming the file; the
+chunks stored before it stay.
 
 One writer per folder: ``FOLDER/lock`` names the process (pid, host) whose run writes
 the folder, and a second run (another process, or another thread) is refused while
@@ -43,14 +45,15 @@ import json
 import os
 import re
 import tempfile
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from . import lock as _lock
 
-__all__ = ["Checkpoint", "fingerprint", "open_checkpoint", "remove", "size_bound",
-           "stored_bytes"]
+__all__ = ["Checkpoint", "DamagedChunkWarning", "fingerprint", "open_checkpoint", "remove",
+           "size_bound", "stored_bytes"]
 
 MANIFEST = "manifest.json"
 
@@ -68,6 +71,12 @@ CHUNK_FILE_BYTES = 8 * 1024
 #: Bytes `size_bound` allows for the manifest and the lock file (2 KiB, each rounded up
 #: to a whole block).
 FOLDER_BYTES = 16 * 1024
+
+
+class DamagedChunkWarning(UserWarning):
+    """A stored chunk could not be used on resume and is recomputed (the message
+    names the file and why)."""
+
 
 def _chunk_name(start: int, stop: int) -> str:
     return f"chunk-{start:012d}-{stop:012d}.npz"
@@ -262,7 +271,8 @@ class Checkpoint:
         """Fill ``arrays[name][start:stop]`` from the stored chunk; False if absent.
 
         A chunk file that cannot be read or does not have the expected shapes and
-        dtypes is treated as absent (recomputed and rewritten).
+        dtypes is treated as absent (recomputed and rewritten), with a
+        `DamagedChunkWarning` naming the file and why.
         """
         path = self._chunks.get((start, stop))
         if path is None:
@@ -270,12 +280,16 @@ class Checkpoint:
         try:
             with np.load(path, allow_pickle=False) as stored:
                 loaded = {name: stored[name] for name in arrays}
-        except Exception:  # noqa: BLE001 - any damage (BadZipFile, EOFError, ...): recompute
-            return False
+        except Exception as exc:  # noqa: BLE001 - any damage (BadZipFile, EOFError, ...)
+            reason = " ".join(str(exc).split())
+            return _damaged(path, f"{type(exc).__name__}: {reason}" if reason else
+                            type(exc).__name__)
         for name, target in arrays.items():
             part = target[start:stop]
             if loaded[name].shape != part.shape or loaded[name].dtype != part.dtype:
-                return False
+                return _damaged(path, f"its {name!r} is {loaded[name].dtype}"
+                                f"{list(loaded[name].shape)}, expected {part.dtype}"
+                                f"{list(part.shape)}")
         for name, target in arrays.items():
             target[start:stop] = loaded[name]
         self.resumed += 1
@@ -298,6 +312,13 @@ class Checkpoint:
         """Delete the files of this checkpoint (and the folder if that empties it)."""
         self.release()
         remove(self.folder)
+
+
+def _damaged(path: Path, why: str) -> bool:
+    """Warn that the chunk file ``path`` cannot be used (``why``); return False."""
+    warnings.warn(f"checkpoint chunk {str(path)!r} is damaged ({why}); it is recomputed",
+                  DamagedChunkWarning, stacklevel=3)
+    return False
 
 
 def _is_ours(name: str) -> bool:
