@@ -240,7 +240,8 @@ def _command_run(args: argparse.Namespace) -> int:
     ever written whole, at the end.
     """
     from .execution import checkpoint as _checkpoint
-    from .io import check_output_path, check_space, save
+    from .diskspace import check_space
+    from .io import check_output_path, save
     from .toml_spec import load_run
 
     options = {}

@@ -72,7 +72,7 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     ------
     ValueError
         Before any compute: bad arguments, or the file may not fit in the free space
-        of its folder (`sweep.io.check_space`: its uncompressed size is the bound).
+        of its folder (`sweep.diskspace.check_space`: its uncompressed size is the bound).
     OSError
         The file could not be written (a full disk after all): one line naming it and
         the cause (`sweep.io.write_error`); no partial file is left.
@@ -83,7 +83,7 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     import tempfile
     import warnings
 
-    from . import engine, io
+    from . import diskspace, engine, io
     from .kernels import failure_summary, status_counts
     from .execution.progress import progress_bar
     from .grid import Grid
@@ -101,7 +101,7 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     if client is not None:
         check_client(client)
     path = io.check_output_path(path)
-    needed = io.check_space(path, scene, grid, **run_kwargs)
+    needed = diskspace.check_space(path, scene, grid, **run_kwargs)
     first, *rest = grid.dims
     axes = grid.axes
     inner = grid.size // grid.shape[0]

@@ -25,6 +25,7 @@ import xarray as xr
 import sweep
 import sweep.distributed
 from sweep import cli
+from sweep import diskspace
 from sweep import io as sweep_io
 from sweep.execution import checkpoint as ckpt
 from sweep.execution import lock as _lock
@@ -136,10 +137,10 @@ _CASES = {
 def test_size_estimate_bounds_the_written_files(case, tmp_path):
     scene, n, kwargs = _CASES[case]
     grid = _grid(n)
-    estimate = sweep_io.estimate_size(scene, grid, **kwargs)
+    estimate = diskspace.estimate_size(scene, grid, **kwargs)
     ds = sweep.run(scene, grid, **kwargs)
     assert sweep_io.file_size_bound(ds) == estimate  # the layout is the dataset's
-    layout = sweep_io.layout(scene, grid, **kwargs)
+    layout = diskspace.layout(scene, grid, **kwargs)
     assert list(layout.variables) == list(ds.variables)
     for name, variable in ds.variables.items():
         assert (layout[name].dims, layout[name].dtype) == (variable.dims, variable.dtype)
@@ -158,13 +159,13 @@ def test_size_estimate_is_tight_for_incompressible_data(n, tmp_path):
     # is within 1.1x of it from 1 MiB on (1.06x at 1.3 MiB, 1.015x at 4 MiB measured)
     kwargs = {"t_end": 1.0, "dt": 0.01, "observe": ("final", "winding", "energy")}
     rng = np.random.default_rng(20261125)
-    ds = sweep_io.layout(SCENE, _grid(n), **kwargs).copy(deep=True)
+    ds = diskspace.layout(SCENE, _grid(n), **kwargs).copy(deep=True)
     for name, variable in ds.data_vars.items():
         bits = rng.bytes(variable.size * variable.dtype.itemsize)
         ds[name] = (variable.dims, np.frombuffer(bits, variable.dtype)
                     .reshape(variable.shape), variable.attrs)
     size = os.path.getsize(sweep.save(ds, tmp_path / "random.nc"))
-    estimate = sweep_io.estimate_size(SCENE, _grid(n), **kwargs)
+    estimate = diskspace.estimate_size(SCENE, _grid(n), **kwargs)
     assert size > 1 << 20
     assert size <= estimate <= 1.1 * size, (size, estimate)
 
@@ -174,8 +175,8 @@ def test_checkpoint_estimate_bounds_its_chunk_files(tmp_path):
     folder = tmp_path / "ck"
     sweep.run(scene, _grid(n), chunk_size=300, checkpoint=folder, keep_checkpoint=True,
               **kwargs)
-    settings, spec, chunk_size = sweep_io._prepared(scene, _grid(n),
-                                                    {"chunk_size": 300, **kwargs})
+    settings, spec, chunk_size = diskspace._prepared(scene, _grid(n),
+                                                     {"chunk_size": 300, **kwargs})
     bound = ckpt.size_bound(spec, settings, n * n, chunk_size)
     stored = ckpt.stored_bytes(folder)
     assert len(chunk_files(folder)) == 6
@@ -226,7 +227,7 @@ def test_a_run_that_cannot_fit_is_refused_before_any_compute(with_checkpoint, sm
     if with_checkpoint:  # the file alone would fit; with the checkpoint's chunks it may not
         assert f"and the checkpoint '{small_disk / 'ck'}' up to " in stderr
         scene, grid, kwargs = load_run(run_file)
-        assert sweep_io.check_space(out, scene, grid, **kwargs) < free
+        assert diskspace.check_space(out, scene, grid, **kwargs) < free
     assert list(small_disk.iterdir()) == []
 
 
@@ -236,7 +237,7 @@ def test_a_run_that_cannot_fit_is_refused_with_simulated_free_space(tmp_path, mo
     monkeypatch.setattr(shutil, "disk_usage", lambda p: real(p)._replace(free=50_000))
     run_file = _run_file(tmp_path)
     scene, grid, kwargs = load_run(run_file)
-    estimate = sweep_io.estimate_size(scene, grid, **kwargs)
+    estimate = diskspace.estimate_size(scene, grid, **kwargs)
     code, _, stderr = call("run", run_file, "-o", tmp_path / "out.nc")
     assert code == 2 and stderr.count("\n") == 1
     assert (f"the output file '{tmp_path / 'out.nc'}' up to {sweep_io._size(estimate)} "
@@ -250,7 +251,7 @@ def test_a_run_that_cannot_fit_is_refused_with_simulated_free_space(tmp_path, mo
 
 def test_a_write_that_fails_on_a_real_full_disk_keeps_the_checkpoint(small_disk, tmp_path,
                                                                      monkeypatch):
-    monkeypatch.setattr(sweep_io, "check_space", lambda *a, **k: 0)  # let it try
+    monkeypatch.setattr(diskspace, "check_space", lambda *a, **k: 0)  # let it try
     run_file = _run_file(tmp_path, _BIG_RUN_FILE)
     out, folder = small_disk / "out.nc", tmp_path / "ck"
     code, stdout, stderr = call("run", run_file, "-o", out, "--checkpoint", folder)
@@ -289,7 +290,7 @@ def test_a_write_that_fails_says_why_and_keeps_the_checkpoint(failure, tmp_path,
 
     real = shutil.disk_usage
     free = 0 if failure == "HDF error, full" else 10**12
-    monkeypatch.setattr(sweep_io, "check_space", lambda *a, **k: 0)
+    monkeypatch.setattr(diskspace, "check_space", lambda *a, **k: 0)
     monkeypatch.setattr(shutil, "disk_usage", lambda p: real(p)._replace(free=free))
     monkeypatch.setattr(xr.Dataset, "to_netcdf", full)
     code, stdout, stderr = call("run", run_file, "-o", out, "--resume")
@@ -341,7 +342,7 @@ def test_a_streamed_file_that_cannot_be_written_leaves_nothing(tmp_path, monkeyp
         raise RuntimeError("NetCDF: HDF error")
 
     real = shutil.disk_usage
-    monkeypatch.setattr(sweep_io, "check_space", lambda *a, **k: 10**6)
+    monkeypatch.setattr(diskspace, "check_space", lambda *a, **k: 10**6)
     monkeypatch.setattr(shutil, "disk_usage", lambda p: real(p)._replace(free=0))
     monkeypatch.setattr(xr.Dataset, "to_netcdf", full)
     path = tmp_path / "streamed.nc"

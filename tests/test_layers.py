@@ -1,7 +1,7 @@
 """The package's layers: every import inside sweep (at module level or inside a
 function) points down or sideways within a layer, never up, and there is no circle.
 
-    cli -> maps, accuracy, plot, toml_spec, distributed -> engine -> execution, io
+    cli -> maps, accuracy, plot, toml_spec, distributed, diskspace -> engine -> execution, io
         -> kernels, grid, stability -> physics, methods, observables -> _config, ...
 
 The README's layout section draws the same picture.
@@ -24,7 +24,7 @@ LAYERS = {
     "sweep.execution": 3, "sweep.io": 3,
     "sweep.engine": 4,
     "sweep.maps": 5, "sweep.accuracy": 5, "sweep.plot": 5, "sweep.toml_spec": 5,
-    "sweep.distributed": 5,
+    "sweep.distributed": 5, "sweep.diskspace": 5,
     "sweep.cli": 6, "sweep.__main__": 7,
     # deprecated shims at the 0.1 module paths (removed in 0.3): each sits in the layer
     # of the module it forwards to
