@@ -6,6 +6,7 @@ Importing ``sweep`` compiles nothing and loads no matplotlib.
 from ._version import __version__ as __version__
 from .engine import run as run
 from .grid import Grid as Grid
+from .grid import Points as Points
 from .grid import from_degrees as from_degrees
 from .io import load as load
 from .io import save as save
@@ -26,7 +27,10 @@ from .physics import Scene as Scene
 #: and give the same module object as the attribute.
 _LAZY_MODULES = {"plot": "plot", "io": "io", "cli": "cli", "maps": "maps",
                  "metrics": "maps.metrics", "response": "maps.response",
-                 "methods": "methods", "accuracy": "accuracy"}
+                 "methods": "methods", "accuracy": "accuracy",
+                 # the browser explorer (extra "explore"); the module is callable:
+                 # sweep.explore(scene, grid, ...) is sweep.explore.explore(...)
+                 "explore": "explore"}
 
 
 def __getattr__(name):
@@ -43,11 +47,13 @@ __all__ = [
     "Forcing",
     "Grid",
     "PivotDrive",
+    "Points",
     "QuadraticDrag",
     "Scene",
     "Status",
     "Torque",
     "__version__",
+    "explore",
     "from_degrees",
     "load",
     "run",

@@ -1,0 +1,65 @@
+"""Explore maps in the browser: ``sweep.explore(scene, grid, **run_kwargs)`` and
+``sweep explore [RUN.toml]``.
+
+`sweep.explore.model` is the app's model in plain Python (state, validation, history,
+cancellable computation, snippets, exports; no Panel import); `sweep.explore.app` is the
+Panel/Bokeh page (the optional extra ``explore``: ``pip install -e ".[explore]"``).
+Importing this package imports neither Panel nor Bokeh; `explore` does.
+
+The module itself is callable, ``sweep.explore(scene, grid, ...)`` being
+``sweep.explore.explore(scene, grid, ...)``: the package and the function share the name
+``sweep.explore``.
+"""
+
+from __future__ import annotations
+
+import sys
+import types
+
+__all__ = ["explore"]
+
+
+def explore(scene, grid, **run_kwargs):
+    """An interactive explorer of ``scene``'s maps over ``grid``, recomputed on zoom.
+
+    Parameters
+    ----------
+    scene : sweep.Scene
+    grid : sweep.Grid
+        Its first two axes with more than one value are the map's x and y (for example
+        ``theta0`` [rad] and ``omega0`` [rad/s]); their ranges are the home view, and
+        their length the resolution (pixels per axis) unless ``resolution`` is given.
+    **run_kwargs
+        `sweep.run` arguments: ``t_end`` and ``dt`` [s] (required), ``t_transient``
+        [s], ``method``, ``device``, ``t0``, ``dtype``, ``strobe_samples``, ...; and
+        ``quantity`` (a key of `sweep.explore.model.QUANTITIES`, default: basins for a
+        forced scene, the final well for damping alone, else motion) and ``resolution``.
+        ``observe``, ``stop_early`` and ``attractors`` are set per map and ignored.
+
+    Returns
+    -------
+    sweep.explore.app.ExplorerApp
+        Displays in a Jupyter notebook; ``.show()`` opens it in a browser from a local
+        server, ``.servable()`` marks it for ``panel serve``, ``.serve(port=...)``
+        starts a server.
+
+    Raises
+    ------
+    ImportError
+        Without Panel and Bokeh (``pip install -e ".[explore]"``).
+    sweep.explore.model.InvalidInput
+        A ValueError naming the setting sweep's validators refuse.
+    """
+    from .app import ExplorerApp
+
+    return ExplorerApp(scene, grid, **run_kwargs)
+
+
+class _CallableModule(types.ModuleType):
+    """``sweep.explore`` is this package; calling it calls `explore`."""
+
+    def __call__(self, *args, **kwargs):
+        return explore(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule

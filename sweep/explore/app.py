@@ -1,0 +1,527 @@
+"""The explorer's page: Panel widgets around two Bokeh figures, the map (``name="map"``)
+and the clicked trajectory (``name="trajectory"``, with the phase portrait ``"phase"``).
+
+Each browser session gets its own `sweep.explore.model.Explorer` (its own history); the
+sessions of one app share the cache of final maps (the start-up warm-up's map appears at
+once) and one compute lock. Zoom, wheel and pan change the map's ranges; 150 ms after the
+last change the visible window is submitted (`sweep.explore.model.Requests`), computed
+on a worker thread (never on the server's event loop), and drawn back through the
+document's ``add_next_tick_callback`` (the one thread-safe entry into a Bokeh document):
+the preview first, then the final map. A stale result (an older request) is dropped.
+"""
+
+from __future__ import annotations
+
+import math
+import socket
+import sys
+import threading
+import time
+import warnings
+from collections import OrderedDict
+from functools import partial
+
+import numpy as np
+
+from .model import (QUANTITIES, Explorer, InvalidInput, MapResult, Requests, State,
+                    Trajectory)
+
+try:
+    import panel as pn
+    from bokeh.events import Tap
+    from bokeh.models import (BasicTicker, ColorBar, ColumnDataSource, FixedTicker,
+                              LinearColorMapper, Range1d)
+    from bokeh.palettes import Category10_10, Category20_20, Viridis256
+    from bokeh.plotting import figure
+except ImportError as exc:  # pragma: no cover - the extra is missing
+    raise ImportError(f"sweep.explore needs Panel and Bokeh ({exc}); install them with: "
+                      "pip install -e \".[explore]\" (or pip install 'panel>=1.4' "
+                      "'bokeh>=3.4')") from None
+
+__all__ = ["ExplorerApp", "free_port"]
+
+#: Seconds after the last range change before the window is recomputed (wheel zoom and
+#: pan send many changes; the newest request cancels the older anyway).
+DEBOUNCE_MS = 150
+
+#: Colours of discrete maps.
+_MOTION_COLOURS = {-1.0: "#2166ac", 0.0: "#f0f0f0", 1.0: "#b2182b"}
+_NAN_COLOUR = "#404040"
+
+
+def free_port(host: str = "127.0.0.1") -> int:
+    """A TCP port nobody listens on at ``host`` now (the OS's choice)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind((host, 0))
+        return s.getsockname()[1]
+
+
+def _axis_label(name: str) -> str:
+    from ..physics import parameters
+
+    for p in parameters():
+        if p.axis == name:
+            return f"{name} [{p.unit_text}]"
+    return name
+
+
+def _palette(result: MapResult) -> list[str]:
+    """One colour per legend entry (NaN's entry dark grey)."""
+    colours = []
+    cycle = Category10_10 if len(result.legend) <= 10 else Category20_20
+    for k, (value, _) in enumerate(result.legend):
+        if not math.isfinite(value):
+            colours.append(_NAN_COLOUR)
+        elif result.state.quantity == "motion" and value in _MOTION_COLOURS:
+            colours.append(_MOTION_COLOURS[value])
+        elif result.state.quantity in ("basins", "period") and value < 0:
+            colours.append("#000000")
+        elif result.state.quantity == "inverted":
+            colours.append("#1a9850" if value else "#f0f0f0")
+        else:
+            colours.append(cycle[k % len(cycle)])
+    return colours
+
+
+class _Session:
+    """One browser session: widgets, figures and the explorer behind them."""
+
+    def __init__(self, app: ExplorerApp) -> None:
+        self.app = app
+        self.explorer = Explorer(app.scene, app.grid, cache=app.cache, **app.kwargs)
+        self.doc = pn.state.curdoc
+        self.latest = 0
+        self.result: MapResult | None = None
+        self.shown: State | None = None
+        self.pending_zoom = None
+        self._build()
+        self.requests = Requests(self.explorer, self._from_worker(self._show),
+                                 self._from_worker(self._failed))
+        if self.doc is not None and hasattr(self.doc, "on_session_destroyed"):
+            self.doc.on_session_destroyed(lambda context: self.requests.close())
+        self._submit()
+
+    # -- threads ------------------------------------------------------------------
+    def _from_worker(self, callback):
+        """``callback`` run on the document's event loop (from the worker thread)."""
+        def schedule(*args):
+            doc = self.doc
+            if doc is not None and getattr(doc, "session_context", None) is not None:
+                doc.add_next_tick_callback(partial(callback, *args))
+            else:  # a notebook: Panel syncs the models itself
+                callback(*args)
+        return schedule
+
+    # -- layout -------------------------------------------------------------------
+    def _build(self) -> None:
+        e = self.explorer
+        s = e.state
+        v = s.view
+        self.mapper = LinearColorMapper(palette=Viridis256, nan_color=_NAN_COLOUR)
+        self.source = ColumnDataSource({"image": [np.zeros((1, 1))], "x": [v.x_range[0]],
+                                        "y": [v.y_range[0]],
+                                        "dw": [v.x_range[1] - v.x_range[0]],
+                                        "dh": [v.y_range[1] - v.y_range[0]]})
+        n = s.resolution
+        self.map = figure(name="map", frame_width=n, frame_height=n,
+                          x_range=Range1d(*v.x_range), y_range=Range1d(*v.y_range),
+                          tools="box_zoom,wheel_zoom,pan,tap,reset", active_scroll="wheel_zoom",
+                          active_drag="box_zoom", toolbar_location="above",
+                          x_axis_label=_axis_label(v.x), y_axis_label=_axis_label(v.y),
+                          title="")
+        self.map.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.source,
+                       color_mapper=self.mapper)
+        self.clicked = ColumnDataSource({"x": [], "y": []})
+        self.map.scatter("x", "y", source=self.clicked, size=12, marker="x", line_width=3,
+                         color="white")
+        self.colorbar = ColorBar(color_mapper=self.mapper, title="", width=16,
+                                 ticker=BasicTicker(), title_text_font_size="12px",
+                                 major_label_text_font_size="11px")
+        self.map.add_layout(self.colorbar, "right")
+        for r in (self.map.x_range, self.map.y_range):
+            r.on_change("start", self._range_changed)
+            r.on_change("end", self._range_changed)
+        self.map.on_event(Tap, self._tapped)
+
+        self.traj_source = ColumnDataSource({"t": [], "theta": [], "omega": []})
+        self.strobe_source = ColumnDataSource({"theta": [], "omega": []})
+        self.trajectory = figure(name="trajectory", width=460, height=240,
+                                 x_axis_label="t [s]", y_axis_label="theta [rad], omega [rad/s]",
+                                 title="trajectory: click a start on the map",
+                                 tools="box_zoom,wheel_zoom,pan,reset,save")
+        self.trajectory.line("t", "theta", source=self.traj_source, legend_label="theta [rad]",
+                             color="#1f77b4")
+        self.trajectory.line("t", "omega", source=self.traj_source,
+                             legend_label="omega [rad/s]", color="#ff7f0e")
+        self.trajectory.legend.location = "top_right"
+        self.phase = figure(name="phase", width=460, height=280, x_axis_label="theta [rad]",
+                            y_axis_label="omega [rad/s]", title="phase portrait",
+                            tools="box_zoom,wheel_zoom,pan,reset,save")
+        self.phase.line("theta", "omega", source=self.traj_source, color="#1f77b4",
+                        legend_label="trajectory")
+        self.phase.scatter("theta", "omega", source=self.strobe_source, size=6, color="#d62728",
+                           legend_label="stroboscopic points")
+        self.phase.legend.location = "top_right"
+
+        # controls from the declarations
+        self.errors: dict[str, pn.pane.Alert] = {}
+        self.widgets: dict[str, object] = {}
+        self.quantity = pn.widgets.Select(name="quantity", options=self._quantity_options(),
+                                          value=s.quantity, width=260)
+        self.x_axis = pn.widgets.Select(name="x axis", options=list(e.axes()), value=v.x,
+                                        width=125)
+        self.y_axis = pn.widgets.Select(name="y axis", options=list(e.axes()), value=v.y,
+                                        width=125)
+        for name, widget in (("quantity", self.quantity), ("x", self.x_axis),
+                             ("y", self.y_axis)):
+            self._bind(name, widget)
+        scene_controls = [self._control(c) for c in e.parameter_controls()]
+        run_controls = [self._control(c) for c in e.run_controls()]
+        self.back = pn.widgets.Button(name="◀ back", width=80, disabled=True)
+        self.forward = pn.widgets.Button(name="forward ▶", width=80, disabled=True)
+        self.reset = pn.widgets.Button(name="reset", width=80)
+        self.back.on_click(lambda event: self._history(self.explorer.back))
+        self.forward.on_click(lambda event: self._history(self.explorer.forward))
+        self.reset.on_click(lambda event: self._history(self.explorer.reset))
+        self.view_error = self._alert()
+        self.status = pn.pane.Markdown("starting…", width=560, name="status")
+        self.caption = pn.pane.Markdown("", width=560)
+        self.info = pn.pane.Markdown("**Click a start on the map** to see its trajectory.",
+                                     width=460, name="info")
+        self.map_python = pn.pane.Markdown("", width=560)
+        self.map_toml = pn.pane.Markdown("", width=560)
+        self.traj_python = pn.pane.Markdown("(click a start)", width=560)
+        self.traj_toml = pn.pane.Markdown("(click a start)", width=560)
+        downloads = pn.Row(
+            pn.widgets.FileDownload(callback=self._netcdf, filename="sweep-explore.nc",
+                                    label="netCDF", button_type="primary", width=100),
+            pn.widgets.FileDownload(callback=self._png, filename="sweep-explore.png",
+                                    label="PNG", width=90),
+            pn.widgets.FileDownload(callback=self._toml_file, filename="sweep-explore.toml",
+                                    label="run file", width=100))
+        controls = pn.Column(
+            pn.pane.Markdown("### Map"), self.quantity, pn.Row(self.x_axis, self.y_axis),
+            pn.pane.Markdown("### Scene"), *scene_controls,
+            pn.pane.Markdown("### Run"), *run_controls, width=290, scroll=True, height=900)
+        main = pn.Column(
+            pn.Row(self.back, self.forward, self.reset, downloads), self.view_error,
+            self.status, pn.pane.Bokeh(self.map), self.caption)
+        side = pn.Column(pn.pane.Bokeh(self.trajectory), pn.pane.Bokeh(self.phase), self.info)
+        code = pn.Tabs(("map: Python", self.map_python), ("map: TOML", self.map_toml),
+                       ("trajectory: Python", self.traj_python),
+                       ("trajectory: TOML", self.traj_toml), width=1000)
+        self.layout = pn.Column(
+            pn.pane.Markdown("## sweep explore: maps recomputed on every zoom"),
+            pn.Row(controls, main, side), code)
+
+    def _quantity_options(self) -> dict:
+        return {label: name for name, label in self.explorer.quantities().items()}
+
+    def _alert(self):
+        return pn.pane.Alert("", alert_type="danger", visible=False, width=260,
+                             margin=(0, 5))
+
+    def _control(self, control):
+        if control.kind == "choice":
+            widget = pn.widgets.Select(name=control.label, options=list(control.choices),
+                                       value=control.value, width=260)
+        elif control.kind == "int":
+            widget = pn.widgets.IntInput(name=control.label, value=int(control.value),
+                                         width=260)
+        else:
+            widget = pn.widgets.FloatInput(name=control.label, value=float(control.value),
+                                           width=260)
+        widget.description = control.help
+        self.widgets[control.name] = widget
+        self._bind(control.name, widget)
+        return pn.Column(widget, self.errors[control.name], margin=0)
+
+    def _bind(self, name: str, widget) -> None:
+        self.errors.setdefault(name, self._alert())
+        widget.param.watch(partial(self._changed, name), "value")
+
+    # -- events -------------------------------------------------------------------
+    def _changed(self, name: str, event) -> None:
+        """A control changed: validate through the model; show the refusal beside the
+        control, or compute."""
+        value = event.new
+        alert = self.errors[name]
+        try:
+            if value is None:
+                raise InvalidInput(name, f"{name} must be a number, got nothing")
+            before = self.explorer.state.view
+            self.explorer.update(**{name: value})
+        except InvalidInput as exc:
+            alert.object = f"{exc}"
+            alert.visible = True
+            return
+        alert.visible = False
+        alert.object = ""
+        for other in self.errors.values():  # an earlier refusal is moot now
+            other.visible = False
+        if self.explorer.state.view != before:
+            self._apply_view()
+        self._submit()
+
+    def _range_changed(self, attr, old, new) -> None:
+        if self.pending_zoom is None and self.doc is not None:
+            self.pending_zoom = self.doc.add_timeout_callback(self._zoom, DEBOUNCE_MS)
+
+    def _zoom(self) -> None:
+        self.pending_zoom = None
+        xr_, yr = self.map.x_range, self.map.y_range
+        window = ((float(xr_.start), float(xr_.end)), (float(yr.start), float(yr.end)))
+        v = self.explorer.state.view
+        if np.allclose(window, (v.x_range, v.y_range), rtol=1e-12, atol=0.0):
+            return  # our own change (history), or nothing new
+        try:
+            self.explorer.zoom(*window)
+        except InvalidInput as exc:
+            self.view_error.object = f"{exc}"
+            self.view_error.visible = True
+            return
+        self.view_error.visible = False
+        self._submit()
+
+    def _history(self, move) -> None:
+        try:
+            move()
+        except InvalidInput as exc:
+            self.view_error.object = f"{exc}"
+            self.view_error.visible = True
+            return
+        self.view_error.visible = False
+        self._apply_view()
+        self._submit()
+
+    def _apply_view(self) -> None:
+        """Put the explorer's view on the figure (ranges, labels, axis selectors)."""
+        v = self.explorer.state.view
+        self.map.x_range.update(start=v.x_range[0], end=v.x_range[1])
+        self.map.y_range.update(start=v.y_range[0], end=v.y_range[1])
+        self.map.xaxis.axis_label = _axis_label(v.x)
+        self.map.yaxis.axis_label = _axis_label(v.y)
+        for widget, value in ((self.x_axis, v.x), (self.y_axis, v.y)):
+            if widget.value != value:
+                with widget.param.discard_events(widget):
+                    widget.value = value
+
+    def _submit(self) -> None:
+        e = self.explorer
+        self.back.disabled = not e.can_go_back()
+        self.forward.disabled = not e.can_go_forward()
+        self.latest = self.requests.submit(e.state)
+        s = e.state
+        self.status.object = (f"computing {QUANTITIES[s.quantity].label} at "
+                              f"{s.resolution} x {s.resolution}…")
+        self.map_python.object = f"```python\n{e.python_snippet(s)}```"
+        self.map_toml.object = f"```toml\n{e.toml_text(s)}```"
+
+    def _show(self, request: int, result: MapResult) -> None:
+        """Draw a result (on the event loop); results of older requests are dropped."""
+        if request != self.latest:
+            return
+        self.result = result
+        s = result.state
+        x0, x1 = s.view.x_range
+        y0, y1 = s.view.y_range
+        self.source.data = {"image": [result.image], "x": [x0], "y": [y0], "dw": [x1 - x0],
+                            "dh": [y1 - y0]}
+        if result.legend:
+            palette = _palette(result)
+            self.mapper.update(palette=palette, low=-0.5, high=len(palette) - 0.5)
+            step = max(1, math.ceil(len(palette) / 16))
+            ticks = list(range(0, len(palette), step))
+            self.colorbar.update(ticker=FixedTicker(ticks=ticks), major_label_overrides={
+                k: result.legend[k][1] for k in ticks}, title=result.title)
+        else:
+            finite = result.image[np.isfinite(result.image)]
+            low, high = (float(finite.min()), float(finite.max())) if finite.size else (0, 1)
+            if high <= low:
+                high = low + 1.0
+            self.mapper.update(palette=Viridis256, low=low, high=high)
+            self.colorbar.update(ticker=BasicTicker(), major_label_overrides={},
+                                 title=result.title)
+        ny, nx = result.image.shape
+        stage = "preview" if result.preview else "map"
+        more = f"; computing {s.resolution} x {s.resolution}…" if result.preview else ""
+        pilot = " (pilot catalogue included)" if result.catalogue is not None else ""
+        self.status.object = (f"**{stage}** {nx} x {ny} in {result.seconds:.2f} s"
+                              f"{pilot}{more}")
+        self.caption.object = f"*{result.description}*"
+        self.map.title.text = f"{QUANTITIES[s.quantity].label}"
+
+    def _failed(self, request: int, exc: Exception) -> None:
+        if request != self.latest:
+            return
+        self.status.object = f"**error**: {' '.join(str(exc).split())}"
+
+    def _tapped(self, event) -> None:
+        """A click on the map: the trajectory of the nearest pixel's start."""
+        if self.result is None or self.result.preview:
+            target = self.result
+        else:
+            target = self.result
+        try:
+            traj = self.explorer.trajectory(event.x, event.y, target)
+        except InvalidInput as exc:
+            self.info.object = f"**refused**: {exc}"
+            return
+        except ValueError as exc:
+            self.info.object = f"**refused**: {' '.join(str(exc).split())}"
+            return
+        self.show_trajectory(traj)
+
+    def show_trajectory(self, traj: Trajectory) -> None:
+        v = self.explorer.state.view
+        self.clicked.data = {"x": [traj.point[v.x]], "y": [traj.point[v.y]]}
+        self.traj_source.data = {"t": traj.t, "theta": traj.theta, "omega": traj.omega}
+        self.strobe_source.data = {"theta": traj.strobe_theta, "omega": traj.strobe_omega}
+        where = ", ".join(f"{k} = {val:.6g}" for k, val in traj.point.items())
+        self.trajectory.title.text = f"trajectory from {where}"
+        self.info.object = (
+            f"**start** theta0 = {traj.theta0:.6g} rad, omega0 = {traj.omega0:.6g} rad/s  \n"
+            f"**status** {traj.status}  \n**label** {traj.label}  \n"
+            f"**stroboscopic points** {traj.strobe_theta.size}")
+        self.traj_python.object = f"```python\n{traj.python}```"
+        self.traj_toml.object = f"```toml\n{traj.toml}```"
+
+    # -- downloads (bytes made here; the browser chooses where to save) ----------------
+    def _final(self) -> MapResult:
+        result = self.result
+        if result is None or result.preview or result.state != self.explorer.state:
+            result = self.explorer.compute(self.explorer.state)
+        return result
+
+    def _netcdf(self):
+        import io
+
+        return io.BytesIO(self.explorer.netcdf_bytes(self._final()))
+
+    def _png(self):
+        import io
+
+        return io.BytesIO(self.explorer.png_bytes(self._final()))
+
+    def _toml_file(self):
+        import io
+
+        return io.BytesIO(self.explorer.toml_text().encode())
+
+
+class ExplorerApp:
+    """The explorer of a scene's maps, served by Panel (see `sweep.explore`).
+
+    Parameters
+    ----------
+    scene, grid, **run_kwargs
+        As `sweep.explore.model.Explorer` (``quantity``, ``resolution`` included);
+        validated now.
+    """
+
+    def __init__(self, scene, grid, **run_kwargs) -> None:
+        self.scene, self.grid, self.kwargs = scene, grid, dict(run_kwargs)
+        self.cache: OrderedDict = OrderedDict()
+        self.template = Explorer(scene, grid, cache=self.cache, **run_kwargs)  # validates
+        self.warm_seconds: float | None = None
+        self.server = None
+
+    # -- warm-up ----------------------------------------------------------------------
+    def warm_up(self) -> float:
+        """Compute the home view's preview, map and one trajectory (compiling, or loading
+        from the disk cache, every kernel the first zoom and click need); the map is kept
+        for the first page. Returns the seconds it took."""
+        begin = time.perf_counter()
+        e = self.template
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            e.compute(preview=True)
+            result = e.compute()
+            e.trajectory(float(result.x[len(result.x) // 2]),
+                         float(result.y[len(result.y) // 2]), result)
+        self.warm_seconds = time.perf_counter() - begin
+        return self.warm_seconds
+
+    # -- Panel ------------------------------------------------------------------------
+    def session(self):
+        """A new page (its own explorer and history): what each browser session gets."""
+        return _Session(self).layout
+
+    def panel(self):
+        """The page as a Panel layout (for notebooks and templates)."""
+        return self.session()
+
+    def _repr_mimebundle_(self, include=None, exclude=None):
+        return self.panel()._repr_mimebundle_(include, exclude)
+
+    def servable(self, title: str = "sweep explore"):
+        """Mark a new page for ``panel serve`` (returns it)."""
+        return self.panel().servable(title=title)
+
+    def serve(self, *, port: int = 0, host: str = "127.0.0.1", show: bool = False,
+              threaded: bool = True, warm: bool = True, quiet: bool = True):
+        """Start a server for this app.
+
+        Parameters
+        ----------
+        port : int, default 0
+            0: a free port.
+        host : str, default "127.0.0.1"
+            The address to bind; websocket connections are accepted only from pages
+            served at ``host:port`` (and ``localhost:port`` for 127.0.0.1).
+        show : bool, default False
+            Open a browser tab.
+        threaded : bool, default True
+            Run the server in a thread and return; False blocks until stopped.
+        warm : bool, default True
+            `warm_up` first (the first page then shows a map at once).
+
+        Returns
+        -------
+        The server (``.stop()``); its URL is `url`.
+        """
+        if warm and self.warm_seconds is None:
+            self.warm_up()
+        if not port:
+            port = free_port(host)
+        origins = [f"{host}:{port}"]
+        if host in ("127.0.0.1", "localhost"):
+            origins = [f"127.0.0.1:{port}", f"localhost:{port}"]
+        self.url = f"http://{host if ':' not in host else f'[{host}]'}:{port}/"
+        self.server = pn.serve({"/": self.session}, port=port, address=host,
+                               websocket_origin=origins, show=show, threaded=threaded,
+                               title="sweep explore", verbose=not quiet,
+                               start=True)
+        return self.server
+
+    def show(self, **kwargs):
+        """Serve and open a browser tab (`serve` with ``show=True``)."""
+        return self.serve(show=True, **kwargs)
+
+    def stop(self) -> None:
+        """Stop the server `serve` started."""
+        if self.server is not None:
+            self.server.stop()
+            self.server = None
+
+
+def main_serve(app: ExplorerApp, *, port: int, host: str, open_browser: bool) -> int:
+    """``sweep explore``: warm up, serve, print the URL, block until Ctrl-C."""
+    if host not in ("127.0.0.1", "localhost", "::1"):
+        print(f"sweep: warning: --host {host}: anyone who can reach port {port or '(chosen)'} "
+              "on this address can use this machine's cores through the explorer",
+              file=sys.stderr)
+    print("sweep explore: compiling the kernels (warm-up)…", file=sys.stderr, flush=True)
+    seconds = app.warm_up()
+    print(f"sweep explore: kernels warm in {seconds:.1f} s", file=sys.stderr, flush=True)
+    server = app.serve(port=port, host=host, show=open_browser, threaded=True, warm=False)
+    print(f"sweep explore: serving {app.url} (Ctrl-C stops)", flush=True)
+    stop = threading.Event()
+    try:
+        while not stop.wait(0.5):
+            pass
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.stop()
+    return 0

@@ -1,0 +1,1299 @@
+"""The explorer's model: what the browser shows, as plain Python (no Panel, no Bokeh).
+
+A `State` says everything a map depends on: the scene (model and parameter values), the
+two axes shown and their window, the quantity, the run settings and the resolution.
+`Explorer` turns user input into states through sweep's own validators (a refused value
+raises `InvalidInput`, naming the control, and nothing is computed), keeps the history of
+views, and computes a state's map (`Explorer.compute`: state -> grid -> `sweep.run` ->
+`sweep.maps` -> image) in bands of rows, checking a `CancelToken` between bands, so that
+a newer request (`Requests`) stops an older one within one band. It also writes the
+Python snippet and the TOML run file that reproduce a map or one trajectory, and the
+exports (netCDF with `sweep.save`'s attributes, PNG, run file) as bytes.
+
+Nothing typed is executed: every value is a number or a choice from a fixed list, and
+goes through `sweep.Scene`, `sweep.Grid` and `sweep.io.layout` (the checks `sweep.run`
+makes) before any compute.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import io as _stdio
+import json
+import math
+import os
+import tempfile
+import threading
+import time
+from collections import OrderedDict
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import io as sweep_io
+from .. import maps
+from ..diskspace import layout as run_layout
+from ..engine import run as sweep_run
+from ..grid import Grid
+from ..kernels import Status
+from ..methods import METHODS
+from ..physics import BASE_PARAMETERS, EFFECTS, MODELS, Scene, parameters
+
+__all__ = ["AXES_INITIAL", "CancelToken", "Cancelled", "Control", "Explorer", "InvalidInput",
+           "MapResult", "QUANTITIES", "Quantity", "Requests", "State", "Trajectory", "View"]
+
+#: The initial-state axes (always offered as map axes).
+AXES_INITIAL = ("theta0", "omega0")
+
+#: Points per axis of the pilot run that catalogues a forced map's attractors
+#: (`sweep.maps.pilot_catalogue`, as ``sweep run --pilot 41``).
+PILOT_POINTS = 41
+
+#: The preview's resolution is the map's divided by this (per axis): 1/16 of the work.
+PREVIEW_FACTOR = 4
+
+#: Smallest number of trajectories per band of the final map: each band is one
+#: `sweep.run` call (~5 ms of overhead each, measured on 400 x 400 damped wells), and a
+#: cancel lands between bands.
+BAND_MIN = 16_384
+
+#: Bands a final map is cut into at most (a cancel waits for at most 1/BANDS of a map).
+BANDS = 8
+
+#: Resolution limits (pixels per axis): a 2000 x 2000 map is 4 M trajectories.
+RESOLUTION_RANGE = (8, 2000)
+
+#: Final maps kept for back/forward (each holds its dataset: a 400 x 400 forced map
+#: with 16 stroboscopic samples is ~45 MB).
+CACHE_SIZE = 3
+
+#: Samples of theta(t) kept for the trajectory panel (save_every is chosen to stay under).
+TRAJECTORY_SAMPLES = 4000
+
+#: One computation at a time in this process, whichever session asks: numba's parallel
+#: kernels must not be launched from two threads at once (its workqueue layer aborts).
+COMPUTE_LOCK = threading.RLock()
+
+#: `sweep.run` keywords the explorer takes from ``run_kwargs`` and passes on unchanged.
+PASSTHROUGH = ("t0", "rtol", "atol", "dtype", "check_stability", "strobe_samples")
+
+#: `sweep.run` keywords the explorer sets itself (per quantity, per view) and ignores.
+SET_BY_EXPLORER = ("observe", "stop_early", "attractors", "progress", "chunk_size",
+                   "save_every", "checkpoint", "resume", "keep_checkpoint", "client",
+                   "estimate_error", "specialize")
+
+
+class InvalidInput(ValueError):
+    """A value sweep's validators refuse; ``control`` names the control it came from.
+
+    Attributes
+    ----------
+    control : str
+        The control (``"damping"``, ``"dt"``, ``"view"``, ...) the message belongs to.
+    """
+
+    def __init__(self, control: str, message: str) -> None:
+        super().__init__(message)
+        self.control = control
+
+
+class Cancelled(Exception):
+    """Raised inside a computation whose request a newer one replaced."""
+
+
+class CancelToken:
+    """A flag a computation checks between bands (`check`)."""
+
+    def __init__(self) -> None:
+        self._event = threading.Event()
+
+    def cancel(self) -> None:
+        """Ask the computation to stop at its next check."""
+        self._event.set()
+
+    @property
+    def cancelled(self) -> bool:
+        return self._event.is_set()
+
+    def check(self) -> None:
+        """Raise `Cancelled` if `cancel` was called."""
+        if self._event.is_set():
+            raise Cancelled()
+
+
+# ------------------------------------------------------------------------ quantities
+def _effects(scene: Scene) -> set[str]:
+    return {effect.declaration.name for effect in scene.effects}
+
+
+def _forced(scene: Scene) -> bool:
+    return scene.forcing is not None
+
+
+def _only_damping(scene: Scene) -> bool:
+    return _effects(scene) == {"damping"}
+
+
+def _pivot(scene: Scene) -> bool:
+    return "pivot" in _effects(scene)
+
+
+def _always(scene: Scene) -> bool:
+    return True
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One map the explorer can draw.
+
+    Attributes
+    ----------
+    name : str
+        Key (``"basins"``, ``"var:theta_final"``).
+    label : str
+        What the selector shows.
+    observe : tuple of str
+        The observables `sweep.run` computes for it.
+    stop_early : bool
+        Run with ``stop_early=True`` (only with settled observables).
+    applies : callable
+        ``applies(scene) -> bool``: offered for this scene.
+    compute : callable
+        ``compute(ds) -> xarray.DataArray``: the map (a `sweep.maps` function or a
+        variable of the dataset).
+    discrete : bool
+        Integer labels with a legend (else a continuous colour bar).
+    pilot : bool
+        Forced basins: find the attractors first (`sweep.maps.pilot_catalogue`).
+    expression : str
+        The Python expression of the map of ``ds``, for the snippets.
+    """
+
+    name: str
+    label: str
+    observe: tuple[str, ...]
+    stop_early: bool
+    applies: Callable[[Scene], bool]
+    compute: Callable[[Any], Any]
+    discrete: bool
+    pilot: bool = False
+    expression: str = ""
+
+
+def _variable(name: str, observable: str, label: str, applies=_always) -> Quantity:
+    return Quantity(f"var:{name}", label, (observable,), False, applies,
+                    lambda ds, name=name: ds[name], False, expression=f'ds["{name}"]')
+
+
+#: Every quantity, in the order the selector lists them.
+QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
+    Quantity("well", "final well (damped, unforced)", ("capture",), True, _only_damping,
+             maps.well, True, expression="maps.well(ds)"),
+    Quantity("basins", "attractor basins (forced)", ("strobe",), True, _forced, maps.basins,
+             True, pilot=True, expression="maps.basins(ds)"),
+    Quantity("motion", "motion: rotation or libration", ("omega_mean",), False, _always,
+             maps.motion, True, expression="maps.motion(ds)"),
+    Quantity("period", "period map (forced)", ("strobe",), True, _forced, maps.period, True,
+             expression="maps.period(ds)"),
+    Quantity("inverted", "stays inverted (pivot drive)", ("top_distance",), False, _pivot,
+             maps.inverted, True, expression="maps.inverted(ds)"),
+    Quantity("lyapunov_max", "largest Lyapunov exponent", ("lyapunov",), False, _always,
+             lambda ds: ds["lyapunov_max"], False, expression='ds["lyapunov_max"]'),
+    Quantity("amplitude", "steady amplitude (librations)", ("amplitude", "omega_mean"), False,
+             _always, maps.amplitude, False, expression="maps.amplitude(ds)"),
+    _variable("theta_final", "final", "observed: theta_final"),
+    _variable("omega_final", "final", "observed: omega_final"),
+    _variable("winding", "winding", "observed: winding"),
+    _variable("theta_max", "theta_max", "observed: theta_max"),
+    _variable("omega_mean", "omega_mean", "observed: omega_mean"),
+    _variable("energy_final", "energy", "observed: energy_final"),
+    _variable("tension_max", "tension", "observed: tension_max"),
+    _variable("top_distance_max", "top_distance", "observed: top_distance_max"),
+)}
+
+
+def default_quantity(scene: Scene) -> str:
+    """Forced scenes: basins; damping alone: the final well; otherwise motion."""
+    if _forced(scene):
+        return "basins"
+    if _only_damping(scene):
+        return "well"
+    return "motion"
+
+
+# ------------------------------------------------------------------------ state
+@dataclass(frozen=True)
+class View:
+    """The window shown: axes and their ranges (in the axes' units: rad, rad/s, ...)."""
+
+    x: str
+    y: str
+    x_range: tuple[float, float]
+    y_range: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class State:
+    """Everything a map depends on (hashable: results are cached by state).
+
+    Attributes
+    ----------
+    scene : Scene
+        Model and parameter values (an axis's value here is unused).
+    view : View
+    quantity : str
+        A key of `QUANTITIES`.
+    t_end, dt, t_transient : float
+        As `sweep.run` [s].
+    method : str
+    resolution : int
+        Pixels (trajectories) per axis of the final map.
+    start : tuple of (str, float)
+        ``theta0`` [rad] and ``omega0`` [rad/s] of the start where they are not axes.
+    extra : tuple of (str, value)
+        `PASSTHROUGH` keywords of `sweep.run`.
+    device : str
+    """
+
+    scene: Scene
+    view: View
+    quantity: str
+    t_end: float
+    dt: float
+    t_transient: float = 0.0
+    method: str = "rk4"
+    resolution: int = 400
+    start: tuple = (("theta0", 0.0), ("omega0", 0.0))
+    extra: tuple = ()
+    device: str = "cpu"
+
+
+def centres(lo: float, hi: float, n: int) -> np.ndarray:
+    """Pixel centres of ``n`` pixels covering ``[lo, hi]``: ``np.linspace`` of the first
+    and last centre (so a run file's ``{start, stop, num}`` gives the same floats)."""
+    step = (hi - lo) / n
+    return np.linspace(lo + 0.5 * step, hi - 0.5 * step, n)
+
+
+# ------------------------------------------------------------------------ controls
+@dataclass(frozen=True)
+class Control:
+    """One input of the control panel, written from the declarations.
+
+    Attributes
+    ----------
+    name : str
+        Key for `Explorer.update` / `Explorer.set_parameter` (a grid axis name for a
+        parameter).
+    label : str
+        ``"damping c [1/s]"``.
+    kind : {"float", "int", "choice"}
+    value : float, int or str
+    choices : tuple of str
+    minimum : float, optional
+    strict : bool
+    help : str
+        Long name and what is accepted.
+    group : str
+        ``"scene"``, ``"run"`` or ``"map"``.
+    """
+
+    name: str
+    label: str
+    kind: str
+    value: Any
+    choices: tuple = ()
+    minimum: float | None = None
+    strict: bool = False
+    help: str = ""
+    group: str = "scene"
+
+
+# ------------------------------------------------------------------------ results
+@dataclass
+class MapResult:
+    """A computed map.
+
+    Attributes
+    ----------
+    state : State
+    preview : bool
+        The coarse preview (resolution / `PREVIEW_FACTOR`), not the final map.
+    x, y : ndarray
+        Pixel centres along the view's axes.
+    values : ndarray, shape (ny, nx)
+        The map's values (labels for a discrete map; NaN where there is none).
+    image : ndarray, shape (ny, nx), float64
+        What is drawn: for a discrete map the index into `legend`, else `values`.
+    legend : list of (value, str)
+        Discrete maps: each value shown, with its meaning (image index i is
+        ``legend[i]``).
+    title : str
+        Colour bar title: name and units (``"lyapunov_max [1/s]"``).
+    description : str
+        The map's long name.
+    da : xarray.DataArray
+        The map (2-D, dims (y, x)).
+    ds : xarray.Dataset or None
+        The run (final maps only).
+    seconds : float
+        Wall time of this stage (pilot included).
+    catalogue : dict or None
+        The pilot's attractor catalogue (forced basins).
+    """
+
+    state: State
+    preview: bool
+    x: np.ndarray
+    y: np.ndarray
+    values: np.ndarray
+    image: np.ndarray
+    legend: list
+    title: str
+    description: str
+    da: Any
+    ds: Any
+    seconds: float
+    catalogue: dict | None = None
+
+
+@dataclass
+class Trajectory:
+    """One start's trajectory.
+
+    Attributes
+    ----------
+    theta0, omega0 : float
+        The start [rad, rad/s] (for parameter axes: the state's start).
+    point : dict
+        The clicked pixel's axis values (``{x: value, y: value}``).
+    t, theta, omega : ndarray
+        Sampled time [s], angle [rad] and angular velocity [rad/s].
+    strobe_theta, strobe_omega : ndarray
+        Stroboscopic samples (forced scenes; empty otherwise) [rad, rad/s].
+    status : str
+        ``"ok"`` or the failure and its meaning.
+    label : str
+        The map's value at the pixel and its meaning.
+    python, toml : str
+        Code and run file that reproduce this trajectory.
+    """
+
+    theta0: float
+    omega0: float
+    point: dict
+    t: np.ndarray
+    theta: np.ndarray
+    omega: np.ndarray
+    strobe_theta: np.ndarray
+    strobe_omega: np.ndarray
+    status: str
+    label: str
+    python: str
+    toml: str
+
+
+# ------------------------------------------------------------------------ explorer
+def _fmt(value: float) -> str:
+    """A float as Python and TOML read it back exactly."""
+    return repr(float(value))
+
+
+class Explorer:
+    """State, validation, history and computation of the browser explorer.
+
+    Parameters
+    ----------
+    scene : Scene
+    grid : Grid
+        Its first two axes with more than one value are the map's x and y (others: the
+        first value); its ranges are the home view. ``theta0``/``omega0`` not among the
+        axes start at their grid value when the grid gives one, else 0.
+    quantity : str, optional
+        A key of `QUANTITIES` (default: `default_quantity`).
+    resolution : int, default 400
+        Pixels per axis of the final map.
+    cache : OrderedDict, optional
+        Final maps by state, shared with other explorers (an app's sessions).
+    **run_kwargs
+        `sweep.run` arguments: ``t_end`` and ``dt`` (required), ``t_transient``,
+        ``method``, ``device`` and the `PASSTHROUGH` ones; those the explorer sets per map
+        (`SET_BY_EXPLORER`: observe, stop_early, attractors, ...) are ignored.
+
+    Raises
+    ------
+    InvalidInput
+        On a value sweep's validators refuse (naming the control).
+    TypeError
+        On a keyword `sweep.run` does not take or the explorer cannot use.
+    """
+
+    def __init__(self, scene: Scene, grid: Grid, *, quantity: str | None = None,
+                 resolution: int = 400, cache: OrderedDict | None = None,
+                 **run_kwargs) -> None:
+        if not isinstance(scene, Scene):
+            raise TypeError(f"scene must be a sweep.Scene, got {scene!r}")
+        if not isinstance(grid, Grid):
+            raise TypeError(f"grid must be a sweep.Grid, got {grid!r}")
+        known = ("t_end", "dt", "t_transient", "method", "device") + PASSTHROUGH
+        unknown = sorted(set(run_kwargs) - set(known) - set(SET_BY_EXPLORER))
+        if unknown:
+            raise TypeError(f"explore: unknown keyword(s) {', '.join(unknown)}; accepted: "
+                            f"{', '.join(known)} (and sweep.run's {', '.join(SET_BY_EXPLORER)},"
+                            " which the explorer sets per map)")
+        for key in ("t_end", "dt"):
+            if key not in run_kwargs:
+                raise TypeError(f"explore: missing run keyword {key!r} (s); accepted: the "
+                                "keywords of sweep.run, t_end and dt required")
+        varying = [name for name in grid.dims if grid.axes[name].size > 1]
+        names = list(varying) + [n for n in AXES_INITIAL if n not in varying]
+        x, y = names[0], names[1]
+        ranges = {}
+        for name in (x, y):
+            values = np.asarray(grid.axes[name], dtype=float) if name in grid.axes else None
+            if values is None or values.size < 2:
+                ranges[name] = self._default_range(scene, name)
+            else:
+                lo, hi = float(values.min()), float(values.max())
+                half = 0.5 * (hi - lo) / (values.size - 1)  # the grid's points as centres
+                ranges[name] = (lo - half, hi + half)
+        start = tuple((n, float(grid.axes[n][0]) if n in grid.axes and
+                       grid.axes[n].size == 1 else 0.0) for n in AXES_INITIAL)
+        fixed = {n: float(v[0]) for n, v in grid.axes.items()
+                 if n not in (x, y) and n not in AXES_INITIAL}
+        if fixed:  # other axes: their first value goes into the scene
+            scene = self._with_parameters(scene, fixed)
+        if quantity is None:
+            quantity = default_quantity(scene)
+        extra = tuple((k, run_kwargs[k]) for k in PASSTHROUGH if k in run_kwargs)
+        state = State(scene=scene, view=View(x, y, ranges[x], ranges[y]), quantity=quantity,
+                      t_end=run_kwargs["t_end"], dt=run_kwargs["dt"],
+                      t_transient=run_kwargs.get("t_transient", 0.0),
+                      method=run_kwargs.get("method", "rk4"), resolution=resolution,
+                      start=start, extra=extra, device=run_kwargs.get("device", "cpu"))
+        self.validate(state, "explore")
+        self.state = state
+        self.home = state.view
+        self._history = [state.view]
+        self._position = 0
+        # final maps by state; an app's sessions share one (the start-up warm-up's map)
+        self._cache: OrderedDict[State, MapResult] = OrderedDict() if cache is None else cache
+        self._catalogues: OrderedDict[tuple, dict] = OrderedDict()
+        self._lock = COMPUTE_LOCK
+
+    # -- controls --------------------------------------------------------------
+    @staticmethod
+    def _default_range(scene: Scene, name: str) -> tuple[float, float]:
+        if name == "theta0":
+            return (-math.pi, math.pi)
+        if name == "omega0":
+            return (-2.0 * scene.natural_frequency, 2.0 * scene.natural_frequency)
+        value = scene.parameters().get(name, 1.0)
+        return (0.5 * value, 1.5 * value) if value else (0.0, 1.0)
+
+    def axes(self) -> tuple[str, ...]:
+        """Axes the map can show: the initial state, the pendulum's length and gravity,
+        and the parameters of the scene's effects (from their declarations)."""
+        names = list(AXES_INITIAL) + ["length", "gravity"]
+        for effect in self.state.scene.effects:
+            names += [p.axis for p in effect.declaration.parameters]
+        return tuple(names)
+
+    def quantities(self) -> dict[str, str]:
+        """``{name: label}`` of the quantities that apply to the current scene."""
+        return {q.name: q.label for q in QUANTITIES.values() if q.applies(self.state.scene)}
+
+    def parameter_controls(self) -> list[Control]:
+        """One control per parameter of the scene (pendulum and each effect), with the
+        units, long name and bound of its declaration (`sweep.physics.parameters`)."""
+        scene, shown = self.state.scene, (self.state.view.x, self.state.view.y)
+        values = scene.parameters()
+        out = []
+        declared = list(BASE_PARAMETERS[2:])
+        for effect in scene.effects:
+            declared += list(effect.declaration.parameters)
+        for p in declared:
+            bound = ""
+            if p.minimum is not None:
+                bound = f" ({'>' if p.strict else '>='} {p.minimum:g})"
+            note = " (on the map's axis)" if p.axis in shown else ""
+            out.append(Control(p.axis, f"{p.axis} {p.symbol} [{p.unit_text}]", "float",
+                               float(values[p.axis]), minimum=p.minimum, strict=p.strict,
+                               help=f"{p.long_name}{bound}{note}", group="scene"))
+        for name, value in self.state.start:
+            if name in shown:
+                continue
+            p = next(q for q in BASE_PARAMETERS if q.axis == name)
+            out.append(Control(name, f"{name} [{p.unit_text}]", "float", float(value),
+                               help=f"{p.long_name} (the start where it is not an axis)",
+                               group="scene"))
+        return out
+
+    def run_controls(self) -> list[Control]:
+        """Model, t_end, dt, t_transient, method and resolution."""
+        s = self.state
+        low, high = RESOLUTION_RANGE
+        return [
+            Control("model", "model", "choice", s.scene.model, choices=MODELS,
+                    help="nonlinear: sin(theta); linear: theta", group="run"),
+            Control("t_end", "t_end [s]", "float", float(s.t_end), minimum=0.0, strict=True,
+                    help="final time; t_end - t0 a whole number of steps dt", group="run"),
+            Control("dt", "dt [s]", "float", float(s.dt), minimum=0.0, strict=True,
+                    help="time step", group="run"),
+            Control("t_transient", "t_transient [s]", "float", float(s.t_transient),
+                    minimum=0.0, help="steady observables start after it", group="run"),
+            Control("method", "method", "choice", s.method, choices=tuple(METHODS),
+                    help="integrator (sweep.methods.METHODS)", group="run"),
+            Control("resolution", "resolution [pixels per axis]", "int", int(s.resolution),
+                    minimum=low, help=f"an integer from {low} to {high}", group="run"),
+        ]
+
+    # -- validation and updates ------------------------------------------------
+    @staticmethod
+    def _with_parameters(scene: Scene, values: dict[str, float]) -> Scene:
+        """``scene`` with parameter values replaced (validated by the effects)."""
+        spec = scene.to_dict()
+        for name, value in values.items():
+            if name in ("length", "gravity"):
+                spec[name] = value
+                continue
+            for effect in scene.effects:
+                for p in effect.declaration.parameters:
+                    if p.axis == name:
+                        spec[effect.declaration.name][p.field] = value
+                        break
+                else:
+                    continue
+                break
+            else:
+                accepted = [p.axis for p in parameters() if p.axis not in AXES_INITIAL]
+                raise ValueError(f"{name}: not a parameter of this scene; accepted: "
+                                 f"{', '.join(accepted)} of the scene's effects")
+        return Scene.from_dict(spec)
+
+    def grid(self, state: State | None = None, resolution: int | None = None,
+             rows: slice | None = None) -> Grid:
+        """The grid of ``state``'s map: y then x (so the map is (ny, nx)), and the start's
+        ``theta0``/``omega0`` as one-value axes where they are not shown."""
+        state = state or self.state
+        n = resolution or state.resolution
+        v = state.view
+        ys = centres(*v.y_range, n)
+        axes = {v.y: ys if rows is None else ys[rows], v.x: centres(*v.x_range, n)}
+        for name, value in state.start:
+            if name not in axes:
+                axes[name] = np.array([value])
+        return Grid(**axes)
+
+    def run_kwargs(self, state: State | None = None) -> dict:
+        """`sweep.run` keyword arguments of ``state``'s map (without the catalogue)."""
+        state = state or self.state
+        q = QUANTITIES[state.quantity]
+        kwargs = dict(t_end=state.t_end, dt=state.dt, t_transient=state.t_transient,
+                      method=state.method, observe=q.observe, **dict(state.extra))
+        if q.stop_early:
+            kwargs["stop_early"] = True
+        if state.device != "cpu":
+            kwargs["device"] = state.device
+        return kwargs
+
+    def uses_pilot(self, state: State | None = None) -> bool:
+        """Forced basins over the initial state: the attractors are catalogued first."""
+        state = state or self.state
+        return QUANTITIES[state.quantity].pilot and \
+            {state.view.x, state.view.y} <= set(AXES_INITIAL)
+
+    def validate(self, state: State, control: str) -> State:
+        """Check ``state`` as `sweep.run` would (`sweep.diskspace.layout`: scene, grid, settings,
+        stability, strobe period, ...) without computing; raise `InvalidInput` naming
+        ``control`` with the validator's message."""
+        try:
+            if state.quantity not in QUANTITIES:
+                raise ValueError(f"quantity {state.quantity!r} is unknown; accepted: "
+                                 f"{', '.join(QUANTITIES)}")
+            if not QUANTITIES[state.quantity].applies(state.scene):
+                names = [q.name for q in QUANTITIES.values() if q.applies(state.scene)]
+                raise ValueError(f"quantity {state.quantity!r} does not apply to this scene "
+                                 f"(effects: {', '.join(sorted(_effects(state.scene))) or 'none'}"
+                                 f"); accepted: {', '.join(names)}")
+            v = state.view
+            if v.x == v.y:
+                raise ValueError(f"x and y are both {v.x!r}; accepted: two different axes")
+            for name, (lo, hi) in ((v.x, v.x_range), (v.y, v.y_range)):
+                if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                    raise ValueError(f"range of {name} must be finite with start < end, got "
+                                     f"({lo!r}, {hi!r})")
+            low, high = RESOLUTION_RANGE
+            r = state.resolution
+            if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or \
+                    not low <= r <= high:
+                raise ValueError(f"resolution must be an integer from {low} to {high} "
+                                 f"(pixels per axis), got {r!r}")
+            run_layout(state.scene, self.grid(state), **self.run_kwargs(state))
+        except InvalidInput:
+            raise
+        except (ValueError, TypeError) as exc:
+            raise InvalidInput(control, " ".join(str(exc).split())) from None
+        return state
+
+    def update(self, **changes) -> State:
+        """Change settings; validated before anything is computed.
+
+        Parameters
+        ----------
+        **changes
+            ``quantity``, ``x``, ``y`` (axis names; a new axis gets its default range),
+            ``model``, ``t_end``, ``dt``, ``t_transient``, ``method``, ``resolution``,
+            ``device``, and any parameter of the scene or ``theta0``/``omega0`` by its
+            axis name (``damping=0.25``).
+
+        Returns
+        -------
+        State
+            The new current state.
+
+        Raises
+        ------
+        InvalidInput
+            Naming the first control changed and the validator's message; the state is
+            unchanged.
+        """
+        if not changes:
+            return self.state
+        control = next(iter(changes))
+        state = self.state
+        try:
+            values = {}
+            for name, value in changes.items():
+                if isinstance(value, (bool, np.bool_)) or (
+                        name not in ("quantity", "x", "y", "model", "method", "device")
+                        and not isinstance(value, (int, float, np.integer, np.floating))):
+                    raise TypeError(f"{name} must be a number, got {value!r}")
+                if name in ("t_end", "dt", "t_transient"):
+                    state = dataclasses.replace(state, **{name: float(value)})
+                elif name == "resolution":
+                    state = dataclasses.replace(state, resolution=value)
+                elif name in ("quantity", "method", "device"):
+                    state = dataclasses.replace(state, **{name: value})
+                elif name == "model":
+                    spec = state.scene.to_dict()
+                    spec["model"] = value
+                    state = dataclasses.replace(state, scene=Scene.from_dict(spec))
+                elif name in ("x", "y"):
+                    if value not in self.axes():
+                        raise ValueError(f"{name} axis {value!r} is not offered; accepted: "
+                                         f"{', '.join(self.axes())}")
+                    v = state.view
+                    other = v.y if name == "x" else v.x
+                    if value == other:  # swap
+                        view = View(v.y, v.x, v.y_range, v.x_range)
+                    elif name == "x":
+                        view = View(value, v.y, self._axis_range(state, value), v.y_range)
+                    else:
+                        view = View(v.x, value, v.x_range, self._axis_range(state, value))
+                    state = dataclasses.replace(state, view=view)
+                elif name in AXES_INITIAL:
+                    start = tuple((n, float(value) if n == name else v)
+                                  for n, v in state.start)
+                    if not math.isfinite(float(value)):
+                        raise ValueError(f"{name} must be a finite number, got {value!r}")
+                    state = dataclasses.replace(state, start=start)
+                else:
+                    values[name] = float(value)
+            if values:
+                state = dataclasses.replace(
+                    state, scene=self._with_parameters(state.scene, values))
+        except (ValueError, TypeError) as exc:
+            raise InvalidInput(control, " ".join(str(exc).split())) from None
+        self.validate(state, control)
+        view_changed = state.view != self.state.view
+        self.state = state
+        if view_changed:
+            self._push(state.view)
+        return state
+
+    def set_parameter(self, name: str, value: float) -> State:
+        """`update` of one parameter by its axis name."""
+        return self.update(**{name: value})
+
+    def _axis_range(self, state: State, name: str) -> tuple[float, float]:
+        if name == self.home.x:
+            return self.home.x_range
+        if name == self.home.y:
+            return self.home.y_range
+        if name in AXES_INITIAL:
+            return self._default_range(state.scene, name)
+        value = state.scene.parameters().get(name, 1.0)
+        return (0.5 * value, 1.5 * value) if value else (0.0, 1.0)
+
+    # -- history -----------------------------------------------------------------
+    def zoom(self, x_range, y_range) -> State:
+        """Show the window ``x_range`` x ``y_range`` (box-zoom, wheel, pan); adds it to
+        the history. Raises `InvalidInput` (control ``"view"``) on a refused window."""
+        try:
+            x_range = tuple(float(v) for v in x_range)
+            y_range = tuple(float(v) for v in y_range)
+            if len(x_range) != 2 or len(y_range) != 2:
+                raise ValueError("a range is two numbers (start, end)")
+        except (TypeError, ValueError) as exc:
+            raise InvalidInput("view", f"zoom: {exc}") from None
+        v = self.state.view
+        state = dataclasses.replace(self.state, view=View(v.x, v.y, x_range, y_range))
+        self.validate(state, "view")
+        self.state = state
+        self._push(state.view)
+        return state
+
+    def _push(self, view: View) -> None:
+        if self._history[self._position] == view:
+            return
+        del self._history[self._position + 1:]
+        self._history.append(view)
+        self._position += 1
+
+    def _go(self, position: int) -> State:
+        view = self._history[position]
+        state = dataclasses.replace(self.state, view=view)
+        self.validate(state, "view")
+        self._position = position
+        self.state = state
+        return state
+
+    @property
+    def history(self) -> list[View]:
+        """The views visited, oldest first."""
+        return list(self._history)
+
+    @property
+    def position(self) -> int:
+        """Index of the current view in `history`."""
+        return self._position
+
+    def can_go_back(self) -> bool:
+        return self._position > 0
+
+    def can_go_forward(self) -> bool:
+        return self._position < len(self._history) - 1
+
+    def back(self) -> State:
+        """The previous view (unchanged at the first)."""
+        return self._go(max(0, self._position - 1))
+
+    def forward(self) -> State:
+        """The next view (unchanged at the last)."""
+        return self._go(min(len(self._history) - 1, self._position + 1))
+
+    def reset(self) -> State:
+        """The home view (the start-up window, with the current axes if they are the
+        home's), added to the history."""
+        v = self.state.view
+        if (v.x, v.y) == (self.home.x, self.home.y):
+            view = self.home
+        else:
+            view = View(v.x, v.y, self._axis_range(self.state, v.x),
+                        self._axis_range(self.state, v.y))
+        state = dataclasses.replace(self.state, view=view)
+        self.validate(state, "view")
+        self.state = state
+        self._push(view)
+        return state
+
+    # -- computation -------------------------------------------------------------
+    def catalogue(self, state: State | None = None) -> dict | None:
+        """The pilot's attractor catalogue of ``state`` (forced basins over the initial
+        state), from the final grid as ``sweep run --pilot 41`` makes it; cached."""
+        state = state or self.state
+        if not self.uses_pilot(state):
+            return None
+        key = (state.scene, state.view, state.resolution, state.t_end, state.dt,
+               state.t_transient, state.method, state.extra, state.device)
+        if key not in self._catalogues:
+            self._catalogues[key] = maps.pilot_catalogue(
+                state.scene, self.grid(state), PILOT_POINTS, **self.run_kwargs(state))
+            while len(self._catalogues) > 8:
+                self._catalogues.popitem(last=False)
+        return self._catalogues[key]
+
+    def compute(self, state: State | None = None, *, preview: bool = False,
+                cancel: CancelToken | None = None) -> MapResult:
+        """Compute ``state``'s map (default: the current state).
+
+        Parameters
+        ----------
+        state : State, optional
+        preview : bool, default False
+            The coarse preview: resolution / `PREVIEW_FACTOR` per axis, in one run.
+        cancel : CancelToken, optional
+            Checked between bands (and before the run); `Cancelled` is raised once set.
+
+        Returns
+        -------
+        MapResult
+        """
+        state = state or self.state
+        if not preview and state in self._cache:
+            self._cache.move_to_end(state)
+            return self._cache[state]
+        cancel = cancel or CancelToken()
+        with self._lock:
+            cancel.check()
+            begin = time.perf_counter()
+            kwargs = self.run_kwargs(state)
+            catalogue = self.catalogue(state)
+            if catalogue is not None:
+                kwargs["attractors"] = catalogue
+            cancel.check()
+            if preview:
+                n = max(RESOLUTION_RANGE[0], state.resolution // PREVIEW_FACTOR)
+                ds = self._run(state, self.grid(state, n), kwargs)
+            else:
+                ds = self._run_bands(state, kwargs, cancel)
+            cancel.check()
+            result = self._image(state, ds, preview, catalogue)
+            result.seconds = time.perf_counter() - begin
+        if not preview:
+            self._cache[state] = result
+            while len(self._cache) > CACHE_SIZE:
+                self._cache.popitem(last=False)
+        return result
+
+    def stages(self, state: State, cancel: CancelToken, emit: Callable[[MapResult], None]
+               ) -> MapResult:
+        """The preview (skipped when the final map is cached), then the final map; each is
+        passed to ``emit`` as it is ready. Raises `Cancelled` once ``cancel`` is set."""
+        if state not in self._cache:
+            emit(self.compute(state, preview=True, cancel=cancel))
+        final = self.compute(state, cancel=cancel)
+        cancel.check()
+        emit(final)
+        return final
+
+    @staticmethod
+    def _run(state: State, grid: Grid, kwargs: dict):
+        import warnings
+
+        with warnings.catch_warnings():  # failures are in the status, shown per start
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return sweep_run(state.scene, grid, progress=False, **kwargs)
+
+    def _run_bands(self, state: State, kwargs: dict, cancel: CancelToken):
+        """The final map as up to `BANDS` runs of whole rows (each >= `BAND_MIN`
+        trajectories), concatenated along y: the same values as one run (results do not
+        depend on how the work is cut), with a cancel check between bands."""
+        import xarray as xr
+
+        n = state.resolution
+        rows = max(1, min(n, max(math.ceil(n / BANDS), math.ceil(BAND_MIN / n))))
+        parts = []
+        for first in range(0, n, rows):
+            cancel.check()
+            parts.append(self._run(state, self.grid(state, rows=slice(first, first + rows)),
+                                   kwargs))
+        if len(parts) == 1:
+            return parts[0]
+        return xr.concat(parts, dim=state.view.y, data_vars="minimal", coords="minimal",
+                         compat="override", combine_attrs="override")
+
+    def _image(self, state: State, ds, preview: bool, catalogue) -> MapResult:
+        q = QUANTITIES[state.quantity]
+        v = state.view
+        da = q.compute(ds)
+        extra = [d for d in da.dims if d not in (v.x, v.y)]
+        da = da.squeeze(extra).transpose(v.y, v.x)
+        values = np.asarray(da.values)
+        from ..plot import units_text
+
+        units = str(da.attrs.get("units", ""))
+        name = str(da.name) if da.name is not None else state.quantity
+        if q.discrete:
+            legend, image = _legend(state.quantity, da, values)
+        else:
+            legend = []
+            image = values.astype(np.float64)
+        title = f"{name} [{units_text(units)}]" if units and units != "1" else name
+        return MapResult(state=state, preview=preview, x=np.asarray(da[v.x].values),
+                         y=np.asarray(da[v.y].values), values=values, image=image,
+                         legend=legend, title=title,
+                         description=str(da.attrs.get("long_name", name)), da=da,
+                         ds=None if preview else ds,
+                         seconds=0.0, catalogue=catalogue)
+
+    def value_at(self, result: MapResult, x: float, y: float) -> tuple[int, int]:
+        """Indices ``(row, column)`` of the pixel of ``result`` nearest ``(x, y)``."""
+        return (int(np.argmin(np.abs(result.y - y))), int(np.argmin(np.abs(result.x - x))))
+
+    def label_at(self, result: MapResult, row: int, col: int) -> str:
+        """The map's value at a pixel, with its meaning."""
+        value = result.values[row, col]
+        if result.legend:
+            index = result.image[row, col]
+            if np.isfinite(index):
+                return f"{result.legend[int(index)][1]} ({_number(value)})"
+            return "none"
+        return f"{_number(value)} ({result.title})"
+
+    # -- one trajectory ---------------------------------------------------------
+    def trajectory(self, x: float, y: float, result: MapResult | None = None,
+                   state: State | None = None) -> Trajectory:
+        """The trajectory of the map's start nearest ``(x, y)`` (snapped to the pixel
+        centre of ``result`` when given, so it is one of the map's starts).
+
+        Returns
+        -------
+        Trajectory
+            Sampled theta(t) and omega(t) (save_every chosen to keep at most
+            `TRAJECTORY_SAMPLES`), stroboscopic points (forced scenes), status, the map's
+            label at that pixel, and the code and run file that reproduce it.
+        """
+        state = state or (result.state if result is not None else self.state)
+        v = state.view
+        label = ""
+        try:
+            x, y = float(x), float(y)
+        except (TypeError, ValueError):
+            raise InvalidInput("view", f"a start is two numbers, got ({x!r}, {y!r})") from None
+        if result is not None:
+            row, col = self.value_at(result, x, y)
+            x, y = float(result.x[col]), float(result.y[row])
+            label = self.label_at(result, row, col)
+        axes, kwargs = self._trajectory_inputs(state, x, y)
+        with self._lock:
+            ds = self._run(state, Grid(**axes), kwargs)
+        one = {d: 0 for d in ds.status.dims}
+        code = int(ds.status.isel(one))
+        status = Status(code)
+        status_text = "ok" if status == Status.OK else f"{status.name.lower()}: {status.message}"
+        if "strobe_theta" in ds:
+            st = np.asarray(ds.strobe_theta.isel(one).values)
+            so = np.asarray(ds.strobe_omega.isel(one).values)
+            keep = np.isfinite(st)
+            st, so = st[keep], so[keep]
+        else:
+            st = so = np.empty(0)
+        if not label:
+            label = _MOTION_TEXT.get(int(maps.motion(ds).isel(one)), "")
+        start = dict(state.start)
+        return Trajectory(
+            theta0=float(axes["theta0"][0]), omega0=float(axes["omega0"][0]),
+            point={v.x: x, v.y: y}, t=np.asarray(ds.time.values),
+            theta=np.asarray(ds.theta.isel(one).values),
+            omega=np.asarray(ds.omega.isel(one).values), strobe_theta=st, strobe_omega=so,
+            status=status_text, label=label,
+            python=self._python(state, Grid(**axes), kwargs, None, trajectory=True),
+            toml=self._toml(state, axes, kwargs, pilot=False,
+                            comment=f"one trajectory of the explorer's map, from "
+                                    f"{v.x} = {x!r}, {v.y} = {y!r}"
+                                    + ("" if v.x in start and v.y in start else
+                                       f" (theta0 = {start['theta0']!r}, omega0 = "
+                                       f"{start['omega0']!r})")))
+
+    def _trajectory_inputs(self, state: State, x: float, y: float):
+        v = state.view
+        axes = {name: np.array([value]) for name, value in state.start}
+        axes[v.x] = np.array([x])
+        axes[v.y] = np.array([y])
+        kwargs = dict(t_end=state.t_end, dt=state.dt, t_transient=state.t_transient,
+                      method=state.method, **dict(state.extra))
+        observe = ["final", "winding"]
+        steps = int(round((state.t_end - kwargs.get("t0", 0.0)) / state.dt))
+        kwargs["save_every"] = max(1, math.ceil(steps / TRAJECTORY_SAMPLES))
+        if _forced(state.scene) and "forcing_frequency" not in (v.x, v.y):
+            frequency = state.scene.forcing.frequency
+            if frequency > 0:
+                period = 2 * math.pi / frequency
+                observed = state.t_end - kwargs.get("t0", 0.0) - state.t_transient
+                samples = int(min(4096, max(2, math.floor(observed / period + 1e-9))))
+                steps_per_period = period / state.dt
+                if abs(steps_per_period - round(steps_per_period)) < 1e-6 * steps_per_period:
+                    observe.append("strobe")
+                    kwargs["strobe_samples"] = samples
+        kwargs["observe"] = tuple(observe)
+        if state.device != "cpu":
+            kwargs["device"] = state.device
+        return axes, kwargs
+
+    # -- reproduction -----------------------------------------------------------
+    def python_snippet(self, state: State | None = None) -> str:
+        """Python that recomputes ``state``'s map exactly (same grid floats, settings and
+        pilot), ending with ``image = <the map>``."""
+        state = state or self.state
+        return self._python(state, self.grid(state), self.run_kwargs(state),
+                            QUANTITIES[state.quantity], pilot=self.uses_pilot(state))
+
+    def toml_text(self, state: State | None = None) -> str:
+        """A run file (`sweep.toml_spec.load_run`) that recomputes ``state``'s map:
+        ``sweep run THIS.toml -o map.nc``, then the map named in its first line."""
+        state = state or self.state
+        q = QUANTITIES[state.quantity]
+        v = state.view
+        n = state.resolution
+        axes = {}
+        for name, rng in ((v.y, v.y_range), (v.x, v.x_range)):
+            c = centres(*rng, n)
+            axes[name] = {"start": float(c[0]), "stop": float(c[-1]), "num": n}
+        for name, value in state.start:
+            if name not in axes:
+                axes[name] = float(value)
+        return self._toml(state, axes, self.run_kwargs(state), pilot=self.uses_pilot(state),
+                          comment=f"the explorer's map: {q.label}; after sweep run, "
+                                  f"image = {q.expression} (ds = sweep.load(OUT.nc)"
+                                  f"{', from sweep import maps' if 'maps.' in q.expression else ''})")
+
+    @staticmethod
+    def _python(state: State, grid: Grid, kwargs: dict, quantity: Quantity | None, *,
+                pilot: bool = False, trajectory: bool = False) -> str:
+        lines = ["import numpy as np", "import sweep", "from sweep import maps", "",
+                 f"scene = sweep.Scene.from_dict({state.scene.to_dict()!r})"]
+        axes = []
+        for name, values in grid.axes.items():
+            values = np.asarray(values)
+            if values.size == 1:
+                axes.append(f"{name}=[{_fmt(values[0])}]")
+            else:
+                axes.append(f"{name}=np.linspace({_fmt(values[0])}, {_fmt(values[-1])}, "
+                            f"{values.size})")
+        lines.append(f"grid = sweep.Grid({', '.join(axes)})")
+        items = ", ".join(f"{k}={v!r}" for k, v in kwargs.items())
+        lines.append(f"kwargs = dict({items})")
+        if pilot:
+            lines.append(f"kwargs['attractors'] = maps.pilot_catalogue(scene, grid, "
+                         f"{PILOT_POINTS}, **kwargs)")
+        lines.append("ds = sweep.run(scene, grid, **kwargs)")
+        if trajectory:
+            lines.append("sweep.plot.trajectory(ds)  # theta(t) and the phase portrait")
+        elif quantity is not None:
+            lines.append(f"image = {quantity.expression}")
+        return "\n".join(lines) + "\n"
+
+    @staticmethod
+    def _toml(state: State, axes: dict, kwargs: dict, *, pilot: bool, comment: str) -> str:
+        spec = state.scene.to_dict()
+        out = [f"# {comment}", "# written by sweep explore; run: sweep run THIS.toml -o OUT.nc",
+               "", "[scene]"]
+        for key in ("gravity", "length", "model"):
+            out.append(f"{key} = {_toml_value(spec[key])}")
+        for name in EFFECTS:
+            if name in spec:
+                out += ["", f"[scene.{name}]"]
+                out += [f"{k} = {_toml_value(v)}" for k, v in spec[name].items()]
+        out += ["", "[grid]"]
+        for name, value in axes.items():
+            if isinstance(value, np.ndarray):
+                value = float(value[0]) if value.size == 1 else [float(x) for x in value]
+            out.append(f"{name} = {_toml_value(value)}")
+        out += ["", "[run]"]
+        for key, value in kwargs.items():
+            out.append(f"{key} = {_toml_value(value)}")
+        if pilot:
+            out.append(f"pilot = {PILOT_POINTS}")
+        return "\n".join(out) + "\n"
+
+    # -- exports ------------------------------------------------------------------
+    def netcdf_bytes(self, result: MapResult) -> bytes:
+        """The final map's run as netCDF (written by `sweep.save`: its provenance
+        attributes), with the map added as a variable and ``explore_quantity`` /
+        ``explore_map`` attributes naming it."""
+        if result.ds is None:
+            result = self.compute(result.state)
+        ds = result.ds.copy()
+        name = str(result.da.name or "map")
+        if name in ds:
+            name = f"{name}_map"
+        da = result.da.copy()
+        da.attrs = {k: v for k, v in da.attrs.items() if not isinstance(v, bool)}
+        if da.dtype == bool:
+            da = da.astype(np.int8)
+        ds[name] = da.transpose(*[d for d in ds.status.dims if d in da.dims])
+        ds.attrs["explore_quantity"] = result.state.quantity
+        ds.attrs["explore_map"] = name
+        with tempfile.TemporaryDirectory(prefix="sweep-explore-") as folder:
+            path = Path(folder) / "map.nc"
+            sweep_io.save(ds, path)
+            return path.read_bytes()
+
+    def png_bytes(self, result: MapResult, dpi: int = 120) -> bytes:
+        """The map drawn by `sweep.plot` (basins: `plot.basins`; others: `plot.map`), as
+        PNG (matplotlib's Agg canvas; no pyplot, so no GUI backend is touched)."""
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        from .. import plot
+
+        v = result.state.view
+        fig = Figure(figsize=(7.0, 5.4), layout="constrained")
+        FigureCanvasAgg(fig)
+        ax = fig.add_subplot()
+        da = result.da.transpose(v.x, v.y)
+        title = f"{QUANTITIES[result.state.quantity].label}"
+        degrees = False
+        if result.state.quantity == "basins":
+            plot.basins(da, ax=ax, degrees=degrees, title=title)
+        else:
+            if da.dtype == bool:
+                da = da.astype(np.int8)
+            plot.map(da, ax=ax, degrees=degrees, title=title)
+        buffer = _stdio.BytesIO()
+        fig.savefig(buffer, format="png", dpi=dpi)
+        return buffer.getvalue()
+
+
+def _number(value) -> str:
+    value = float(value)
+    if not math.isfinite(value):
+        return "NaN"
+    return f"{int(value):d}" if value == int(value) and abs(value) < 1e15 else f"{value:.6g}"
+
+
+def _toml_value(value) -> str:
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        return _fmt(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + "}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"cannot write {value!r} to a run file")
+
+
+_MOTION_TEXT = {-1: "rotation, negative sense", 0: "libration", 1: "rotation, positive sense",
+                -127: "unresolved (failed)"}
+
+
+def _legend(quantity: str, da, values: np.ndarray) -> tuple[list, np.ndarray]:
+    """``(legend, image)`` of a discrete map: the distinct values present (NaN as its own
+    entry) and each pixel's index into them."""
+    v = np.asarray(values, dtype=np.float64)
+    finite = np.isfinite(v)
+    found = np.unique(v[finite])
+    image = np.full(v.shape, np.nan)
+    image[finite] = np.searchsorted(found, v[finite])
+    legend = [(float(value), _meaning(quantity, da, float(value))) for value in found]
+    if not finite.all():
+        nan_text = {"well": "not captured by t_end (or failed)"}.get(quantity, "none")
+        image[~finite] = len(legend)
+        legend.append((math.nan, nan_text))
+    return legend, image
+
+
+def _meaning(quantity: str, da, value: float) -> str:
+    k = int(value)
+    if quantity == "well":
+        return f"well {k} (rest at theta = {k} x 2 pi)"
+    if quantity == "motion":
+        return _MOTION_TEXT.get(k, str(k))
+    if quantity == "period":
+        return "no period found" if k < 0 else f"period {k}"
+    if quantity == "inverted":
+        return "stays up" if k else "falls"
+    if quantity == "basins":
+        if k < 0:
+            return "unresolved"
+        a = da.attrs
+        try:
+            period = int(np.atleast_1d(a["attractor_period"])[k])
+            turns = float(np.atleast_1d(a["attractor_turns_per_period"])[k])
+            return f"attractor {k}: period {period}, {turns:+g} turns/period"
+        except (KeyError, IndexError):
+            return f"attractor {k}"
+    return f"{k}"
+
+
+# ------------------------------------------------------------------------ requests
+class Requests:
+    """Compute maps off the caller's thread: the newest request wins.
+
+    One worker thread takes the latest request (a newer one replaces a waiting one, and
+    cancels the one computing, which stops at its next band), computes its preview and
+    final map (`Explorer.stages`) and reports each with ``on_result(request_id,
+    result)``; errors go to ``on_error(request_id, exception)``, cancellations to
+    ``on_cancel(request_id)``. Callbacks run on the worker thread.
+
+    Parameters
+    ----------
+    explorer : Explorer
+    on_result, on_error, on_cancel : callable
+    """
+
+    def __init__(self, explorer: Explorer, on_result, on_error=None, on_cancel=None) -> None:
+        self.explorer = explorer
+        self.on_result = on_result
+        self.on_error = on_error or (lambda request, exc: None)
+        self.on_cancel = on_cancel or (lambda request: None)
+        self._condition = threading.Condition()
+        self._pending = None
+        self._token: CancelToken | None = None
+        self._closed = False
+        self._count = 0
+        self._busy = False
+        self._thread = threading.Thread(target=self._loop, name="sweep-explore", daemon=True)
+        self._thread.start()
+
+    def submit(self, state: State) -> int:
+        """Ask for ``state``'s map; cancels the request computing. Returns its id."""
+        with self._condition:
+            if self._token is not None:
+                self._token.cancel()
+            self._count += 1
+            self._token = CancelToken()
+            self._pending = (self._count, state, self._token)
+            self._condition.notify()
+            return self._count
+
+    def idle(self, timeout: float | None = None) -> bool:
+        """Wait until nothing is pending or computing; False on timeout."""
+        end = None if timeout is None else time.monotonic() + timeout
+        with self._condition:
+            while self._pending is not None or self._busy:
+                left = None if end is None else end - time.monotonic()
+                if left is not None and left <= 0:
+                    return False
+                self._condition.wait(left)
+        return True
+
+    def close(self) -> None:
+        """Cancel what is computing and stop the worker."""
+        with self._condition:
+            self._closed = True
+            if self._token is not None:
+                self._token.cancel()
+            self._condition.notify_all()
+
+    def _loop(self) -> None:
+        while True:
+            with self._condition:
+                while self._pending is None and not self._closed:
+                    self._condition.wait()
+                if self._closed:
+                    return
+                request, state, token = self._pending
+                self._pending = None
+                self._busy = True
+            try:
+                self.explorer.stages(state, token,
+                                     lambda result, request=request: self.on_result(request,
+                                                                                    result))
+            except Cancelled:
+                self.on_cancel(request)
+            except Exception as exc:  # reported to the page, never raised into the loop
+                self.on_error(request, exc)
+            finally:
+                with self._condition:
+                    self._busy = False
+                    self._condition.notify_all()
+
+
+def rss_bytes() -> int:
+    """This process's resident memory [bytes] (Linux ``/proc/self/statm``; 0 elsewhere)."""
+    try:
+        with open("/proc/self/statm") as handle:
+            return int(handle.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return 0

@@ -1,0 +1,420 @@
+"""The explorer's model without a browser: state -> grid -> run -> image, history,
+cancellation, every map kind, refused input, and the snippets and exports that
+reproduce a map (sweep.explore.model; no Panel needed)."""
+
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+import pytest
+
+import sweep
+from sweep import maps
+from sweep.explore import model
+from sweep.physics import Effect, EffectDeclaration, Parameter, register, unregister
+from sweep.explore.model import (QUANTITIES, CancelToken, Cancelled, Explorer, InvalidInput,
+                                 Requests, centres)
+from sweep.toml_spec import load_run
+
+N = 24  # pixels per axis: small maps, the code paths are those of 400 x 400
+PERIOD = 2 * np.pi  # the forced scene's forcing period (W = 1 rad/s) [s]
+
+
+def demo():
+    """The demo scene of `sweep demo` (damped, unforced) on its phase-plane window."""
+    from sweep.cli import demo_inputs
+
+    scene, grid, kwargs = demo_inputs(N)
+    return scene, grid, kwargs
+
+
+def wada():
+    """The forced scene of examples/forced_basins.py (three attractors, Wada basins),
+    shortened: 60 forcing periods, 20 of them transient, 50 steps per period."""
+    scene = sweep.Scene(gravity=1.0, length=1.0,
+                        effects=(sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, np.pi / 2)))
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, N), omega0=np.linspace(-4, 4, N))
+    return scene, grid, dict(t_end=60 * PERIOD, dt=PERIOD / 50, t_transient=20 * PERIOD)
+
+
+def torque():
+    """A constant torque with damping: locked versus running (examples/torque_...)."""
+    scene = sweep.Scene(effects=(sweep.Damping(0.5), sweep.Torque(5.0)))
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, N), omega0=np.linspace(-6, 6, N))
+    return scene, grid, dict(t_end=20.0, dt=0.02, t_transient=10.0)
+
+
+def pivot():
+    """Kapitza's pendulum over (pivot_amplitude, pivot_frequency), from near the top."""
+    scene = sweep.Scene(effects=(sweep.Damping(0.2), sweep.PivotDrive(0.05, 200.0, 0.0)))
+    grid = sweep.Grid(theta0=[np.pi - 0.1], pivot_amplitude=np.linspace(0.01, 0.1, N),
+                      pivot_frequency=np.linspace(20.0, 200.0, N))
+    return scene, grid, dict(t_end=5.0, dt=0.002, t_transient=4.0)
+
+
+def explorer(make=demo, **extra):
+    scene, grid, kwargs = make()
+    return Explorer(scene, grid, resolution=N, **kwargs, **extra)
+
+
+# ------------------------------------------------------------------ state -> image
+def test_state_grid_run_image_is_sweep_run_and_maps():
+    e = explorer()
+    s = e.state
+    assert (s.view.x, s.view.y, s.quantity) == ("theta0", "omega0", "well")
+    grid = e.grid()
+    assert grid.dims == ("omega0", "theta0") and grid.shape == (N, N)
+    # the demo grid's points are the home view's pixel centres
+    np.testing.assert_allclose(grid.axes["theta0"], np.linspace(-np.pi, np.pi, N),
+                               rtol=0, atol=1e-12)  # centres of (lo - h/2, hi + h/2)
+    result = e.compute()
+    ds = sweep.run(s.scene, grid, **e.run_kwargs(), progress=False)
+    expected = maps.well(ds).values
+    assert result.values.shape == (N, N)
+    np.testing.assert_array_equal(result.values, expected)
+    # discrete map: the image indexes the legend, which names each well
+    assert result.legend and all("well" in text for _, text in result.legend
+                                 if math.isfinite(_))
+    for (row, col) in [(0, 0), (N // 2, N // 2), (N - 1, 3)]:
+        value, text = result.legend[int(result.image[row, col])]
+        assert value == expected[row, col]
+    assert result.title == "well" and "rest at theta" in result.description
+
+
+def test_bands_give_the_one_run_map(monkeypatch):
+    e = explorer()
+    whole = e.compute().values
+    monkeypatch.setattr(model, "BAND_MIN", 1)  # 8 bands of 3 rows
+    calls = []
+    run = Explorer._run
+
+    def counting(state, grid, kwargs):
+        calls.append(grid.shape)
+        return run(state, grid, kwargs)
+
+    monkeypatch.setattr(Explorer, "_run", staticmethod(counting))
+    e._cache.clear()
+    banded = e.compute()
+    assert len(calls) == model.BANDS and all(shape == (N // model.BANDS, N) for shape in calls)
+    np.testing.assert_array_equal(banded.values, whole)
+    assert banded.ds.sizes == {"omega0": N, "theta0": N}
+
+
+def test_zoom_recomputes_the_window_at_full_resolution():
+    e = explorer()
+    home = e.compute()
+    e.zoom((0.5, 1.5), (-3.0, -1.0))
+    zoomed = e.compute()
+    assert zoomed.values.shape == (N, N)  # never a scaled image
+    np.testing.assert_allclose(zoomed.x, centres(0.5, 1.5, N), rtol=0, atol=0)
+    assert zoomed.x.min() > 0.5 and zoomed.x.max() < 1.5
+    assert zoomed.y.min() > -3.0 and zoomed.y.max() < -1.0
+    assert not np.array_equal(zoomed.values, home.values)
+
+
+def test_preview_is_coarse_and_agrees_where_it_samples_the_same_map():
+    e = explorer()
+    e.update(resolution=40)
+    preview = e.compute(preview=True)
+    assert preview.preview and preview.values.shape == (10, 10)
+    assert preview.ds is None  # previews keep no dataset
+    final = e.compute()
+    assert not final.preview and final.values.shape == (40, 40)
+
+
+# ------------------------------------------------------------------ history
+def test_history_back_forward_reset():
+    e = explorer()
+    home = e.state.view
+    a = e.zoom((-1.0, 1.0), (-2.0, 2.0)).view
+    b = e.zoom((0.0, 1.0), (0.0, 2.0)).view
+    assert e.history == [home, a, b] and e.position == 2
+    assert e.back().view == a and e.back().view == home
+    assert not e.can_go_back() and e.back().view == home  # stays at the first
+    assert e.forward().view == a
+    c = e.zoom((0.0, 0.5), (0.0, 1.0)).view  # a new view drops the forward branch
+    assert e.history == [home, a, c] and not e.can_go_forward()
+    assert e.reset().view == home and e.history[-1] == home
+    # changing an axis is a new view too
+    e.update(x="damping")
+    assert e.state.view.x == "damping" and e.history[-1] == e.state.view
+    assert e.back().view == home
+
+
+def test_swapping_axes():
+    e = explorer()
+    v = e.state.view
+    e.update(x="omega0")
+    assert (e.state.view.x, e.state.view.y) == ("omega0", "theta0")
+    assert (e.state.view.x_range, e.state.view.y_range) == (v.y_range, v.x_range)
+
+
+# ------------------------------------------------------------------ cancellation
+def test_a_cancelled_token_computes_nothing(monkeypatch):
+    e = explorer()
+    token = CancelToken()
+    token.cancel()
+    monkeypatch.setattr(Explorer, "_run", staticmethod(lambda *a: pytest.fail("ran")))
+    with pytest.raises(Cancelled):
+        e.compute(cancel=token)
+
+
+def test_cancel_lands_between_bands(monkeypatch):
+    e = explorer()
+    monkeypatch.setattr(model, "BAND_MIN", 1)
+    token = CancelToken()
+    bands = []
+    run = Explorer._run
+
+    def cancel_after_first(state, grid, kwargs):
+        bands.append(grid.shape)
+        token.cancel()  # a newer request arrives while the first band computes
+        return run(state, grid, kwargs)
+
+    monkeypatch.setattr(Explorer, "_run", staticmethod(cancel_after_first))
+    with pytest.raises(Cancelled):
+        e.compute(cancel=token)
+    assert len(bands) == 1  # the other 7 bands never ran
+    assert e.state not in e._cache  # nothing half-made is kept
+
+
+def test_requests_newest_wins(monkeypatch):
+    e = explorer()
+    monkeypatch.setattr(model, "BAND_MIN", 1)
+    started = threading.Event()
+    release = threading.Event()
+    run = Explorer._run
+
+    def slow(state, grid, kwargs):
+        started.set()
+        release.wait(10)
+        return run(state, grid, kwargs)
+
+    monkeypatch.setattr(Explorer, "_run", staticmethod(slow))
+    results, cancelled, errors = [], [], []
+    requests = Requests(e, lambda r, res: results.append((r, res)),
+                        lambda r, exc: errors.append(exc), cancelled.append)
+    first = requests.submit(e.state)
+    assert started.wait(10)
+    second_state = e.zoom((0.0, 1.0), (0.0, 1.0))
+    second = requests.submit(second_state)
+    release.set()
+    assert requests.idle(60)
+    requests.close()
+    assert not errors
+    assert cancelled == [first]
+    assert [r for r, _ in results] == [second, second]  # its preview, then its map
+    assert [res.preview for _, res in results] == [True, False]
+    assert results[-1][1].state == second_state
+
+
+# ------------------------------------------------------------------ every map kind
+CASES = [(demo, q) for q in ("well", "motion", "lyapunov_max", "amplitude", "var:theta_final",
+                              "var:omega_final", "var:winding", "var:theta_max",
+                              "var:omega_mean", "var:energy_final", "var:tension_max",
+                              "var:top_distance_max")]
+CASES += [(wada, "basins"), (wada, "period"), (wada, "motion"), (torque, "motion"),
+          (torque, "amplitude"), (pivot, "inverted")]
+
+
+@pytest.mark.parametrize("make, quantity", CASES,
+                         ids=[f"{m.__name__}-{q}" for m, q in CASES])
+def test_every_map_kind(make, quantity):
+    e = explorer(make)
+    assert quantity in e.quantities()
+    e.update(quantity=quantity)
+    result = e.compute()
+    s = e.state
+    assert result.values.shape == (N, N)
+    q = QUANTITIES[quantity]
+    kwargs = e.run_kwargs()
+    if e.uses_pilot():
+        assert result.catalogue is not None
+        kwargs["attractors"] = maps.pilot_catalogue(s.scene, e.grid(), model.PILOT_POINTS,
+                                                    **kwargs)
+    ds = sweep.run(s.scene, e.grid(), progress=False, **kwargs)
+    expected = q.compute(ds).squeeze().transpose(s.view.y, s.view.x).values
+    np.testing.assert_array_equal(result.values, expected)
+    if q.discrete:
+        assert result.legend and all(text for _, text in result.legend)
+        assert np.isfinite(result.image).all()  # every pixel has a legend entry
+    else:
+        units = QUANTITIES[quantity].compute(ds).attrs.get("units", "1")
+        assert units == "1" or "[" in result.title  # the colour bar names the units
+
+
+def test_forced_basins_name_their_attractors():
+    e = explorer(wada)
+    result = e.compute()
+    assert e.state.quantity == "basins" and e.uses_pilot()
+    texts = [text for value, text in result.legend if value >= 0]
+    assert texts and all(t.startswith("attractor") and "period" in t for t in texts)
+
+
+def test_parameter_axes():
+    e = explorer(pivot)
+    assert (e.state.view.x, e.state.view.y) == ("pivot_amplitude", "pivot_frequency")
+    assert dict(e.state.start)["theta0"] == pytest.approx(np.pi - 0.1)
+    assert e.state.quantity == "motion" and "inverted" in e.quantities()
+    e.update(quantity="inverted")
+    grid = e.grid()
+    assert grid.dims == ("pivot_frequency", "pivot_amplitude", "theta0", "omega0")
+    assert e.compute().values.dtype == bool
+
+
+# ------------------------------------------------------------------ controls
+def test_controls_come_from_the_declarations():
+    e = explorer(wada)
+    names = [c.name for c in e.parameter_controls()]
+    assert names == ["length", "gravity", "damping", "forcing_amplitude",
+                     "forcing_frequency", "forcing_phase"]
+    damping = e.parameter_controls()[2]
+    assert damping.label == "damping c [1/s]" and damping.minimum == 0.0
+    assert [c.name for c in e.run_controls()] == ["model", "t_end", "dt", "t_transient",
+                                                  "method", "resolution"]
+
+
+def test_an_effect_registered_later_gets_its_controls():
+    @dataclass(frozen=True)
+    class Spring(Effect):
+        stiffness: float
+        declaration: ClassVar[EffectDeclaration] = EffectDeclaration(
+            name="explore_spring", term="- kappa * th", equation="- kappa theta",
+            parameters=(Parameter("spring_kappa", "stiffness", "kappa", "s-2", "1/s^2",
+                                  "torsion spring stiffness", minimum=0.0),),
+            conservative=True, linear_stiffness="kappa", jacobian_theta="- kappa")
+
+    register(Spring)
+    try:
+        scene = sweep.Scene(effects=(sweep.Damping(0.3), Spring(2.0)))
+        e = Explorer(scene, sweep.Grid(theta0=np.linspace(-1, 1, N),
+                                       omega0=np.linspace(-1, 1, N)), t_end=1.0, dt=0.01)
+        spring = [c for c in e.parameter_controls() if c.name == "spring_kappa"]
+        assert spring and spring[0].label == "spring_kappa kappa [1/s^2]"
+        assert "spring_kappa" in e.axes()
+        e.update(spring_kappa=3.0)
+        assert e.state.scene.effect("explore_spring").stiffness == 3.0
+        with pytest.raises(InvalidInput, match="stiffness"):
+            e.update(spring_kappa=-1.0)
+    finally:
+        unregister("explore_spring")
+
+
+# ------------------------------------------------------------------ invalid input
+@pytest.mark.parametrize("change, control, words", [
+    ({"damping": -0.5}, "damping", ["coefficient", "-0.5", ">= 0"]),
+    ({"gravity": 0.0}, "gravity", ["gravity", "> 0"]),
+    ({"dt": 0.03}, "dt", ["whole number of steps"]),
+    ({"dt": -1.0}, "dt", ["dt", "-1.0"]),
+    ({"t_transient": 50.0}, "t_transient", ["t_transient"]),
+    ({"resolution": 3}, "resolution", ["resolution", "8 to 2000", "3"]),
+    ({"resolution": 40.5}, "resolution", ["resolution", "40.5"]),
+    ({"quantity": "basins"}, "quantity", ["basins", "does not apply", "well"]),
+    ({"method": "rk5"}, "method", ["rk5", "rk4"]),
+    ({"model": "cubic"}, "model", ["cubic", "nonlinear"]),
+    ({"x": "forcing_amplitude"}, "x", ["forcing_amplitude", "theta0"]),
+    ({"damping": "0.5"}, "damping", ["number", "'0.5'"]),
+    ({"damping": "__import__('os').system('true')"}, "damping", ["number"]),
+    ({"damping": True}, "damping", ["number"]),
+    ({"theta0": float("nan")}, "theta0", ["theta0"]),
+])
+def test_refused_input_names_the_control_and_computes_nothing(monkeypatch, change, control,
+                                                              words):
+    e = explorer()
+    before = e.state
+    monkeypatch.setattr(Explorer, "_run", staticmethod(lambda *a: pytest.fail("ran")))
+    with pytest.raises(InvalidInput) as info:
+        e.update(**change)
+    assert info.value.control == control
+    for word in words:
+        assert word in str(info.value), (word, str(info.value))
+    assert e.state == before and e.history == [before.view]
+
+
+def test_refused_windows():
+    e = explorer()
+    for window in [((1.0, 1.0), (0.0, 1.0)), ((2.0, 1.0), (0.0, 1.0)),
+                   ((0.0, math.inf), (0.0, 1.0)), (("a", 1.0), (0.0, 1.0))]:
+        with pytest.raises(InvalidInput) as info:
+            e.zoom(*window)
+        assert info.value.control == "view"
+    e.update(x="damping")
+    with pytest.raises(InvalidInput, match="damping"):  # c < 0 on the axis
+        e.zoom((-1.0, 1.0), e.state.view.y_range)
+
+
+def test_unknown_run_keyword_is_refused():
+    scene, grid, kwargs = demo()
+    with pytest.raises(TypeError, match="dtt"):
+        Explorer(scene, grid, dtt=0.1, **kwargs)
+    with pytest.raises(TypeError, match="t_end"):
+        Explorer(scene, grid, dt=0.1)
+
+
+# ------------------------------------------------------------------ reproduction
+@pytest.mark.parametrize("make", [demo, wada], ids=["demo", "wada"])
+def test_toml_and_python_reproduce_the_map_exactly(make, tmp_path):
+    e = explorer(make)
+    e.zoom(*[(lo + 0.1 * (hi - lo), hi - 0.3 * (hi - lo)) for lo, hi in
+             (e.state.view.x_range, e.state.view.y_range)])
+    result = e.compute()
+    path = tmp_path / "map.toml"
+    path.write_text(e.toml_text())
+    options = {}
+    scene, grid, kwargs = load_run(path, options)
+    if options.get("pilot"):  # what sweep run --pilot does
+        kwargs["attractors"] = maps.pilot_catalogue(scene, grid, options["pilot"], **kwargs)
+    ds = sweep.run(scene, grid, progress=False, **kwargs)
+    q = QUANTITIES[e.state.quantity]
+    np.testing.assert_array_equal(q.compute(ds).squeeze().values, result.values)
+    namespace = {}
+    exec(e.python_snippet(), namespace)  # our own generated text, nothing typed
+    np.testing.assert_array_equal(namespace["image"].squeeze().values, result.values)
+
+
+def test_trajectory_is_the_clicked_pixel_and_reproduces(tmp_path):
+    e = explorer(wada)
+    result = e.compute()
+    traj = e.trajectory(0.31, -1.07, result)
+    row, col = e.value_at(result, 0.31, -1.07)
+    assert (traj.theta0, traj.omega0) == (result.x[col], result.y[row])
+    assert traj.theta[0] == traj.theta0 and traj.omega[0] == traj.omega0
+    assert traj.status == "ok" and traj.label.startswith(result.legend[
+        int(result.image[row, col])][1])
+    assert traj.strobe_theta.size == 40  # one per forcing period after the transient
+    assert traj.t[-1] == pytest.approx(e.state.t_end, rel=1e-12)
+    path = tmp_path / "trajectory.toml"
+    path.write_text(traj.toml)
+    scene, grid, kwargs = load_run(path)
+    ds = sweep.run(scene, grid, progress=False, **kwargs)
+    np.testing.assert_array_equal(ds.theta.values.ravel(), traj.theta)
+    namespace = {}
+    exec(traj.python.replace("sweep.plot.trajectory(ds)", "pass"), namespace)
+    np.testing.assert_array_equal(namespace["ds"].omega.values.ravel(), traj.omega)
+
+
+# ------------------------------------------------------------------ exports
+def test_netcdf_export_has_the_provenance_and_the_map(tmp_path):
+    e = explorer(wada)
+    result = e.compute()
+    path = tmp_path / "export.nc"
+    path.write_bytes(e.netcdf_bytes(result))
+    ds = sweep.load(path)
+    for key in ("sweep_version", "scene", "equation", "t_end", "dt", "observe", "history"):
+        assert key in ds.attrs
+    assert ds.attrs["explore_quantity"] == "basins"
+    np.testing.assert_array_equal(ds[ds.attrs["explore_map"]].values, result.values)
+    again = sweep.run(sweep.io.scene_from(ds), sweep.Grid(**{d: ds[d].values for d in
+                                                            ds.attrs["grid_axes"].split()}),
+                      progress=False, **sweep.io.run_arguments(ds))
+    np.testing.assert_array_equal(maps.basins(again).values, result.values)
+
+
+def test_png_export():
+    e = explorer()
+    data = e.png_bytes(e.compute())
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
