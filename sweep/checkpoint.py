@@ -7,11 +7,6 @@ DeprecationWarning that points at the importing line, and give the module
 under both paths. This file goes in 0.3.
 """
 
-import sys
-import warnings
+from ._moved import forward
 
-from .execution import checkpoint as _new
-
-warnings.warn("the module path sweep.checkpoint is deprecated and will be removed in 0.3; "
-              "import sweep.execution.checkpoint instead", DeprecationWarning, stacklevel=2)
-sys.modules[__name__] = _new  # the import statement binds the new module itself
+forward("sweep.checkpoint", "sweep.execution.checkpoint")

@@ -10,11 +10,6 @@ both paths. This file goes in 0.3.
 `sweep.maps.metrics` too; it is not deprecated and does not warn.
 """
 
-import sys
-import warnings
+from ._moved import forward
 
-from .maps import metrics as _new
-
-warnings.warn("the module path sweep.metrics is deprecated and will be removed in 0.3; "
-              "import sweep.maps.metrics instead", DeprecationWarning, stacklevel=2)
-sys.modules[__name__] = _new  # the import statement binds the new module itself
+forward("sweep.metrics", "sweep.maps.metrics")

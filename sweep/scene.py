@@ -9,11 +9,6 @@ the functions `sweep.physics.scene.parameter_names` and ``parameter_info`` repla
 them.)
 """
 
-import sys
-import warnings
+from ._moved import forward
 
-from .physics import scene as _new
-
-warnings.warn("the module path sweep.scene is deprecated and will be removed in 0.3; "
-              "import sweep.physics.scene instead", DeprecationWarning, stacklevel=2)
-sys.modules[__name__] = _new  # the import statement binds the new module itself
+forward("sweep.scene", "sweep.physics.scene")
