@@ -43,7 +43,8 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     block at a time; a worker, the block it computes).
 
     The grid is cut along its first axis into blocks of ``rows_per_task`` rows (default:
-    as many rows as make about ``chunk_size`` trajectories, at least one); each block is
+    as many rows as make about ``chunk_size`` trajectories, at least one), and `Points`
+    into ranges of ``rows_per_task`` points (default ``chunk_size``); each block is
     an ordinary `sweep.run` of that sub-grid, on ``client``'s cluster or, without a
     client, one after another in this process. The file is written to a temporary name
     in the same folder and renamed into place once complete; ``sweep.load(path)`` then
@@ -86,7 +87,7 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     from . import diskspace, engine, io
     from .kernels import failure_summary, status_counts
     from .execution.progress import progress_bar
-    from .grid import Grid
+    from .grid import Grid, Points
 
     for name in _NOT_STREAMED:
         if name in run_kwargs:
@@ -112,6 +113,8 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
               for i in range(0, grid.shape[0], int(rows_per_task))]
 
     def block_grid(i0, i1):
+        if isinstance(grid, Points):  # rows i0:i1, every column
+            return Points(**{name: values[i0:i1] for name, values in axes.items()})
         return Grid(**{name: (values[i0:i1] if name == first else values)
                        for name, values in axes.items()})
 

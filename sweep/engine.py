@@ -24,7 +24,7 @@ from .execution import RunContext, execute
 from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
 from .execution.progress import progress_bar
-from .grid import Grid
+from .grid import Grid, ParameterRows
 from .kernels import (KernelSpec, build, check_device, check_dtype, check_method_fits,
                       check_observables_fit, check_tangent_fits, declarations, failure_summary, n_columns,
                       status_counts)
@@ -381,8 +381,8 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     settings, the kernel spec and the chunk size. Raises ValueError/TypeError."""
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a sweep.Scene, got {scene!r}")
-    if not isinstance(grid, Grid):
-        raise TypeError(f"grid must be a sweep.Grid, got {grid!r}")
+    if not isinstance(grid, ParameterRows):
+        raise TypeError(f"grid must be a sweep.Grid or sweep.Points, got {grid!r}")
     grid.check_against(scene)
     settings = validate_settings(t_end=t_end, dt=dt, t0=t0, t_transient=t_transient,
                                  save_every=save_every, method=method, rtol=rtol, atol=atol)
@@ -438,8 +438,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         # a settled trajectory's lane takes the next waiting one (no idle lanes)
         refill=refill,
         # one sine per drive and step for a whole block when no trajectory differs in it
-        shared_forcing=not any(grid.axes.get(name, np.zeros(1)).size > 1
-                               for effect in effects if effect.drive is not None
+        shared_forcing=not any(grid.varies(name) for effect in effects if effect.drive is not None
                                for name in _drive_axes(effect))
         and not (refill and settings.n_steps > _config.SINE_TABLE_STEPS),
         device=device,
@@ -472,17 +471,17 @@ def _check_angle_range(grid: Grid, spec: KernelSpec) -> None:
 INITIAL_AXES = ("theta0", "omega0")
 
 
-def check_one_scene(grid: Grid) -> None:
-    """Refuse a grid that varies anything but the initial conditions (for an attractor
-    catalogue, which holds one scene's attractors).
+def check_one_scene(grid: ParameterRows) -> None:
+    """Refuse a grid (or points) that varies anything but the initial conditions (for an
+    attractor catalogue, which holds one scene's attractors). A `Points` column varies
+    when it holds more than one distinct value.
 
     Raises
     ------
     ValueError
         Naming the varied axes and what is accepted.
     """
-    varied = [name for name, values in grid.axes.items()
-              if name not in INITIAL_AXES and np.size(values) > 1]
+    varied = [name for name in grid.axes if name not in INITIAL_AXES and grid.varies(name)]
     if varied:
         raise ValueError(f"an attractor catalogue holds the attractors of one scene, but the "
                          f"grid varies {', '.join(varied)}; accepted: a grid that varies only "

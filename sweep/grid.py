@@ -1,9 +1,13 @@
-"""Named 1-D axes whose Cartesian product is the set of trajectories of a run.
+"""The rows of parameter sets a run integrates, described two ways: a `Grid` (named 1-D
+axes whose Cartesian product is the set of trajectories) or `Points` (a table of
+parameter sets, one per trajectory, e.g. drawn by `sample`).
 
-A `Grid` maps to a flat parameter table (one row per trajectory, one column per
-parameter, `sweep.physics.parameter_names`) chunk by chunk, so the table for a huge grid
-never has to exist in memory at once; flat per-trajectory outputs are reshaped back
-to the grid's shape (C order: the last axis varies fastest).
+Both are `ParameterRows`: they map to a flat parameter table (one row per trajectory,
+one column per parameter, `sweep.physics.parameter_names`) chunk by chunk, so the table
+for a huge run never has to exist in memory at once, and everything below them
+(kernels, checkpoints, Dask, CUDA, attractor catalogues) sees only chunks of rows. Flat
+per-trajectory outputs are reshaped back to the grid's shape (C order: the last axis
+varies fastest), or stay one dimension ``point`` for `Points`.
 """
 
 from __future__ import annotations
@@ -16,7 +20,7 @@ import numpy as np
 from ._validate import check_axis, check_numbers
 from .physics import EFFECTS, Scene, parameter_names, parameters
 
-__all__ = ["Grid", "GridRows", "from_degrees"]
+__all__ = ["Grid", "GridRows", "ParameterRows", "Points", "from_degrees", "sample"]
 
 
 class GridRows:
@@ -84,7 +88,133 @@ def from_degrees(values) -> np.ndarray:
     return np.deg2rad(check_numbers("from_degrees: values", values))
 
 
-class Grid:
+class ParameterRows:
+    """What `sweep.run` integrates: rows of parameter sets, one per trajectory, each a
+    scene's parameters with some of them (the *axes*) set per row. `Grid` and `Points`
+    are the two ways of describing them; below them the engine sees only chunks of rows
+    (`table`, `rows`), so checkpoints, Dask, CUDA and catalogues serve both.
+
+    Subclasses set ``_axes`` (``{name: read-only float64 array}``) and define `dims`,
+    `shape`, `rows`, `varies`, `coordinates` and `provenance`.
+    """
+
+    #: How a message names one of the axes ("grid axis", "points axis").
+    _what = "axis"
+    _axes: dict[str, np.ndarray]
+
+    @staticmethod
+    def _declared() -> dict:
+        return {p.axis: p for p in parameters()}
+
+    def _check_name(self, name: str, declared: dict) -> None:
+        if name not in declared:
+            raise ValueError(
+                f"unknown {self._what} {name!r}; accepted axis names: {', '.join(declared)}"
+            )
+
+    def _check_bounds(self, name: str, array: np.ndarray, declared: dict) -> None:
+        bad = declared[name].is_outside(array)
+        if bad.any():
+            raise ValueError(
+                f"{self._what} {name!r} has value {float(array[bad][0])!r} at index "
+                f"{int(np.flatnonzero(bad)[0])}; accepted: {declared[name].accepted(True)}"
+            )
+
+    @property
+    def axes(self) -> dict[str, np.ndarray]:
+        """The axes, ``{name: read-only float64 array}``, in the order given."""
+        return dict(self._axes)
+
+    @property
+    def size(self) -> int:
+        """Number of trajectories (rows)."""
+        return math.prod(self.shape)
+
+    def __repr__(self) -> str:
+        inner = ", ".join(f"{k}=<{v.size} values>" for k, v in self._axes.items())
+        return f"{type(self).__name__}({inner})"
+
+    def check_against(self, scene: Scene) -> None:
+        """Refuse axes that the scene cannot honour.
+
+        An axis of an effect the scene lacks switches that effect on when its
+        declaration says so (``switched_on_by_grid``: a ``damping`` axis switches damping
+        on); otherwise the scene must have the effect (it supplies the effect's other
+        parameters: a forcing axis needs a `Forcing`, a torque axis a `Torque`).
+
+        Raises
+        ------
+        ValueError
+        """
+        for name, effect_type in EFFECTS.items():
+            declaration = effect_type.declaration
+            given = [axis for axis in declaration.axes if axis in self._axes]
+            if given and scene.effect(name) is None and not declaration.switched_on_by_grid:
+                what = (f"to supply the other {name} parameters" if len(declaration.parameters) > 1
+                        else "(the axis alone does not switch it on)")
+                raise ValueError(
+                    f"{self._what} {given[0]!r} needs a {name} in the scene {what}; accepted: "
+                    f"add {effect_type.signature()} to Scene.effects"
+                )
+
+    def effects(self, scene: Scene) -> frozenset[str]:
+        """Names of the effects the run must simulate: the scene's, plus those an axis
+        switches on (see `check_against`)."""
+        names = {e.declaration.name for e in scene.effects}
+        for name, effect_type in EFFECTS.items():
+            if any(axis in self._axes for axis in effect_type.declaration.axes):
+                names.add(name)
+        return frozenset(names)
+
+    def _template(self, scene: Scene) -> np.ndarray:
+        """The scene's parameter row, theta0 = omega0 = 0 (axes override them)."""
+        fixed = {"theta0": 0.0, "omega0": 0.0, **scene.parameters()}
+        return np.array([fixed[name] for name in parameter_names()], dtype=np.float64)
+
+    def _columns(self) -> np.ndarray:
+        names = parameter_names()
+        return np.array([names.index(name) for name in self._axes], dtype=np.int64)
+
+    def table(self, scene: Scene, start: int = 0, stop: int | None = None) -> np.ndarray:
+        """Parameter table for the flat trajectory indices ``start:stop``.
+
+        Parameters
+        ----------
+        scene : Scene
+            Supplies every parameter that is not an axis.
+        start, stop : int
+            Flat (C-order) trajectory index range; ``stop`` defaults to `size`.
+
+        Returns
+        -------
+        ndarray, shape (stop - start, n_parameters), float64, C-contiguous
+            Columns in the order of `sweep.physics.parameter_names`.
+        """
+        rows = self.rows(scene, start, stop)
+        # the constant row broadcast in one contiguous pass, then only the axes' columns
+        table = np.empty(rows.shape, dtype=np.float64)
+        table[:] = rows.template
+        flat = np.arange(rows.start, rows.start + len(rows), dtype=np.int64)
+        for column, stride, size, offset in zip(rows.columns, rows.strides, rows.sizes,
+                                                rows.offsets):
+            table[:, column] = rows.values[offset + (flat // stride) % size]
+        return table
+
+    def rows(self, scene: Scene, start: int = 0, stop: int | None = None) -> GridRows:
+        """The rows ``start:stop`` of `table`, described (`GridRows`)."""
+        raise NotImplementedError
+
+    def chunks(self, chunk_size: int) -> Iterator[tuple[int, int]]:
+        """Yield ``(start, stop)`` flat index ranges of at most ``chunk_size`` rows."""
+        for start in range(0, self.size, chunk_size):
+            yield start, min(start + chunk_size, self.size)
+
+    def unflatten(self, flat: np.ndarray) -> np.ndarray:
+        """Reshape per-trajectory values, shape (size, ...), to (*shape, ...)."""
+        return flat.reshape(self.shape + flat.shape[1:])
+
+
+class Grid(ParameterRows):
     """Named axes of a sweep; the run covers their Cartesian product.
 
     Parameters
@@ -108,32 +238,21 @@ class Grid:
     ((5, 2), 10)
     """
 
+    _what = "grid axis"
+
     def __init__(self, **axes) -> None:
-        declared = {p.axis: p for p in parameters()}
+        declared = self._declared()
         if not axes:
             raise ValueError(
                 "Grid needs at least one axis; accepted axis names: " + ", ".join(declared)
             )
         checked = {}
         for name, values in axes.items():
-            if name not in declared:
-                raise ValueError(
-                    f"unknown grid axis {name!r}; accepted axis names: {', '.join(declared)}"
-                )
+            self._check_name(name, declared)
             array = checked[name] = check_axis(name, values)
-            bad = declared[name].is_outside(array)
-            if bad.any():
-                raise ValueError(
-                    f"grid axis {name!r} has value {float(array[bad][0])!r} at index "
-                    f"{int(np.flatnonzero(bad)[0])}; accepted: {declared[name].accepted(True)}"
-                )
+            self._check_bounds(name, array, declared)
             array.flags.writeable = False
         self._axes = checked
-
-    @property
-    def axes(self) -> dict[str, np.ndarray]:
-        """The axes, ``{name: read-only float64 array, shape (n_name,)}``, in grid order."""
-        return dict(self._axes)
 
     @property
     def dims(self) -> tuple[str, ...]:
@@ -145,97 +264,172 @@ class Grid:
         """Number of points along each axis."""
         return tuple(a.size for a in self._axes.values())
 
-    @property
-    def size(self) -> int:
-        """Number of trajectories (product of the axis lengths)."""
-        return math.prod(self.shape)
-
-    def __repr__(self) -> str:
-        inner = ", ".join(f"{k}=<{v.size} values>" for k, v in self._axes.items())
-        return f"Grid({inner})"
-
-    def check_against(self, scene: Scene) -> None:
-        """Refuse axes that the scene cannot honour.
-
-        An axis of an effect the scene lacks switches that effect on when its
-        declaration says so (``switched_on_by_grid``: a ``damping`` axis switches damping
-        on); otherwise the scene must have the effect (it supplies the effect's other
-        parameters: a forcing axis needs a `Forcing`, a torque axis a `Torque`).
-
-        Raises
-        ------
-        ValueError
-        """
-        for name, effect_type in EFFECTS.items():
-            declaration = effect_type.declaration
-            given = [axis for axis in declaration.axes if axis in self._axes]
-            if given and scene.effect(name) is None and not declaration.switched_on_by_grid:
-                what = (f"to supply the other {name} parameters" if len(declaration.parameters) > 1
-                        else "(the axis alone does not switch it on)")
-                raise ValueError(
-                    f"grid axis {given[0]!r} needs a {name} in the scene {what}; accepted: "
-                    f"add {effect_type.signature()} to Scene.effects"
-                )
-
-    def effects(self, scene: Scene) -> frozenset[str]:
-        """Names of the effects the run must simulate: the scene's, plus those a grid
-        axis switches on (see `check_against`)."""
-        names = {e.declaration.name for e in scene.effects}
-        for name, effect_type in EFFECTS.items():
-            if any(axis in self._axes for axis in effect_type.declaration.axes):
-                names.add(name)
-        return frozenset(names)
-
-    def table(self, scene: Scene, start: int = 0, stop: int | None = None) -> np.ndarray:
-        """Parameter table for the flat trajectory indices ``start:stop``.
-
-        Parameters
-        ----------
-        scene : Scene
-            Supplies every parameter that is not a grid axis.
-        start, stop : int
-            Flat (C-order) trajectory index range; ``stop`` defaults to `size`.
-
-        Returns
-        -------
-        ndarray, shape (stop - start, n_parameters), float64, C-contiguous
-            Columns in the order of `sweep.physics.parameter_names`.
-        """
-        rows = self.rows(scene, start, stop)
-        # the constant row broadcast in one contiguous pass, then only the axes' columns
-        table = np.empty(rows.shape, dtype=np.float64)
-        table[:] = rows.template
-        flat = np.arange(rows.start, rows.start + len(rows), dtype=np.int64)
-        for column, stride, size, offset in zip(rows.columns, rows.strides, rows.sizes,
-                                                rows.offsets):
-            table[:, column] = rows.values[offset + (flat // stride) % size]
-        return table
-
     def rows(self, scene: Scene, start: int = 0, stop: int | None = None) -> GridRows:
         """The rows ``start:stop`` of `table`, described instead of tabulated: the
         constant row and each axis's column, stride and values, from which trajectory
         ``start + i`` builds its own row where it runs (a GPU thread does; see
         `GridRows`). O(number of axis values) memory, whatever the chunk's size."""
         stop = self.size if stop is None else stop
-        names = parameter_names()
-        fixed = {"theta0": 0.0, "omega0": 0.0, **scene.parameters()}
-        template = np.array([fixed[name] for name in names], dtype=np.float64)
         strides = np.cumprod((self.shape + (1,))[:0:-1])[::-1] if self._axes else ()
         sizes = [values.size for values in self._axes.values()]
         return GridRows(
-            template=template,
-            columns=np.array([names.index(name) for name in self._axes], dtype=np.int64),
+            template=self._template(scene), columns=self._columns(),
             strides=np.array(strides, dtype=np.int64), sizes=np.array(sizes, dtype=np.int64),
             offsets=np.array(np.cumsum([0] + sizes[:-1]), dtype=np.int64),
             values=np.concatenate([np.zeros(0)] + list(self._axes.values())).astype(np.float64),
             start=int(start), n=int(stop - start))
 
-    def chunks(self, chunk_size: int) -> Iterator[tuple[int, int]]:
-        """Yield ``(start, stop)`` flat index ranges of at most ``chunk_size`` rows."""
-        for start in range(0, self.size, chunk_size):
-            yield start, min(start + chunk_size, self.size)
+    def varies(self, name: str) -> bool:
+        """Whether the axis ``name`` takes more than one value (False if not an axis)."""
+        return name in self._axes and self._axes[name].size > 1
 
-    def unflatten(self, flat: np.ndarray) -> np.ndarray:
-        """Reshape per-trajectory values, shape (size, ...), to (*shape, ...)."""
-        return flat.reshape(self.shape + flat.shape[1:])
+    def coordinates(self) -> list[tuple[str, str, np.ndarray]]:
+        """``(axis, dimension, values)`` per axis: each axis is its own dimension."""
+        return [(name, name, values) for name, values in self._axes.items()]
+
+    def provenance(self) -> dict[str, str]:
+        """Dataset attributes that say how to rebuild it (`sweep.io.grid_from`):
+        ``grid_axes``, the axis names in dimension order."""
+        return {"grid_axes": " ".join(self._axes)}
+
+
+class Points(ParameterRows):
+    """A table of parameter sets, one per trajectory: the run covers exactly these rows.
+
+    Where a `Grid` takes the Cartesian product of its axes, ``Points`` takes its
+    columns side by side: point ``i`` has, for each axis, that axis's ``i``-th value. The
+    run's dataset has one dimension, ``point``, and every axis is a coordinate along it.
+    Each trajectory is bit-identical to the same parameter set inside a `Grid`.
+
+    Parameters
+    ----------
+    **axes : array_like, each 1-D of length n, or a scalar
+        The same names, units and accepted values as `Grid`'s axes: ``theta0`` [rad],
+        ``omega0`` [rad/s], ``length`` [m], ``gravity`` [m/s^2], ``damping`` [1/s],
+        ``forcing_amplitude`` [rad/s^2], ``forcing_frequency`` [rad/s],
+        ``forcing_phase`` [rad], and those of any registered effect. Every 1-D column
+        has the same length n (the number of points); a scalar is a constant column of
+        that length (n = 1 if every column is a scalar). Values must be real, finite
+        numbers within the parameter's accepted range; unlike a grid axis they may
+        repeat (two points may share a theta0, or be the same point twice). An axis
+        overrides the scene's value of that parameter; ``theta0`` and ``omega0``
+        default to 0 when absent.
+
+    Attributes
+    ----------
+    axes : dict of str to ndarray, shape (n,), float64, read-only
+    dims : ("point",)
+    shape : (n,)
+    size : int
+        n, the number of trajectories.
+
+    Raises
+    ------
+    ValueError
+        Naming the axis, the bad value (and its index) and what is accepted: an unknown
+        name, a column that is not 1-D numbers, empty, non-finite, out of range, or
+        columns of unequal lengths.
+
+    See Also
+    --------
+    sample : Points drawn in a box (Sobol or uniform random).
+
+    Examples
+    --------
+    >>> import sweep
+    >>> points = sweep.Points(theta0=[0.1, 2.0, 2.0], omega0=[0.0, 0.5, -0.5], damping=0.2)
+    >>> points.dims, points.shape, points.size
+    (('point',), (3,), 3)
+    """
+
+    _what = "points axis"
+
+    def __init__(self, **axes) -> None:
+        declared = self._declared()
+        if not axes:
+            raise ValueError(
+                "Points needs at least one axis; accepted axis names: " + ", ".join(declared)
+            )
+        checked = {}
+        for name, values in axes.items():
+            self._check_name(name, declared)
+            checked[name] = array = self._column(name, values)
+            self._check_bounds(name, array, declared)
+        lengths = {name: a.size for name, a in checked.items() if a.ndim == 1}
+        if len(set(lengths.values())) > 1:
+            raise ValueError(
+                "points axes have unequal lengths: "
+                + ", ".join(f"{name} has {size}" for name, size in lengths.items())
+                + "; accepted: 1-D arrays of one length (one value per point), or scalars "
+                "(a constant column)")
+        n = next(iter(lengths.values()), 1)
+        for name, array in checked.items():
+            checked[name] = array = np.ascontiguousarray(np.broadcast_to(array, (n,)),
+                                                         dtype=np.float64)
+            array.flags.writeable = False
+        self._axes = checked
+        self._n = n
+
+    def _column(self, name: str, values) -> np.ndarray:
+        """One column as float64 (0-D for a scalar), refused unless 1-D or a scalar,
+        non-empty and finite."""
+        array = check_numbers(f"{self._what} {name!r}", values)
+        if array.ndim > 1:
+            raise ValueError(
+                f"{self._what} {name!r} must be 1-D (one value per point) or a scalar, got "
+                f"an array of shape {array.shape}")
+        if array.size == 0:
+            raise ValueError(f"{self._what} {name!r} is empty; accepted: at least one value")
+        bad = ~np.isfinite(np.atleast_1d(array))
+        if bad.any():
+            raise ValueError(
+                f"{self._what} {name!r} has non-finite value "
+                f"{float(np.atleast_1d(array)[bad][0])!r} at index "
+                f"{int(np.flatnonzero(bad)[0])}; accepted: finite numbers")
+        return array
+
+    @property
+    def dims(self) -> tuple[str]:
+        """``("point",)``: the dataset's one dimension."""
+        return ("point",)
+
+    @property
+    def shape(self) -> tuple[int]:
+        """``(n,)``, the number of points."""
+        return (self._n,)
+
+    def __len__(self) -> int:
+        return self._n
+
+    def rows(self, scene: Scene, start: int = 0, stop: int | None = None) -> GridRows:
+        """The rows ``start:stop`` of `table`, described: each axis a column of stride 1
+        over the chunk's own values (as `GridRows.from_table` describes a table), so
+        the description is O(chunk) memory and row ``i`` of it is point ``start + i``
+        (its ``start`` is 0: the values are the chunk's)."""
+        stop = self._n if stop is None else stop
+        n, count = int(stop - start), len(self._axes)
+        return GridRows(
+            template=self._template(scene), columns=self._columns(),
+            strides=np.ones(count, dtype=np.int64), sizes=np.full(count, n, dtype=np.int64),
+            offsets=np.arange(count, dtype=np.int64) * n,
+            values=np.concatenate([np.zeros(0)] + [values[start:stop]
+                                                   for values in self._axes.values()]),
+            start=0, n=n)
+
+    def varies(self, name: str) -> bool:
+        """Whether the axis ``name`` has more than one distinct value (False if not an
+        axis): a constant column describes one scene, as a one-value grid axis does."""
+        if name not in self._axes:
+            return False
+        values = self._axes[name]
+        return bool(np.any(values != values[0]))
+
+    def coordinates(self) -> list[tuple[str, str, np.ndarray]]:
+        """``(axis, "point", values)`` per axis: every axis a coordinate along ``point``."""
+        return [(name, "point", values) for name, values in self._axes.items()]
+
+    def provenance(self) -> dict[str, str]:
+        """Dataset attributes that say how to rebuild it (`sweep.io.grid_from`):
+        ``point_axes``, the axis names (coordinates along ``point``)."""
+        return {"point_axes": " ".join(self._axes)}
 

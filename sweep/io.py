@@ -16,11 +16,13 @@ import numpy as np
 import xarray as xr
 
 from ._version import __version__
+from .grid import Grid, Points
 from .kernels import Status
 from .observables import OBSERVABLES
 from .physics import EFFECTS, Scene, parameter_info
 
-__all__ = ["to_dataset", "save", "load", "scene_from", "run_arguments", "netcdf_encoding",
+__all__ = ["to_dataset", "save", "load", "scene_from", "grid_from", "run_arguments",
+           "netcdf_encoding",
            "file_size_bound"]
 
 #: zlib level of the variables `save` writes (with the byte shuffle filter), chosen by
@@ -59,7 +61,7 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     Parameters
     ----------
     scene : Scene
-    grid : Grid
+    grid : Grid or Points
     settings : sweep.engine.RunSettings
     spec : sweep.kernels.KernelSpec
     out : ndarray, shape (grid.size, n_columns), float64
@@ -75,8 +77,8 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     dims = grid.dims
     info = parameter_info()
     coords = {
-        name: xr.Variable(name, values, {"units": info[name][0], "long_name": info[name][1]})
-        for name, values in grid.axes.items()
+        name: xr.Variable(dim, values, {"units": info[name][0], "long_name": info[name][1]})
+        for name, dim, values in grid.coordinates()
     }
     data_vars = {}
     col = 0
@@ -121,7 +123,7 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     simulated = [effect.name for effect in spec.effects]
     present = {axis for effect in spec.effects for axis in effect.axes}
     fixed = {k: v for k, v in scene.parameters().items()
-             if k not in dims and (k in ("length", "gravity") or k in present)}
+             if k not in grid.axes and (k in ("length", "gravity") or k in present)}
     attrs = {
         "Conventions": "CF-1.10",
         "title": "pendulum parameter sweep",
@@ -134,7 +136,7 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
         "effects": " ".join(simulated) if simulated else "none",
         **{name: float(value) for name, value in fixed.items()},
         "scene": json.dumps(scene.to_dict(), sort_keys=True),
-        "grid_axes": " ".join(dims),
+        **grid.provenance(),  # grid_axes (a Grid) or point_axes (Points): grid_from
         "method": settings.method,
         "t0": settings.t0,
         "t_end": settings.t_end,
@@ -165,13 +167,31 @@ def scene_from(ds: xr.Dataset) -> Scene:
     return Scene.from_dict(json.loads(ds.attrs["scene"]))
 
 
+def grid_from(ds: xr.Dataset):
+    """Rebuild the `sweep.Grid` or `sweep.Points` a dataset was made with, from its
+    coordinates and its ``grid_axes`` or ``point_axes`` attribute.
+
+    Raises
+    ------
+    ValueError
+        If the dataset has neither attribute (not made by `sweep.run`).
+    """
+    if "point_axes" in ds.attrs:
+        return Points(**{name: ds[name].values for name in ds.attrs["point_axes"].split()})
+    if "grid_axes" in ds.attrs:
+        return Grid(**{name: ds[name].values for name in ds.attrs["grid_axes"].split()})
+    raise ValueError("the dataset has neither a 'grid_axes' nor a 'point_axes' attribute; "
+                     "accepted: a dataset made by sweep.run (or read by sweep.load)")
+
+
 def run_arguments(ds: xr.Dataset) -> dict:
     """The keyword arguments of `sweep.run` that made ``ds`` (besides scene and grid).
 
-    With `scene_from` and the dataset's coordinates this reproduces the run::
+    With `scene_from` and `grid_from` (the dataset's coordinates) this reproduces the
+    run, of a `Grid` or of `Points`::
 
-        grid = sweep.Grid(**{d: ds[d].values for d in ds.attrs["grid_axes"].split()})
-        sweep.run(sweep.io.scene_from(ds), grid, **sweep.io.run_arguments(ds))
+        sweep.run(sweep.io.scene_from(ds), sweep.io.grid_from(ds),
+                  **sweep.io.run_arguments(ds))
     """
     a = ds.attrs
     kwargs = {"t0": float(a["t0"]), "t_end": float(a["t_end"]), "dt": float(a["dt"]),

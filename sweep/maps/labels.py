@@ -328,6 +328,14 @@ def strobe_table(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray, tuple[str, ...
             np.ascontiguousarray(table[1], dtype=np.float64), dims)
 
 
+def map_coords(ds: xr.Dataset, dims) -> dict[str, xr.DataArray]:
+    """The coordinates of ``ds`` that lie along ``dims`` only, for a map over them: a
+    grid's axes (each its own dimension), or every axis of `sweep.Points` (all along
+    ``point``, which has none of its own)."""
+    return {name: coord for name, coord in ds.coords.items()
+            if coord.dims and set(coord.dims) <= set(dims)}
+
+
 def _catalogued(ds: xr.Dataset, dims) -> np.ndarray | None:
     """Per trajectory (rows in ``dims`` order), the index of the catalogued attractor
     the run's ``attractor`` observable matched, -1 where none (or a failed
@@ -395,7 +403,7 @@ def _forced_basins(ds: xr.Dataset, *, max_period: int, tol: float) -> xr.DataArr
                                                      ds.attrs, max_period=max_period,
                                                      tol=tol)
     shape = tuple(ds.sizes[d] for d in dims)
-    out = xr.DataArray(labels.reshape(shape), coords={d: ds[d] for d in dims}, dims=dims,
+    out = xr.DataArray(labels.reshape(shape), coords=map_coords(ds, dims), dims=dims,
                        name="basins")
     out.attrs = {
         "long_name": "basin of attraction (attractor label)",

@@ -8,7 +8,7 @@ import xarray as xr
 
 from . import _strobe
 from .._validate import check_count
-from .labels import check_tolerance, strobe_axes, strobe_table
+from .labels import check_tolerance, map_coords, strobe_axes, strobe_table
 
 __all__ = ["NO_PERIOD", "period"]
 
@@ -61,7 +61,7 @@ def period(ds: xr.Dataset, *, max_period: int | None = None, tol: float = 1e-3
     found, _ = _strobe.periods(theta, omega, max_period, tol)
     found = np.where(found > 0, found, NO_PERIOD).astype(np.int32)
     shape = tuple(ds.sizes[d] for d in dims)
-    out = xr.DataArray(found.reshape(shape), coords={d: ds[d] for d in dims}, dims=dims,
+    out = xr.DataArray(found.reshape(shape), coords=map_coords(ds, dims), dims=dims,
                        name="period")
     out.attrs = {"long_name": "period of the attractor (forcing periods); -1: none found",
                  "units": "1", "max_period": int(max_period), "tol": float(tol),
