@@ -56,6 +56,13 @@ def free_port(host: str = "127.0.0.1") -> int:
         return s.getsockname()[1]
 
 
+def _labelled(cls, text: str, **kwargs):
+    """A Panel widget titled ``text`` (``label=`` where Panel has it, 1.9+; ``name=`` in
+    older versions, where it is the same thing)."""
+    key = "label" if "label" in cls.param and cls is not pn.widgets.FileDownload else "name"
+    return cls(**{key: text}, **kwargs)
+
+
 def _axis_label(name: str) -> str:
     from ..physics import parameters
 
@@ -166,20 +173,20 @@ class _Session:
         # controls from the declarations
         self.errors: dict[str, pn.pane.Alert] = {}
         self.widgets: dict[str, object] = {}
-        self.quantity = pn.widgets.Select(name="quantity", options=self._quantity_options(),
+        self.quantity = _labelled(pn.widgets.Select, "quantity", options=self._quantity_options(),
                                           value=s.quantity, width=260)
-        self.x_axis = pn.widgets.Select(name="x axis", options=list(e.axes()), value=v.x,
+        self.x_axis = _labelled(pn.widgets.Select, "x axis", options=list(e.axes()), value=v.x,
                                         width=125)
-        self.y_axis = pn.widgets.Select(name="y axis", options=list(e.axes()), value=v.y,
+        self.y_axis = _labelled(pn.widgets.Select, "y axis", options=list(e.axes()), value=v.y,
                                         width=125)
         for name, widget in (("quantity", self.quantity), ("x", self.x_axis),
                              ("y", self.y_axis)):
             self._bind(name, widget)
         scene_controls = [self._control(c) for c in e.parameter_controls()]
         run_controls = [self._control(c) for c in e.run_controls()]
-        self.back = pn.widgets.Button(name="◀ back", width=80, disabled=True)
-        self.forward = pn.widgets.Button(name="forward ▶", width=80, disabled=True)
-        self.reset = pn.widgets.Button(name="reset", width=80)
+        self.back = _labelled(pn.widgets.Button, "◀ back", width=80, disabled=True)
+        self.forward = _labelled(pn.widgets.Button, "forward ▶", width=80, disabled=True)
+        self.reset = _labelled(pn.widgets.Button, "reset", width=80)
         self.back.on_click(lambda event: self._history(self.explorer.back))
         self.forward.on_click(lambda event: self._history(self.explorer.forward))
         self.reset.on_click(lambda event: self._history(self.explorer.reset))
@@ -194,7 +201,7 @@ class _Session:
         self.traj_toml = pn.pane.Markdown("(click a start)", width=560)
         downloads = pn.Row(
             pn.widgets.FileDownload(callback=self._netcdf, filename="sweep-explore.nc",
-                                    label="netCDF", button_type="primary", width=100),
+                                    label="netCDF", width=100),
             pn.widgets.FileDownload(callback=self._png, filename="sweep-explore.png",
                                     label="PNG", width=90),
             pn.widgets.FileDownload(callback=self._toml_file, filename="sweep-explore.toml",
@@ -223,13 +230,13 @@ class _Session:
 
     def _control(self, control):
         if control.kind == "choice":
-            widget = pn.widgets.Select(name=control.label, options=list(control.choices),
+            widget = _labelled(pn.widgets.Select, control.label, options=list(control.choices),
                                        value=control.value, width=260)
         elif control.kind == "int":
-            widget = pn.widgets.IntInput(name=control.label, value=int(control.value),
+            widget = _labelled(pn.widgets.IntInput, control.label, value=int(control.value),
                                          width=260)
         else:
-            widget = pn.widgets.FloatInput(name=control.label, value=float(control.value),
+            widget = _labelled(pn.widgets.FloatInput, control.label, value=float(control.value),
                                            width=260)
         widget.description = control.help
         self.widgets[control.name] = widget

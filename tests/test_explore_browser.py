@@ -1,0 +1,265 @@
+"""The explorer in a real browser: Debian's chromium and chromium-driver, driven by
+Selenium, against a server on a free port.
+
+Under CI (``CI=true``) a missing browser, driver, Selenium or Panel fails the run (`.ci/run`
+installs them); elsewhere these tests skip with a message. The README's screenshot is
+taken here: with ``SWEEP_README_SCREENSHOT=1`` the last screenshot is also copied to
+docs/images/explorer.png.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+IN_CI = os.environ.get("CI", "").strip().lower() not in ("", "0", "false", "no", "off")
+
+
+def _missing(reason: str):
+    if IN_CI:
+        pytest.fail(f"CI=true but {reason}: .ci/run installs chromium and chromium-driver "
+                    "(apt) and the test extra (selenium, panel)", pytrace=False)
+    pytest.skip(f"{reason}: install chromium and chromium-driver (apt) and "
+                "pip install -e '.[test]' to run the browser tests")
+
+
+def _binaries():
+    browser = next((p for p in (shutil.which("chromium"), shutil.which("chromium-browser"),
+                                shutil.which("google-chrome")) if p), None)
+    driver = shutil.which("chromedriver")
+    return browser, driver
+
+
+@pytest.fixture(scope="module")
+def app():
+    try:
+        from sweep.explore.app import ExplorerApp
+    except ImportError as exc:
+        _missing(f"Panel/Bokeh are not importable ({exc})")
+    from sweep.cli import demo_inputs
+
+    scene, grid, kwargs = demo_inputs(400)  # the demo scene; 400 x 400: screen resolution
+    explorer = ExplorerApp(scene, grid, **kwargs)
+    explorer.serve(port=0)  # warms up, then serves on a free port of 127.0.0.1
+    yield explorer
+    explorer.stop()
+
+
+@pytest.fixture(scope="module")
+def driver():
+    try:
+        from selenium import webdriver
+        from selenium.webdriver.chrome.options import Options
+        from selenium.webdriver.chrome.service import Service
+    except ImportError:
+        _missing("selenium is not installed")
+    browser, chromedriver = _binaries()
+    if browser is None or chromedriver is None:
+        _missing("chromium or chromedriver not found on PATH")
+    options = Options()
+    options.binary_location = browser
+    for argument in ("--headless=new", "--no-sandbox", "--disable-gpu",
+                     "--disable-dev-shm-usage", "--window-size=1500,1250",
+                     "--force-device-scale-factor=1"):
+        options.add_argument(argument)
+    d = webdriver.Chrome(service=Service(chromedriver), options=options)
+    yield d
+    d.quit()
+
+
+#: The map's image data as the page holds it: shape, a checksum that changes with any
+#: value, the glyph's window (x, y, dw, dh) and the figure's ranges.
+_MAP = """
+if (!window.Bokeh || !Bokeh.documents.length) return null;
+const doc = Bokeh.documents[0];
+const m = doc.get_model_by_name('map');
+if (!m) return null;
+const src = m.renderers[0].data_source;
+const img = src.data.image[0];
+if (!img || img.length === undefined) return null;
+let sum = 0, weighted = 0;
+for (let i = 0; i < img.length; i++) {
+  const v = Number.isFinite(img[i]) ? img[i] : -7; sum += v; weighted += v * (i % 9973);
+}
+const shape = img.shape ? Array.from(img.shape) : [img.length];
+return {n: img.length, shape: shape, sum: sum, weighted: weighted,
+        x: src.data.x[0], y: src.data.y[0], dw: src.data.dw[0], dh: src.data.dh[0],
+        xr: [m.x_range.start, m.x_range.end], yr: [m.y_range.start, m.y_range.end],
+        title: m.title.text};
+"""
+
+#: Viewport coordinates of the map's frame (the plotting area).
+_FRAME = """
+const m = Bokeh.documents[0].get_model_by_name('map');
+const view = Bokeh.index.find_one(m);
+const canvas = view.canvas_view.el.getBoundingClientRect();
+const b = view.frame.bbox;
+return {left: canvas.left + b.left, top: canvas.top + b.top, width: b.width,
+        height: b.height, xr: [m.x_range.start, m.x_range.end],
+        yr: [m.y_range.start, m.y_range.end]};
+"""
+
+_TRAJECTORY = """
+const t = Bokeh.documents[0].get_model_by_name('trajectory');
+if (!t) return null;
+const src = t.renderers[0].data_source;
+const theta = src.data.theta, omega = src.data.omega;
+if (!theta || !theta.length) return {title: t.title.text, n: 0};
+return {title: t.title.text, n: theta.length, theta0: theta[0], omega0: omega[0]};
+"""
+
+#: Every text shown by a Panel Markdown/Alert model containing a word.
+_TEXTS = """
+const word = arguments[0];
+const out = [];
+for (const m of Bokeh.documents[0].all_models) {
+  const text = m.text;
+  if (typeof text === 'string' && text.includes(word) && m.visible !== false) out.push(text);
+}
+return out;
+"""
+
+
+def _wait(driver, script, until, timeout=30.0, *args):
+    end = time.monotonic() + timeout
+    value = None
+    while time.monotonic() < end:
+        value = driver.execute_script(script, *args)
+        if value is not None and until(value):
+            return value
+        time.sleep(0.1)
+    raise AssertionError(f"timed out after {timeout} s; last value: {value!r}")
+
+
+def _drag(driver, start, stop):
+    """A real mouse drag between two viewport points (the active tool: box-zoom)."""
+    from selenium.webdriver.common.actions.action_builder import ActionBuilder
+
+    actions = ActionBuilder(driver)
+    pointer = actions.pointer_action
+    pointer.move_to_location(*start).pointer_down()
+    for k in range(1, 6):
+        pointer.move_to_location(start[0] + (stop[0] - start[0]) * k // 5,
+                                 start[1] + (stop[1] - start[1]) * k // 5)
+    pointer.pointer_up()
+    actions.perform()
+
+
+def _click(driver, point):
+    from selenium.webdriver.common.actions.action_builder import ActionBuilder
+
+    actions = ActionBuilder(driver)
+    actions.pointer_action.move_to_location(*point).click()
+    actions.perform()
+
+
+def _recomputed_for(state, window):
+    """The image covers ``window`` exactly (its glyph's x, y, dw, dh) at 400 x 400."""
+    (x0, x1), (y0, y1) = window
+    return (state["n"] == 400 * 400 and np.isclose(state["x"], x0, rtol=1e-9, atol=1e-12)
+            and np.isclose(state["x"] + state["dw"], x1, rtol=1e-9, atol=1e-12)
+            and np.isclose(state["y"], y0, rtol=1e-9, atol=1e-12)
+            and np.isclose(state["y"] + state["dh"], y1, rtol=1e-9, atol=1e-12))
+
+
+def test_explorer_in_a_real_browser(app, driver, tmp_path):
+    driver.get(app.url)
+    home = _wait(driver, _MAP, lambda s: s["n"] == 400 * 400 and "well" in s["title"], 60)
+    driver.save_screenshot(str(tmp_path / "1-home.png"))
+    assert home["shape"] == [400, 400]
+
+    # box-zoom: a real mouse drag over the middle of the frame
+    frame = driver.execute_script(_FRAME)
+    left, top, w, h = frame["left"], frame["top"], frame["width"], frame["height"]
+    _drag(driver, (int(left + 0.55 * w), int(top + 0.30 * h)),
+          (int(left + 0.80 * w), int(top + 0.55 * h)))
+    zoomed = _wait(driver, _MAP, lambda s: s["xr"] != home["xr"] and
+                   _recomputed_for(s, (s["xr"], s["yr"])) and s["sum"] != home["sum"])
+    # the window is the dragged box (in data units), and the data were recomputed for it:
+    # the same 400 x 400 pixels, other values (a scaled image keeps its data and window)
+    assert home["xr"][0] < zoomed["xr"][0] < zoomed["xr"][1] < home["xr"][1]
+    assert zoomed["dw"] < 0.5 * home["dw"]
+    assert zoomed["weighted"] != home["weighted"]
+    driver.save_screenshot(str(tmp_path / "2-box-zoom.png"))
+
+    # through the figure's ranges (what wheel zoom and pan change)
+    window = ((-3.0, -1.0), (3.0, 8.0))  # crosses the boundaries of wells 0, 1 and 2
+    driver.execute_script(
+        "const m = Bokeh.documents[0].get_model_by_name('map');"
+        "m.x_range.setv({start: arguments[0], end: arguments[1]});"
+        "m.y_range.setv({start: arguments[2], end: arguments[3]});",
+        window[0][0], window[0][1], window[1][0], window[1][1])
+    ranged = _wait(driver, _MAP, lambda s: _recomputed_for(s, window) and
+                   s["sum"] != zoomed["sum"])
+    assert ranged["shape"] == [400, 400]
+    driver.save_screenshot(str(tmp_path / "3-ranges.png"))
+
+    # click a pixel: the trajectory panel shows that start
+    frame = driver.execute_script(_FRAME)
+    fx, fy = 0.3, 0.6  # fractions of the frame from its left and its top
+    _click(driver, (int(frame["left"] + fx * frame["width"]),
+                    int(frame["top"] + fy * frame["height"])))
+    traj = _wait(driver, _TRAJECTORY, lambda t: t["n"] > 0)
+    x = window[0][0] + fx * (window[0][1] - window[0][0])
+    y = window[1][1] - fy * (window[1][1] - window[1][0])
+    pixel = (window[0][1] - window[0][0]) / 400, (window[1][1] - window[1][0]) / 400
+    # snapped to the pixel centre; the click lands within ~1 screen pixel of the target
+    assert abs(traj["theta0"] - x) <= 2 * pixel[0]
+    assert abs(traj["omega0"] - y) <= 2 * pixel[1]
+    assert f"theta0 = {traj['theta0']:.6g}" in traj["title"]
+    info = driver.execute_script(_TEXTS, "stroboscopic points")  # Markdown as HTML
+    assert len(info) == 1 and "ok" in info[0] and "well" in info[0]
+    assert f"{traj['theta0']:.6g}" in info[0] and f"{traj['omega0']:.6g}" in info[0]
+    driver.save_screenshot(str(tmp_path / "4-trajectory.png"))
+
+    # change a parameter: the map changes
+    set_value = ("for (const m of Bokeh.documents[0].all_models) {"
+                 " if (m.title === arguments[0]) { m.value = arguments[1]; return true; } }"
+                 "return false;")
+    assert driver.execute_script(set_value, "damping c [1/s]", 0.08)
+    damped = _wait(driver, _MAP, lambda s: _recomputed_for(s, window) and
+                   s["sum"] != ranged["sum"])
+    assert damped["weighted"] != ranged["weighted"]
+    driver.save_screenshot(str(tmp_path / "5-parameter.png"))
+
+    # a value the validators refuse: its message beside the control, nothing computed
+    assert driver.execute_script(set_value, "damping c [1/s]", -1.0)
+    messages = _wait(driver, _TEXTS, lambda texts: len(texts) > 0, 10, "coefficient must be")
+    assert "-1.0" in messages[0]
+    time.sleep(0.5)
+    assert driver.execute_script(_MAP)["sum"] == damped["sum"]
+    driver.save_screenshot(str(tmp_path / "6-refused.png"))
+    assert driver.execute_script(set_value, "damping c [1/s]", 0.08)  # back to valid
+
+    for shot in sorted(tmp_path.glob("*.png")):
+        assert shot.stat().st_size > 20_000, shot  # a rendered page, not a blank one
+    if os.environ.get("SWEEP_README_SCREENSHOT"):
+        shutil.copy(tmp_path / "4-trajectory.png", ROOT / "docs" / "images" / "explorer.png")
+
+
+def test_websocket_origins_are_limited_to_the_served_address(app):
+    from tornado.httpclient import HTTPClientError, HTTPRequest
+    from tornado.ioloop import IOLoop
+    from tornado.websocket import websocket_connect
+
+    url = app.url.replace("http://", "ws://") + "ws"
+
+    async def status(origin):
+        try:
+            connection = await websocket_connect(HTTPRequest(url, headers={"Origin": origin}))
+        except HTTPClientError as exc:
+            return exc.code
+        connection.close()
+        return 101
+
+    foreign = IOLoop().run_sync(lambda: status("http://evil.example:80"))
+    assert foreign == 403
+    port = app.url.rstrip("/").rsplit(":", 1)[1]
+    own = IOLoop().run_sync(lambda: status(f"http://127.0.0.1:{port}"))
+    assert own != 403  # let past the origin check (the session token is checked next)
