@@ -8,6 +8,7 @@ from .engine import run as run
 from .grid import Grid as Grid
 from .grid import Points as Points
 from .grid import from_degrees as from_degrees
+from .grid import sample as sample
 from .io import load as load
 from .io import save as save
 from .kernels import Status as Status
@@ -57,5 +58,6 @@ __all__ = [
     "from_degrees",
     "load",
     "run",
+    "sample",
     "save",
 ]

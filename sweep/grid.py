@@ -17,7 +17,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from ._validate import check_axis, check_numbers
+from ._validate import check_axis, check_choice, check_count, check_numbers
 from .physics import EFFECTS, Scene, parameter_names, parameters
 
 __all__ = ["Grid", "GridRows", "ParameterRows", "Points", "from_degrees", "sample"]
@@ -433,3 +433,99 @@ class Points(ParameterRows):
         ``point_axes``, the axis names (coordinates along ``point``)."""
         return {"point_axes": " ".join(self._axes)}
 
+
+
+#: The ways `sample` draws points.
+SAMPLING_METHODS = ("sobol", "random")
+
+
+def _sample_range(name: str, value, declared: dict):
+    """A `sample` range ``(lo, hi)`` as two floats, or a scalar as a 0-D array."""
+    accepted = (f"accepted: (lo, hi) with lo < hi, or one value (a constant column), "
+                f"{declared[name].accepted(True)}")
+    array = check_numbers(f"sample: {name}", value)
+    if array.shape not in ((), (2,)):
+        raise ValueError(f"sample: {name} = {value!r} is neither a range nor a value; "
+                         f"{accepted}")
+    if not np.all(np.isfinite(array)) or np.any(declared[name].is_outside(array)) \
+            or (array.shape == (2,) and not array[0] < array[1]):
+        raise ValueError(f"sample: {name} = {value!r}; {accepted}")
+    return array
+
+
+def sample(n: int, *, seed: int, method: str = "sobol", **ranges) -> Points:
+    """``n`` points drawn in a box of parameters: scrambled Sobol or uniform random.
+
+    For estimating what fraction of a region goes where (basin stability; see
+    `sweep.maps.fractions`) at a cost set by the error wanted rather than by a grid's
+    resolution.
+
+    Parameters
+    ----------
+    n : int
+        Number of points, >= 1.
+    seed : int
+        Seed, >= 0 (keyword, required): the same seed gives the same points.
+    method : {"sobol", "random"}, default "sobol"
+        ``"sobol"``: a scrambled Sobol sequence (``scipy.stats.qmc.Sobol(d,
+        scramble=True, seed=seed)``, d the number of ranges), its first ``n`` points
+        (drawn as the next power of two and cut, so SciPy's warning about other sizes
+        does not arise; the sequence's balance is exact only at powers of two, and
+        ``sample(n)`` is a prefix of ``sample(2 n)`` with the same seed). ``"random"``:
+        independent uniform points (``numpy.random.default_rng(seed)``), so
+        `sweep.maps.fractions`' binomial standard error is exact.
+    **ranges : (lo, hi) or float
+        Per axis name (those of `Grid`: ``theta0=(-np.pi, np.pi)`` [rad], ``omega0``
+        [rad/s], ...): a range ``lo < hi`` (finite, within the parameter's accepted
+        values) drawn uniformly in ``[lo, hi)``, or one value, a constant column (``damping=0.2``).
+        The keyword order is the column order. At least one range.
+
+    Returns
+    -------
+    Points
+        ``n`` points; column ``name`` is ``lo + (hi - lo) u`` with ``u`` in [0, 1).
+
+    Raises
+    ------
+    ValueError
+        Before any drawing, naming the argument, its value and what is accepted.
+
+    Examples
+    --------
+    >>> import numpy as np, sweep
+    >>> points = sweep.sample(1024, seed=1, theta0=(-np.pi, np.pi), omega0=(-4.0, 4.0))
+    >>> points.shape
+    (1024,)
+    """
+    n = check_count("sample: n", n, accepted="an int >= 1 (points)")
+    seed = check_count("sample: seed", seed, minimum=0, accepted="an int >= 0")
+    method = check_choice("sample: method", method, SAMPLING_METHODS)
+    declared = ParameterRows._declared()
+    if not ranges:
+        raise ValueError("sample needs at least one range, e.g. theta0=(-np.pi, np.pi); "
+                         f"accepted axis names: {', '.join(declared)}")
+    checked = {}
+    for name, value in ranges.items():
+        if name not in declared:
+            raise ValueError(f"sample: unknown axis {name!r}; accepted axis names: "
+                             f"{', '.join(declared)}")
+        checked[name] = _sample_range(name, value, declared)
+    boxed = [name for name, array in checked.items() if array.shape == (2,)]
+    if not boxed:
+        raise ValueError("sample needs at least one range (lo, hi), got only constant "
+                         f"values ({', '.join(checked)}); accepted: e.g. theta0=(-np.pi, np.pi)")
+    if method == "sobol":
+        from scipy.stats import qmc  # only here: import sweep stays light
+
+        sobol = qmc.Sobol(len(boxed), scramble=True, seed=seed)
+        unit = sobol.random_base2(max(0, math.ceil(math.log2(n))))[:n]
+    else:
+        unit = np.random.default_rng(seed).random((n, len(boxed)))
+    columns = {}
+    for name, array in checked.items():
+        if array.shape == (2,):
+            lo, hi = array
+            columns[name] = lo + (hi - lo) * unit[:, boxed.index(name)]
+        else:
+            columns[name] = float(array)
+    return Points(**columns)

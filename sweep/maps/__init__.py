@@ -1,7 +1,7 @@
 """Maps of what each region of phase space does: pure functions ``Dataset -> DataArray``
 that read a run's stored features (they never re-run the integrator), periodicity maps,
-attractor continuation along a grid axis, basin metrics, and frequency responses by
-continuation.
+attractor continuation along a grid axis, basin metrics, frequency responses by
+continuation, and adaptive refinement of a 2-D map toward its boundaries (`refine`).
 
 ``sweep.maps.metrics`` and ``sweep.maps.response`` are also reachable as
 ``sweep.metrics`` and ``sweep.response``.
@@ -10,11 +10,13 @@ continuation.
 from .labels import (UNRESOLVED, amplitude, attractor_catalogue, basins, identify_attractors,
                      inverted, motion, natural_frequency_squared, well)
 from .continuation import continuation
+from .fractions import fractions
 from .period import NO_PERIOD, period
 from .pilot import pilot_catalogue, pilot_grid
+from .refine import refine
 
 __all__ = ["NO_PERIOD", "UNRESOLVED", "amplitude", "attractor_catalogue", "basins",
-           "continuation",
+           "continuation", "fractions",
            "identify_attractors", "inverted", "motion", "natural_frequency_squared", "period",
-           "pilot_catalogue", "pilot_grid",
+           "pilot_catalogue", "pilot_grid", "refine",
            "well"]

@@ -1,0 +1,176 @@
+"""Basin stability: the fraction of sampled starts that each label takes, with its
+standard error (Menck et al., Nature Physics 9, 89, 2013), from the labels of a run of
+`sweep.sample` points (or of any run: every trajectory counts once)."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+__all__ = ["fractions"]
+
+#: The dimension `fractions` reads as independent replicates (R runs of
+#: ``sweep.sample(..., seed=s)`` with R seeds, stacked along it).
+REPLICATE = "replicate"
+
+#: Smallest prefix of the convergence table (smaller ones say little).
+FIRST_PREFIX = 16
+
+BINOMIAL = ("binomial sqrt(p (1 - p) / n): exact for independent uniform samples "
+            "(sample(method='random')); for scrambled Sobol points the error of random "
+            "sampling, which for a basin indicator (discontinuous, a fractal boundary) "
+            "scrambling improves on little; an unbiased estimate: R independent seeds "
+            "along a 'replicate' dimension")
+SPREAD = ("spread of R independent replicates (randomised QMC): sample standard "
+          "deviation of the R fractions / sqrt(R)")
+
+
+def _unresolved_code(labels, unresolved):
+    """The label value that means 'no label', from the argument or the labels' own
+    attributes (``unresolved`` of `sweep.maps.basins`, the ``unresolved`` flag of
+    `sweep.maps.motion`); None when there is none."""
+    if unresolved is not None:
+        return unresolved
+    attrs = getattr(labels, "attrs", {})
+    if "unresolved" in attrs:
+        return attrs["unresolved"]
+    meanings = str(attrs.get("flag_meanings", "")).split()
+    if "unresolved" in meanings and "flag_values" in attrs:
+        return np.asarray(attrs["flag_values"])[meanings.index("unresolved")]
+    return None
+
+
+def _table(values: np.ndarray) -> tuple[np.ndarray, bool]:
+    """The labels present (sorted; NaN, if any, last) and whether NaN is one."""
+    nan = values.dtype.kind == "f" and bool(np.isnan(values).any())
+    present = np.unique(values[~np.isnan(values)] if nan else values)
+    return (np.append(present.astype(np.float64), np.nan) if nan else present), nan
+
+
+def _counts(values: np.ndarray, codes: np.ndarray, nan: bool) -> np.ndarray:
+    """Per row of ``values`` (shape (R, n)), the count of each code, shape (R, k)."""
+    known = codes[:-1] if nan else codes
+    counts = (values[..., None] == known).sum(axis=-2)
+    if nan:
+        counts = np.concatenate([counts, np.isnan(values).sum(axis=-1)[:, None]], axis=-1)
+    return counts
+
+
+def _estimate(values: np.ndarray, codes, nan: bool):
+    """Fraction, standard error and count per code of ``values``, shape (R, n)."""
+    r, n = values.shape
+    counts = _counts(values, codes, nan)
+    p = counts / n
+    if r == 1:
+        return p[0], np.sqrt(p[0] * (1 - p[0]) / n), counts[0]
+    return p.mean(axis=0), p.std(axis=0, ddof=1) / np.sqrt(r), counts.sum(axis=0)
+
+
+def fractions(labels, *, convergence: bool = False, unresolved=None) -> xr.Dataset:
+    """The fraction of the samples each label takes, with its standard error.
+
+    Parameters
+    ----------
+    labels : xarray.DataArray or array_like
+        Per trajectory, a label (`sweep.maps.basins`, `motion`, `period`, `well`, ...),
+        any shape: every trajectory counts once, in C order (for `sweep.Points`, the
+        order of the points, so a Sobol sample's prefixes are its first points). A
+        dimension named ``replicate`` (a DataArray's) holds R >= 2 independent samples,
+        e.g. ``xr.concat([maps.basins(run(sample(n, seed=s))) ...], "replicate")``:
+        the fraction is then their mean and its standard error their spread.
+    convergence : bool, default False
+        Also give the estimates over the first n samples for n = 16, 32, 64, ... (powers
+        of two, where a Sobol sample is balanced) and the total: a dimension ``n``.
+    unresolved : scalar, optional
+        The label that means 'no label' (a failed, chaotic or unmatched trajectory).
+        Default: the labels' own ``unresolved`` attribute (`basins`: -1) or
+        ``unresolved`` flag (`motion`: -127); NaN (`well`) is always no label. It is not
+        dropped: it keeps a row of its own, flagged by the coordinate ``unresolved``, so
+        the fractions of all rows sum to 1 and the resolved ones can be renormalised
+        (divide by ``1 - fraction`` of the unresolved row) if that is what is wanted.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimension ``label`` (each label present, sorted; NaN last), and ``n`` with
+        ``convergence``. Variables ``fraction`` (count / n, or the replicates' mean),
+        ``standard_error`` (one standard deviation of the fraction: ``sqrt(p (1 - p) /
+        n)`` for one sample, the binomial error, exact for independent random samples;
+        std over replicates / sqrt(R) with a ``replicate`` dimension) and ``count``
+        (over all replicates); coordinate ``unresolved`` (bool per label); attributes
+        ``samples`` (n per replicate), ``replicates`` and ``standard_error_method``.
+
+    Raises
+    ------
+    ValueError
+        For no labels, a single replicate, or labels that are not numbers.
+
+    Notes
+    -----
+    For scrambled Sobol samples (`sweep.sample`'s default) the binomial error is the
+    error random sampling would have. Scrambled Sobol is unbiased, and its variance is
+    below random sampling's for smooth integrands; a basin indicator is discontinuous
+    along a (here fractal) boundary, where the gain is small, so the binomial error is
+    a close, slightly conservative stand-in in practice, not a bound. For an estimate
+    that needs no such argument, run R independent seeds and pass them along
+    ``replicate``: the spread of the R fractions is an unbiased estimate of the
+    variance (randomised quasi-Monte Carlo).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sweep import maps
+    >>> table = maps.fractions(np.array([0, 0, 1, 1, 1, -1]), unresolved=-1)
+    >>> table.fraction.values.round(3).tolist(), table.unresolved.values.tolist()
+    ([0.167, 0.333, 0.5], [True, False, False])
+    """
+    if not isinstance(convergence, (bool, np.bool_)):
+        raise TypeError(f"convergence must be True or False, got {convergence!r}")
+    code = _unresolved_code(labels, unresolved)
+    if isinstance(labels, xr.DataArray) and REPLICATE in labels.dims:
+        other = [d for d in labels.dims if d != REPLICATE]
+        values = labels.transpose(REPLICATE, *other).values
+        values = values.reshape(values.shape[0], -1)
+        if values.shape[0] < 2:
+            raise ValueError(f"labels have {values.shape[0]} replicate; accepted: R >= 2 "
+                             "independent samples along 'replicate' (or no such dimension)")
+    else:
+        values = np.asarray(labels.values if isinstance(labels, xr.DataArray) else labels)
+        values = values.reshape(1, -1)
+    if values.dtype.kind not in "biuf":
+        raise ValueError(f"labels must be numbers (int or float labels), got dtype "
+                         f"{values.dtype}")
+    if values.shape[1] == 0:
+        raise ValueError("labels are empty; accepted: at least one labelled sample")
+    codes, nan = _table(values)
+    flagged = np.isnan(codes) if codes.dtype.kind == "f" else np.zeros(codes.size, bool)
+    if code is not None:
+        flagged |= codes == code
+    n = values.shape[1]
+    prefixes = [n]
+    if convergence:
+        prefixes = [1 << k for k in range(FIRST_PREFIX.bit_length() - 1, n.bit_length())
+                    if 1 << k < n] + [n]
+    estimates = [_estimate(values[:, :m], codes, nan) for m in prefixes]
+    p, se, counts = (np.array(column) for column in zip(*estimates))
+    dims = ("n", "label") if convergence else ("label",)
+    if not convergence:
+        p, se, counts = p[0], se[0], counts[0]
+    r = values.shape[0]
+    ds = xr.Dataset(
+        {"fraction": (dims, p, {"long_name": "fraction of the samples", "units": "1"}),
+         "standard_error": (dims, se, {"long_name": "standard error of the fraction "
+                                                    "(one standard deviation)", "units": "1"}),
+         "count": (dims, counts, {"long_name": "samples with the label (all replicates)",
+                                  "units": "1"})},
+        coords={"label": ("label", codes, {"long_name": "label"}),
+                "unresolved": ("label", flagged, {"long_name": "the label means no label "
+                                                               "(failed, chaotic, unmatched)"})},
+        attrs={"samples": n, "replicates": r,
+               "standard_error_method": BINOMIAL if r == 1 else SPREAD})
+    if convergence:
+        ds = ds.assign_coords(n=("n", np.array(prefixes, dtype=np.int64),
+                                 {"long_name": "samples used (the first n)"}))
+    if isinstance(labels, xr.DataArray) and labels.name:
+        ds.attrs["labels"] = str(labels.name)
+    return ds
