@@ -802,17 +802,34 @@ class Explorer:
         return state
 
     # -- computation -------------------------------------------------------------
+    def pilot_state(self, state: State | None = None) -> State:
+        """The state whose grid the pilot thins: ``state`` with the home window (when
+        its axes are the home's), so that every zoom reuses one catalogue."""
+        state = state or self.state
+        v = state.view
+        if (v.x, v.y) == (self.home.x, self.home.y):
+            return dataclasses.replace(state, view=self.home)
+        return state
+
     def catalogue(self, state: State | None = None) -> dict | None:
-        """The pilot's attractor catalogue of ``state`` (forced basins over the initial
-        state), from the final grid as ``sweep run --pilot 41`` makes it; cached."""
+        """The attractor catalogue of ``state`` (forced basins over the initial state):
+        `sweep.maps.pilot_catalogue` over the home window's grid (`pilot_state`), thinned
+        to `PILOT_POINTS` per axis; cached per scene and settings.
+
+        One catalogue for every zoom: the catalogue is compiled into the kernel, so a new
+        one costs a compilation (seconds), while the labels do not depend on it (a
+        catalogue only decides when a trajectory may stop; attractors it lacks are still
+        found by the strobe test; `sweep.maps.basins` orders them as a full run does).
+        """
         state = state or self.state
         if not self.uses_pilot(state):
             return None
-        key = (state.scene, state.view, state.resolution, state.t_end, state.dt,
-               state.t_transient, state.method, state.extra, state.device)
+        pilot = self.pilot_state(state)
+        key = (pilot.scene, pilot.view, pilot.resolution, pilot.t_end, pilot.dt,
+               pilot.t_transient, pilot.method, pilot.extra, pilot.device)
         if key not in self._catalogues:
             self._catalogues[key] = maps.pilot_catalogue(
-                state.scene, self.grid(state), PILOT_POINTS, **self.run_kwargs(state))
+                pilot.scene, self.grid(pilot), PILOT_POINTS, **self.run_kwargs(pilot))
             while len(self._catalogues) > 8:
                 self._catalogues.popitem(last=False)
         return self._catalogues[key]
@@ -1020,8 +1037,9 @@ class Explorer:
         """Python that recomputes ``state``'s map exactly (same grid floats, settings and
         pilot), ending with ``image = <the map>``."""
         state = state or self.state
+        pilot = self.grid(self.pilot_state(state)) if self.uses_pilot(state) else None
         return self._python(state, self.grid(state), self.run_kwargs(state),
-                            QUANTITIES[state.quantity], pilot=self.uses_pilot(state))
+                            QUANTITIES[state.quantity], pilot=pilot)
 
     def toml_text(self, state: State | None = None) -> str:
         """A run file (`sweep.toml_spec.load_run`) that recomputes ``state``'s map:
@@ -1037,29 +1055,26 @@ class Explorer:
         for name, value in state.start:
             if name not in axes:
                 axes[name] = float(value)
+        comment = (f"the explorer's map: {q.label}; after sweep run, image = {q.expression} "
+                   f"(ds = sweep.load(OUT.nc){', from sweep import maps' if 'maps.' in q.expression else ''})")
+        if self.uses_pilot(state):
+            comment += ("\n# pilot = 41 catalogues the attractors on this window (the "
+                        "explorer's pilot used its home window): the labels are the same, "
+                        "a catalogue only decides when a start may stop")
         return self._toml(state, axes, self.run_kwargs(state), pilot=self.uses_pilot(state),
-                          comment=f"the explorer's map: {q.label}; after sweep run, "
-                                  f"image = {q.expression} (ds = sweep.load(OUT.nc)"
-                                  f"{', from sweep import maps' if 'maps.' in q.expression else ''})")
+                          comment=comment)
 
     @staticmethod
     def _python(state: State, grid: Grid, kwargs: dict, quantity: Quantity | None, *,
-                pilot: bool = False, trajectory: bool = False) -> str:
+                pilot: Grid | None = None, trajectory: bool = False) -> str:
         lines = ["import numpy as np", "import sweep", "from sweep import maps", "",
                  f"scene = sweep.Scene.from_dict({state.scene.to_dict()!r})"]
-        axes = []
-        for name, values in grid.axes.items():
-            values = np.asarray(values)
-            if values.size == 1:
-                axes.append(f"{name}=[{_fmt(values[0])}]")
-            else:
-                axes.append(f"{name}=np.linspace({_fmt(values[0])}, {_fmt(values[-1])}, "
-                            f"{values.size})")
-        lines.append(f"grid = sweep.Grid({', '.join(axes)})")
+        lines.append(f"grid = {_grid_text(grid)}")
         items = ", ".join(f"{k}={v!r}" for k, v in kwargs.items())
         lines.append(f"kwargs = dict({items})")
-        if pilot:
-            lines.append(f"kwargs['attractors'] = maps.pilot_catalogue(scene, grid, "
+        if pilot is not None:
+            lines.append(f"home = {_grid_text(pilot)}  # the pilot's window: the home view")
+            lines.append(f"kwargs['attractors'] = maps.pilot_catalogue(scene, home, "
                          f"{PILOT_POINTS}, **kwargs)")
         lines.append("ds = sweep.run(scene, grid, **kwargs)")
         if trajectory:
@@ -1138,6 +1153,19 @@ class Explorer:
         buffer = _stdio.BytesIO()
         fig.savefig(buffer, format="png", dpi=dpi)
         return buffer.getvalue()
+
+
+def _grid_text(grid: Grid) -> str:
+    """``sweep.Grid(...)`` source giving exactly ``grid``'s floats."""
+    axes = []
+    for name, values in grid.axes.items():
+        values = np.asarray(values)
+        if values.size == 1:
+            axes.append(f"{name}=[{_fmt(values[0])}]")
+        else:
+            axes.append(f"{name}=np.linspace({_fmt(values[0])}, {_fmt(values[-1])}, "
+                        f"{values.size})")
+    return f"sweep.Grid({', '.join(axes)})"
 
 
 def _number(value) -> str:
