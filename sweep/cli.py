@@ -7,6 +7,7 @@
     sweep demo [-o FOLDER] [--size N]
     sweep plot FILE.nc --var NAME [--sel DIM=VALUE ...] -o OUT.png
     sweep plot FILE.nc --trajectory --sel theta0=VALUE --sel omega0=VALUE -o OUT.png
+    sweep explore [RUN.toml] [--port N] [--host ADDRESS] [--device cpu|cuda] [--no-browser]
     sweep --version
 
 Every error is one line on stderr, ``sweep: error: ...``, and exit status 2; no
@@ -69,7 +70,8 @@ DEMO = {
 
 # ------------------------------------------------------------------------------ parser
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``sweep`` command (sub-commands run, demo, plot)."""
+    """The argument parser of the ``sweep`` command (sub-commands run, demo, plot,
+    explore)."""
     parser = argparse.ArgumentParser(
         prog="sweep",
         description="JIT-compiled parameter sweeps of pendulum dynamics.",
@@ -149,6 +151,25 @@ def build_parser() -> argparse.ArgumentParser:
                       help="label theta0/omega0 axes in rad and rad/s instead of degrees")
     plot.add_argument("--cmap", metavar="NAME", help="matplotlib colormap")
     plot.set_defaults(handler=_command_plot)
+
+    explore = commands.add_parser(
+        "explore", help="explore maps in the browser, recomputed on every zoom",
+        description="Start a local web app (sweep.explore; needs the explore extra) that "
+        "draws any map of the scene over any two axes and recomputes the visible window on "
+        "every zoom; print its URL. Without RUN.toml: the demo scene.")
+    explore.add_argument("run_file", nargs="?", metavar="RUN.toml",
+                         help="start from this run file's scene, axes and run settings "
+                         "(default: the demo scene of sweep demo)")
+    explore.add_argument("--port", type=int, default=0,
+                         help="TCP port (default: a free one)")
+    explore.add_argument("--host", default="127.0.0.1",
+                         help="address to bind (default: %(default)s; any other lets anyone "
+                         "who can reach the port use this machine's cores)")
+    explore.add_argument("--device", choices=DEVICES,
+                         help="where maps run (default: the run file's, else cpu)")
+    explore.add_argument("--no-browser", action="store_true",
+                         help="print the URL without opening a browser")
+    explore.set_defaults(handler=_command_explore)
     return parser
 
 
@@ -633,6 +654,27 @@ def _load(path: str):
     except (OSError, ValueError) as exc:
         raise ValueError(f"cannot read {path!r} as a netCDF file written by sweep: "
                          f"{exc}") from None
+
+
+def _command_explore(args: argparse.Namespace) -> int:
+    """``sweep explore``: serve the browser explorer until Ctrl-C."""
+    if not 0 <= args.port <= 65535:
+        raise ValueError(f"--port must be an integer from 0 to 65535 (0: a free port), "
+                         f"got {args.port}")
+    if args.run_file is None:
+        scene, grid, kwargs = demo_inputs(400)
+    else:
+        from .toml_spec import load_run
+
+        scene, grid, kwargs = load_run(args.run_file, {})
+    if args.device is not None:
+        kwargs["device"] = args.device
+    try:
+        from .explore.app import ExplorerApp, main_serve
+    except ImportError as exc:
+        raise ValueError(str(exc)) from None
+    return main_serve(ExplorerApp(scene, grid, **kwargs), port=args.port, host=args.host,
+                      open_browser=not args.no_browser)
 
 
 def _use_agg() -> None:

@@ -418,3 +418,29 @@ def test_png_export():
     e = explorer()
     data = e.png_bytes(e.compute())
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
+
+
+# ------------------------------------------------------------------ command line
+@pytest.mark.parametrize("argv, words", [
+    (["explore", "--port", "70000"], ["--port", "70000", "0 to 65535"]),
+    (["explore", "no-such-run-file.toml"], ["no-such-run-file.toml"]),
+    (["explore", "--device", "tpu"], ["--device", "tpu"]),
+])
+def test_sweep_explore_errors_are_one_line(capsys, argv, words):
+    from sweep.cli import main
+
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("sweep: error:") or "error:" in err[-1]
+    for word in words:
+        assert word in err[-1]
+
+
+def test_sweep_explore_refuses_a_run_file_the_explorer_cannot_use(capsys, tmp_path):
+    from sweep.cli import main
+
+    path = tmp_path / "one_axis.toml"
+    path.write_text("[grid]\ntheta0 = [0.0, 1.0]\n[run]\nt_end = 1.0\ndt = 0.3\n")
+    assert main(["explore", str(path), "--no-browser"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("sweep: error:") and "dt" in err[0]

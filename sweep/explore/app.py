@@ -494,6 +494,13 @@ class ExplorerApp:
         origins = [f"{host}:{port}"]
         if host in ("127.0.0.1", "localhost"):
             origins = [f"127.0.0.1:{port}", f"localhost:{port}"]
+        elif host in ("0.0.0.0", "::", ""):  # every interface: this machine's own names
+            names = {socket.gethostname(), socket.getfqdn(), "127.0.0.1", "localhost"}
+            try:
+                names.update(socket.gethostbyname_ex(socket.gethostname())[2])
+            except OSError:
+                pass
+            origins = [f"{name}:{port}" for name in sorted(names)]
         self.url = f"http://{host if ':' not in host else f'[{host}]'}:{port}/"
         self.server = pn.serve({"/": self.session}, port=port, address=host,
                                websocket_origin=origins, show=show, threaded=threaded,
