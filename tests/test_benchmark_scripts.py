@@ -172,6 +172,17 @@ def test_gpu_script_under_the_simulator(tmp_path):
     assert (tmp_path / "gpu.md").read_text().startswith("# sweep on a GPU")
 
 
+def test_explore_script(tmp_path):
+    explore = importlib.import_module("explore")
+    assert explore.main(["--size", "16", "--zooms", "2", "--rss-zooms", "10", "--no-browser",
+                         "--no-forced", "--out", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "explore.json").read_text())
+    wells = result["scenes"]["damped wells"]
+    assert wells["final_n"] == 2 and wells["final_median_s"] > 0
+    assert len(wells["rss"]["rss_mib"]) == 2  # before, and after the 10 zooms
+    assert "| damped wells |" in (tmp_path / "explore.md").read_text()
+
+
 def test_period_map_script(tmp_path):
     period_map = importlib.import_module("period_map")
     assert period_map.main(["--size", "4", "--out", str(tmp_path)]) == 0
