@@ -234,10 +234,12 @@ def _run_quietly(scene, grid, **kwargs):
 
 
 def _summary(ds, grid, seconds: float) -> str:
-    """``12 trajectories (theta0 3 x omega0 4) in 0.52 s, 0 non-finite``."""
+    """``12 trajectories (theta0 3 x omega0 4) in 0.52 s, 0 non-finite``; for points
+    ``12 trajectories (12 points of theta0, omega0) ...``."""
     from .kernels import Status
 
-    shape = " x ".join(f"{name} {size}" for name, size in zip(grid.dims, grid.shape))
+    shape = (" x ".join(f"{name} {size}" for name, size in zip(grid.dims, grid.shape))
+             if grid.dims != ("point",) else f"{grid.size} points of {', '.join(grid.axes)}")
     failed = int(np.count_nonzero(ds.status.values != Status.OK))
     return (f"{grid.size} trajectories ({shape}) in {seconds:.2f} s wall time, "
             f"{failed} non-finite")

@@ -1,6 +1,8 @@
-"""Run files: a TOML description of a sweep -> ``(Scene, Grid, run keyword arguments)``.
+"""Run files: a TOML description of a sweep -> ``(Scene, Grid or Points, run keyword
+arguments)``.
 
-A run file has three tables::
+A run file has three tables (``[points]`` instead of ``[grid]`` for a table of
+parameter sets, `sweep.Points`)::
 
     [scene]                      # Scene.from_dict: gravity, length, model
     gravity = 9.81               # m/s^2
@@ -16,6 +18,17 @@ A run file has three tables::
     omega0 = [0.0, 1.0, 2.0]                                        # a list
     damping = 0.5                                                   # one number
     forcing_phase = {values = [0, 90], units = "deg"}               # a list in degrees
+
+    # or, instead of [grid]: one point per row, columns of one length (a number is a
+    # constant column; units = "deg" as in [grid])
+    [points]
+    theta0 = {values = [10, 120, 170], units = "deg"}
+    omega0 = [0.0, 0.5, -0.5]
+    damping = 0.2
+    # ... or the columns from a file (relative to the run file's folder): a CSV whose
+    # header names the axes, or a netCDF whose variables named by axes lie along one
+    # dimension; other keys add columns
+    # file = "starts.csv"
 
     [run]                        # keyword arguments of sweep.run
     t_end = 100.0                # s (required)
@@ -51,7 +64,7 @@ import numpy as np
 
 from ._validate import check_flag, check_positive_int
 from .engine import check_strobe_samples, validate_settings
-from .grid import Grid, from_degrees
+from .grid import Grid, Points, from_degrees
 from .kernels.spec import check_device, check_dtype
 from .observables import DEFAULT_OBSERVE, resolve
 from .physics import Scene, parameter_names, parameters
@@ -59,8 +72,8 @@ from .physics import Scene, parameter_names, parameters
 __all__ = ["OPTION_KEYS", "RUN_KEYS", "TABLES", "angle_axes", "check_scheduler", "load_run",
            "parse_run"]
 
-#: Top-level tables of a run file.
-TABLES = ("scene", "grid", "run")
+#: Top-level tables of a run file (one of grid and points).
+TABLES = ("scene", "grid", "run", "points")
 
 #: Keys of the ``[run]`` table (keyword arguments of `sweep.run`).
 RUN_KEYS = ("t_end", "dt", "t0", "t_transient", "observe", "save_every", "method", "rtol",
@@ -136,11 +149,11 @@ def load_run(path, options: dict | None = None) -> tuple[Scene, Grid, dict[str, 
                          f"{exc.strerror or exc}") from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"run file {str(path)!r} is not valid TOML: {exc}") from None
-    return parse_run(spec, source=str(path), options=options)
+    return parse_run(spec, source=str(path), options=options, folder=path.parent)
 
 
-def parse_run(spec: dict[str, Any], source: str = "run file", options: dict | None = None
-              ) -> tuple[Scene, Grid, dict[str, Any]]:
+def parse_run(spec: dict[str, Any], source: str = "run file", options: dict | None = None,
+              folder=None) -> tuple[Scene, Grid | Points, dict[str, Any]]:
     """Turn a parsed run file (nested dicts, as `tomllib` returns) into run arguments.
 
     Parameters
@@ -152,6 +165,9 @@ def parse_run(spec: dict[str, Any], source: str = "run file", options: dict | No
         Where ``spec`` came from, put at the start of every error message.
     options : dict, optional
         As `load_run`.
+    folder : str or Path, optional
+        Where ``[points] file`` paths are relative to (the run file's folder; default
+        the working directory).
 
     Returns
     -------
@@ -164,14 +180,19 @@ def parse_run(spec: dict[str, Any], source: str = "run file", options: dict | No
         As `load_run`.
     """
     _check_keys(source, "top level of the file", spec, TABLES)
+    if "grid" in spec and "points" in spec:
+        raise ValueError(f"{source}: both [grid] and [points]; accepted: one of them (a "
+                         "grid's Cartesian product, or a table of points)")
     for name in ("grid", "run"):
-        if name not in spec:
-            raise ValueError(f"{source}: missing table [{name}]; required tables: grid, run "
-                             "(scene is optional)")
+        if name not in spec and not (name == "grid" and "points" in spec):
+            raise ValueError(f"{source}: missing table [{name}]; required tables: grid (or "
+                             "points), run (scene is optional)")
     tables = {name: _table(source, name, spec.get(name, {})) for name in TABLES}
     scene = _scene(source, tables["scene"])
-    grid = _grid(source, tables["grid"])
-    with _context(source, "grid"):
+    which = "points" if "points" in spec else "grid"
+    grid = (_points(source, tables["points"], folder) if which == "points"
+            else _grid(source, tables["grid"]))
+    with _context(source, which):
         grid.check_against(scene)
     kwargs = _run(source, tables["run"])
     found = {key: kwargs.pop(key) for key in OPTION_KEYS if key in kwargs}
@@ -242,33 +263,112 @@ def _grid(source: str, table: dict) -> Grid:
         return Grid(**axes)
 
 
-def _axis(source: str, name: str, value: Any) -> np.ndarray | list:
+def _points(source: str, table: dict, folder) -> Points:
+    """``[points]`` -> Points: columns as ``[grid]`` axes (a number is a constant
+    column), and those of ``file`` (a CSV or netCDF of columns)."""
+    names = parameter_names()
+    _check_keys(source, "[points]", table, names + ("file",))
+    columns = {}
+    if "file" in table:
+        columns = _columns_file(source, table["file"], folder)
+    for name, value in table.items():
+        if name == "file":
+            continue
+        if name in columns:
+            raise ValueError(f"{source}: [points] {name} is both a key and a column of "
+                             f"{table['file']!r}; accepted: one of them")
+        columns[name] = (float(value) if isinstance(value, (int, float))
+                         and not isinstance(value, bool)
+                         else _axis(source, name, value, "points"))
+    if not columns:
+        raise ValueError(f"{source}: [points] has no columns; accepted: axis names "
+                         f"({', '.join(names)}) with lists of one length, or file")
+    with _context(source, "points"):
+        return Points(**columns)
+
+
+def _columns_file(source: str, file: Any, folder) -> dict[str, np.ndarray]:
+    """The columns of ``[points] file``: a CSV with a header of axis names, or a netCDF
+    whose variables named by axes lie along one dimension."""
+    if not isinstance(file, str) or not file:
+        raise TypeError(f"{source}: [points] file must be a path (a string), got {file!r}")
+    path = Path(folder or ".") / file
+    where = f"{source}: [points] file {file!r}"
+    if not path.is_file():
+        raise ValueError(f"{where}: no such file {str(path)!r}; accepted: a CSV or netCDF "
+                         "file, relative to the run file's folder")
+    if path.suffix.lower() in (".nc", ".nc4", ".netcdf"):
+        return _netcdf_columns(where, path)
+    import csv
+
+    try:
+        with open(path, newline="", encoding="utf-8") as handle:
+            rows = [row for row in csv.reader(handle) if row]
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{where}: cannot read it: {exc}") from None
+    if not rows:
+        raise ValueError(f"{where} is empty; accepted: a header of axis names, then rows")
+    header = [name.strip() for name in rows[0]]
+    _check_keys(source, f"the header of {file!r}", dict.fromkeys(header), parameter_names())
+    if len(rows) < 2:
+        raise ValueError(f"{where} has a header but no rows; accepted: one row per point")
+    values = np.empty((len(rows) - 1, len(header)))
+    for i, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise ValueError(f"{where}: line {i} has {len(row)} values, the header "
+                             f"{len(header)}; accepted: one value per column")
+        for j, cell in enumerate(row):
+            try:
+                values[i - 2, j] = float(cell)
+            except ValueError:
+                raise ValueError(f"{where}: line {i}, column {header[j]!r}: {cell!r} is not "
+                                 "a number") from None
+    return {name: values[:, j] for j, name in enumerate(header)}
+
+
+def _netcdf_columns(where: str, path: Path) -> dict[str, np.ndarray]:
+    import xarray as xr
+
+    try:
+        ds = xr.load_dataset(path)
+    except (OSError, ValueError, RuntimeError) as exc:
+        raise ValueError(f"{where}: cannot read it as netCDF: {exc}") from None
+    found = {name: ds[name] for name in parameter_names() if name in ds.variables}
+    dims = {variable.dims for variable in found.values()}
+    if not found or len(dims) != 1 or len(next(iter(dims))) != 1:
+        raise ValueError(f"{where}: variables named by axes ({', '.join(found) or 'none'}) "
+                         f"along {sorted(dims) or 'no dimension'}; accepted: variables named "
+                         "theta0, omega0, ... along one and the same dimension")
+    return {name: variable.values for name, variable in found.items()}
+
+
+def _axis(source: str, name: str, value: Any, table: str = "grid") -> np.ndarray | list:
     """One ``[grid]`` entry -> the values of that axis (radians for angles)."""
     if isinstance(value, (bool, str)):
-        raise TypeError(f"{source}: [grid] {name} must be a number, a list of numbers or "
+        raise TypeError(f"{source}: [{table}] {name} must be a number, a list of numbers or "
                          f"a table {{start, stop, num}}, got {value!r}")
     if isinstance(value, (int, float)):
         return [float(value)]
     if isinstance(value, list):
-        return _numbers(source, name, value)
+        return _numbers(source, name, value, table)
     if not isinstance(value, dict):
-        raise TypeError(f"{source}: [grid] {name} must be a number, a list of numbers or "
+        raise TypeError(f"{source}: [{table}] {name} must be a number, a list of numbers or "
                          f"a table {{start, stop, num}}, got {value!r}")
-    return _axis_table(source, name, value)
+    return _axis_table(source, name, value, table)
 
 
-def _numbers(source: str, name: str, values: list) -> list:
+def _numbers(source: str, name: str, values: list, table: str = "grid") -> list:
     for index, item in enumerate(values):
         if isinstance(item, bool) or not isinstance(item, (int, float)):
-            raise TypeError(f"{source}: [grid] {name}[{index}] must be a number, "
+            raise TypeError(f"{source}: [{table}] {name}[{index}] must be a number, "
                              f"got {item!r}")
     return [float(item) for item in values]
 
 
-def _axis_table(source: str, name: str, table: dict) -> np.ndarray:
+def _axis_table(source: str, name: str, table: dict, kind: str = "grid") -> np.ndarray:
     """``{start, stop, num[, units]}`` or ``{values[, units]}`` -> axis values."""
     accepted = _RANGE_KEYS + ("values",) + (("units",) if name in angle_axes() else ())
-    _check_keys(source, f"[grid.{name}]", table, accepted)
+    _check_keys(source, f"[{kind}.{name}]", table, accepted)
     if "values" in table:
         extra = [key for key in _RANGE_KEYS if key in table]
         if extra:
@@ -277,7 +377,7 @@ def _axis_table(source: str, name: str, table: dict) -> np.ndarray:
         if not isinstance(table["values"], list):
             raise TypeError(f"{source}: [grid.{name}] values must be a list of numbers, "
                              f"got {table['values']!r}")
-        values = np.asarray(_numbers(source, f"{name}.values", table["values"]))
+        values = np.asarray(_numbers(source, f"{name}.values", table["values"], kind))
     else:
         missing = [key for key in _RANGE_KEYS if key not in table]
         if missing:

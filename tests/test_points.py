@@ -7,6 +7,8 @@ cells, since both reach the kernel as rows of the same parameter table (one path
 both run in `sweep._config.SMALL_BLOCK` lanes), since each new spec compiles for seconds.
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -155,3 +157,197 @@ def test_forced_points_with_a_catalogue_are_bit_identical(forced_pair):
     ds, grid_ds, index, _ = forced_pair
     assert "attractor" in ds and ds["strobe_theta"].dims == ("point", "strobe")
     assert_same_as_cells(ds, grid_ds, index)
+
+
+# ------------------------------------------------------------------ the engine's paths
+def _same(a, b):
+    """Identical datasets but for the creation time."""
+    a, b = a.copy(), b.copy()
+    for ds in (a, b):
+        ds.attrs.pop("history", None)
+    xr.testing.assert_identical(a, b)
+
+
+def test_points_checkpoint_resumes_bit_identically(damped_pair, tmp_path):
+    ds, _, _ = damped_pair
+    points = sweep.io.grid_from(ds)
+    folder = tmp_path / "ck"
+    sweep.run(DAMPED, points, checkpoint=folder, keep_checkpoint=True, chunk_size=8, **BASE)
+    chunks = sorted(folder.glob("chunk-*.npz"))
+    assert len(chunks) == 4  # 30 points in chunks of 8
+    chunks[1].unlink()  # as if interrupted: one chunk is recomputed on resume
+    _same(sweep.run(DAMPED, points, checkpoint=folder, resume=True, chunk_size=8, **BASE), ds)
+    # a checkpoint of other points is refused, naming the difference
+    sweep.run(DAMPED, points, checkpoint=tmp_path / "other", keep_checkpoint=True,
+              chunk_size=8, **BASE)
+    moved = sweep.Points(theta0=points.axes["theta0"] + 0.5, omega0=points.axes["omega0"])
+    with pytest.raises(ValueError, match="grid"):
+        sweep.run(DAMPED, moved, checkpoint=tmp_path / "other", resume=True, chunk_size=8,
+                  **BASE)
+
+
+def test_points_stream_to_netcdf_by_row_ranges(damped_pair, tmp_path):
+    from sweep.distributed import run_to_netcdf
+
+    ds, _, _ = damped_pair
+    path = run_to_netcdf(tmp_path / "points.nc", DAMPED, sweep.io.grid_from(ds),
+                         rows_per_task=7, **BASE)  # 5 blocks of rows, the last short
+    _same(sweep.load(path), ds)
+
+
+def test_points_on_a_dask_cluster_are_identical(damped_pair, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    from sweep.distributed import run_to_netcdf
+
+    ds, _, _ = damped_pair
+    points = sweep.io.grid_from(ds)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        _same(sweep.run(DAMPED, points, client=client, chunk_size=8, **BASE), ds)
+        path = run_to_netcdf(tmp_path / "p.nc", DAMPED, points, client=client,
+                             rows_per_task=16, **BASE)
+    _same(sweep.load(path), ds)
+
+
+def test_points_on_cuda_are_bit_identical_to_the_grid_on_cuda():
+    """Under numba's CUDA simulator (tests/conftest.py) or a GPU: the same device code,
+    so the cells agree exactly (CPU and GPU differ by an ulp in sine: not compared)."""
+    pytest.importorskip("numba.cuda")
+    grid = sweep.Grid(theta0=np.linspace(-3.0, 3.0, 5), omega0=[-1.0, 0.0, 2.0])
+    points, index = subset(grid, 6)
+    kwargs = dict(BASE, t_end=1.0, device="cuda")
+    ds = sweep.run(DAMPED, points, chunk_size=4, **kwargs)  # two chunks: rows per chunk
+    assert ds.attrs["device"] == "cuda"
+    assert_same_as_cells(ds, sweep.run(DAMPED, grid, **kwargs), index)
+
+
+def test_a_catalogue_takes_points_of_one_scene_only(forced_pair, no_compute):
+    _, _, _, catalogue = forced_pair
+    run = dict(FORCED_RUN, attractors=catalogue)
+    varied = sweep.Points(theta0=[0.0, 1.0], damping=[0.2, 0.3])
+    with pytest.raises(ValueError, match="grid varies damping; accepted: a grid that varies "
+                                         "only theta0 and omega0"):
+        sweep.run(FORCED, varied, **run)
+    # a constant column is one scene: validated, then refused only because no compute
+    # is allowed here
+    with pytest.raises(AssertionError, match="compute started"):
+        sweep.run(FORCED, sweep.Points(theta0=[0.0, 1.0], damping=[0.2, 0.2]), **run)
+
+
+# ------------------------------------------------------------------ maps on points
+def _same_partition(a: np.ndarray, b: np.ndarray) -> None:
+    """Labels ``a`` and ``b`` name the same classes (up to renaming the labels)."""
+    pairs = set(zip(a.tolist(), b.tolist()))
+    assert len(pairs) == len(set(a.tolist())) == len(set(b.tolist())), pairs
+
+
+def test_forced_maps_label_points_as_their_grid_cells(forced_pair):
+    ds, grid_ds, index, _ = forced_pair
+    for label in (maps.basins, maps.period):
+        points, cells = label(ds), label(grid_ds).values[index]
+        assert points.dims == ("point",)
+        assert set(points.coords) == {"theta0", "omega0"}
+        _same_partition(points.values, cells)
+    np.testing.assert_array_equal(maps.period(ds).values, maps.period(grid_ds).values[index])
+    assert maps.basins(ds).attrs["attractor_period"].size >= 2
+
+
+def test_unforced_maps_label_points_as_their_grid_cells(damped_pair):
+    ds, grid_ds, index = damped_pair
+    np.testing.assert_array_equal(maps.motion(ds).values, maps.motion(grid_ds).values[index])
+    kwargs = dict(t_end=20.0, dt=0.01, observe=("final", "energy", "top_distance"),
+                  progress=False)
+    points = sweep.io.grid_from(ds)
+    point_run, grid_run = sweep.run(DAMPED, points, **kwargs), sweep.run(DAMPED, GRID, **kwargs)
+    np.testing.assert_array_equal(maps.well(point_run).values,
+                                  maps.well(grid_run).values[index])
+    np.testing.assert_array_equal(maps.inverted(point_run).values,
+                                  maps.inverted(grid_run).values[index])
+    _same_partition(maps.basins(point_run).values, maps.basins(grid_run).values[index])
+    assert maps.basins(point_run).dims == ("point",)
+
+
+# ------------------------------------------------------------------ run files, CLI
+RUN_FILE = """
+[scene.damping]
+coefficient = 0.2
+[points]
+{points}
+[run]
+t_end = 5.0
+dt = 0.01
+observe = ["final", "winding", "theta_max"]
+"""
+
+
+def _sweep(*argv):
+    """``sweep ARGV`` in-process: (exit status, stdout, stderr)."""
+    import contextlib
+    import io
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        status = sweep.cli.main([str(a) for a in argv])
+    return status, out.getvalue(), err.getvalue()
+
+
+def test_run_file_points_inline_from_csv_and_from_netcdf(tmp_path, damped_pair):
+    from sweep.toml_spec import load_run
+
+    ds, _, _ = damped_pair
+    theta0, omega0 = ds.theta0.values, ds.omega0.values
+    inline = tmp_path / "inline.toml"
+    inline.write_text(RUN_FILE.format(points=f"theta0 = {theta0.tolist()}\n"
+                                             f"omega0 = {omega0.tolist()}"))
+    folder = tmp_path / "sub"
+    folder.mkdir()
+    rows = "\n".join(f"{float(t)!r},{float(w)!r}" for t, w in zip(theta0, omega0))
+    (folder / "starts.csv").write_text("theta0, omega0\n" + rows + "\n")
+    xr.Dataset({"theta0": ("row", theta0), "omega0": ("row", omega0)}).to_netcdf(
+        folder / "starts.nc")
+    for name, points in (("csv", 'file = "starts.csv"'), ("nc", 'file = "starts.nc"')):
+        (folder / f"{name}.toml").write_text(RUN_FILE.format(points=points))
+    for path in (inline, folder / "csv.toml", folder / "nc.toml"):  # relative to the file
+        scene, points, kwargs = load_run(path)
+        assert isinstance(points, sweep.Points)
+        for axis in ("theta0", "omega0"):  # repr round trip: the exact values
+            np.testing.assert_array_equal(points.axes[axis], ds[axis].values)
+    status, out, err = _sweep("run", folder / "csv.toml", "-o", tmp_path / "out.nc")
+    assert status == 0 and err == ""
+    assert "30 trajectories (30 points of theta0, omega0)" in out
+    _same(sweep.load(tmp_path / "out.nc").drop_attrs(), ds.drop_attrs())
+
+
+@pytest.mark.parametrize("points, words", [
+    ("theta0 = [0.0, 1.0]\nomega0 = [1.0]",
+     "run.toml: points axes have unequal lengths: theta0 has 2, omega0 has 1"),
+    ('file = "nowhere.csv"', "[points] file 'nowhere.csv': no such file"),
+    ('file = "bad.csv"', "line 3, column 'omega0': 'x' is not a number"),
+    ('file = "short.csv"', "line 2 has 1 values, the header 2"),
+    ('file = "unknown.csv"', "unknown key 'theta' in the header of 'unknown.csv'"),
+    ('file = "bad.nc"', "accepted: variables named theta0, omega0, ... along one"),
+    ("", "[points] has no columns"),
+    ("theta0 = [0.0]\n[grid]\nomega0 = [0.0]", "both [grid] and [points]"),
+])
+def test_bad_points_in_a_run_file_are_one_line_errors(tmp_path, points, words, no_compute):
+    (tmp_path / "bad.csv").write_text("theta0,omega0\n0.0,1.0\n0.5,x\n")
+    (tmp_path / "short.csv").write_text("theta0,omega0\n0.0\n")
+    (tmp_path / "unknown.csv").write_text("theta,omega0\n0.0,1.0\n")
+    xr.Dataset({"theta0": ("a", [0.0]), "omega0": ("b", [1.0])}).to_netcdf(tmp_path / "bad.nc")
+    (tmp_path / "run.toml").write_text(RUN_FILE.format(points=points))
+    status, out, err = _sweep("run", tmp_path / "run.toml", "-o", tmp_path / "out.nc")
+    assert status == 2 and out == ""
+    assert err.startswith("sweep: error: ") and err.count("\n") == 1, err
+    assert words in err, err
+    assert not (tmp_path / "out.nc").exists()
+
+
+def test_the_example_points_run_file_runs_with_its_pilot(tmp_path):
+    example = Path(__file__).resolve().parents[1] / "examples" / "points.toml"
+    status, out, _ = _sweep("run", example, "-o", tmp_path / "points.nc")
+    assert status == 0 and "8 trajectories (8 points of theta0, omega0)" in out
+    ds = sweep.load(tmp_path / "points.nc")
+    labels = maps.basins(ds)
+    assert labels.dims == ("point",) and "attractor" in ds and (labels >= 0).all()
+    assert len(np.unique(labels)) == 3  # the three attractors of the Wada map

@@ -8,7 +8,7 @@ import numpy as np
 from .. import engine
 from .._validate import check_count
 from ..engine import INITIAL_AXES
-from ..grid import Grid
+from ..grid import Grid, Points
 from ..physics import Scene
 from .labels import attractor_catalogue
 
@@ -20,9 +20,11 @@ _MAP_ONLY = ("checkpoint", "resume", "keep_checkpoint", "estimate_error", "chunk
              "client", "progress", "stop_early", "attractors", "save_every")
 
 
-def pilot_grid(grid: Grid, points: int) -> Grid:
+def pilot_grid(grid: Grid | Points, points: int) -> Grid:
     """``grid`` with its initial-condition axes thinned to at most ``points`` evenly
-    spaced values each (ends kept).
+    spaced values each (ends kept); for `Points`, a grid of ``points`` evenly spaced
+    values from the smallest to the largest of each initial-condition column (a box
+    around them) and their other columns' one value.
 
     Raises
     ------
@@ -33,6 +35,10 @@ def pilot_grid(grid: Grid, points: int) -> Grid:
     points = check_count("pilot", points, minimum=2,
                          accepted="an int >= 2 (points per initial-condition axis)")
     engine.check_one_scene(grid)
+    if isinstance(grid, Points):
+        return Grid(**{name: np.unique(np.linspace(values.min(), values.max(), points))
+                       if name in INITIAL_AXES else values[0]
+                       for name, values in grid.axes.items()})
     axes = {}
     for name, values in grid.axes.items():
         values = np.asarray(values)
