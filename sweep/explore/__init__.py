@@ -39,7 +39,8 @@ def explore(scene, grid, **run_kwargs):
     Returns
     -------
     sweep.explore.app.ExplorerApp
-        Displays in a Jupyter notebook; ``.show()`` opens it in a browser from a local
+        Displays in a Jupyter notebook (after ``import panel; panel.extension()``, as
+        every Panel object); ``.show()`` opens it in a browser from a local
         server, ``.servable()`` marks it for ``panel serve``, ``.serve(port=...)``
         starts a server.
 
