@@ -1,0 +1,352 @@
+"""Adaptive boundary refinement of a 2-D map: the labels of a whole grid, computing only
+the trajectories its boundaries need (issue 27).
+
+`refine` runs the Mariani-Silver subdivision of `sweep.maps._quadtree` (its module
+docstring states the rule and what it guarantees) with one `sweep.run` of `sweep.Points`
+per level, and keeps the labels consistent from level to level: a per-trajectory map
+(`motion`, `well`, `period`, `inverted`, a variable) labels each trajectory on its own;
+`basins` numbers its labels over the whole map, so `refine` labels each level's
+trajectories by what they settle on (the well, or the forced attractor matched to the
+attractors met so far) and numbers the labels at the end exactly as `basins` numbers
+those of the full run.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+
+import numpy as np
+import xarray as xr
+
+from .. import engine
+from ..engine import INITIAL_AXES
+from ..grid import Grid, Points
+from ..observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
+from ..physics import Scene
+from ._quadtree import check_step, refine_field
+from .labels import (UNRESOLVED, _orbit, _same_orbit, attractor_catalogue, basins,
+                     check_max_period, check_tolerance, identify_attractors, well)
+from .pilot import pilot_catalogue
+
+__all__ = ["refine"]
+
+#: `sweep.run` arguments refine refuses: it runs one sweep per level, and a checkpoint
+#: belongs to one sweep.
+_REFUSED = ("checkpoint", "resume", "keep_checkpoint", "save_every")
+
+
+class _Codes:
+    """Integer codes for label values (NaN its own value), stable across levels."""
+
+    def __init__(self):
+        self.codes = {}
+
+    def encode(self, values: np.ndarray) -> np.ndarray:
+        values = np.asarray(values).ravel()
+        out = np.empty(values.size, dtype=np.int64)
+        missing = np.isnan(values) if values.dtype.kind == "f" else np.zeros(values.size, bool)
+        if missing.any():
+            out[missing] = self.codes.setdefault("nan", len(self.codes))
+        present = ~missing
+        found, inverse = np.unique(values[present], return_inverse=True)
+        lookup = np.array([self.codes.setdefault(v.item(), len(self.codes)) for v in found],
+                          dtype=np.int64)
+        out[present] = lookup[inverse.ravel()] if found.size else 0
+        return out
+
+    def decode(self, codes: np.ndarray, dtype) -> np.ndarray:
+        lookup = np.zeros(max(len(self.codes), 1), dtype=dtype)
+        for value, code in self.codes.items():
+            lookup[code] = np.nan if value == "nan" else value
+        return lookup[codes]
+
+
+class _ForcedAttractors:
+    """The forced attractors met so far, each a stroboscopic ring: a level's attractors
+    are matched to them (period, turns per period and orbit points within 10 ``tol``,
+    the identity test of `identify_attractors`) or added."""
+
+    def __init__(self, max_period: int, tol: float):
+        self.max_period, self.tol = max_period, tol
+        self.theta, self.omega, self.period, self.turns = [], [], [], []
+
+    def index(self, theta, omega, period: int, turns: float) -> int:
+        orbit = _orbit(theta, omega, period)
+        for k, (t, w, p, n) in enumerate(zip(self.theta, self.omega, self.period,
+                                              self.turns)):
+            if p == period and abs(n - turns) < 1e-9 \
+                    and _same_orbit(_orbit(t, w, p), orbit, 10 * self.tol):
+                return k
+        self.theta.append(theta)
+        self.omega.append(omega)
+        self.period.append(period)
+        self.turns.append(turns)
+        return len(self.theta) - 1
+
+    def keys(self, ds: xr.Dataset) -> np.ndarray:
+        """Per trajectory of ``ds`` (one level's run), the index of its attractor among
+        those met so far; -1 unresolved."""
+        labels = basins(ds, max_period=self.max_period, tol=self.tol)
+        flat = labels.values.ravel().astype(np.int64)
+        periods = np.asarray(labels.attrs["attractor_period"], dtype=np.int64)
+        if periods.size == 0:
+            return flat  # all unresolved
+        rings = attractor_catalogue(ds, labels, max_period=self.max_period, tol=self.tol)
+        turns = labels.attrs["attractor_turns_per_period"]
+        found = np.array([self.index(rings["theta"][a], rings["omega"][a], int(periods[a]),
+                                     float(turns[a]) * periods[a])
+                          for a in range(periods.size)] + [UNRESOLVED], dtype=np.int64)
+        return found[flat]  # flat == -1 picks the appended UNRESOLVED
+
+    def labels(self, keys: np.ndarray):
+        """`basins`' labels and attributes for a map of attractor indices: the rings,
+        weighted by their cells, identified together, as `basins` identifies a run with
+        an attractor catalogue (labels by decreasing basin size)."""
+        counts = np.bincount(keys[keys >= 0], minlength=len(self.theta))
+        used = np.flatnonzero(counts)
+        out = np.full(keys.shape, UNRESOLVED, dtype=np.int32)
+        if used.size == 0:
+            empty = np.zeros(0)
+            return out, {"theta": empty, "omega": empty, "period": empty.astype(int),
+                         "turns_per_period": empty, "size": empty.astype(int)}
+        part, catalogue = identify_attractors(
+            np.stack([self.theta[k] for k in used]), np.stack([self.omega[k] for k in used]),
+            max_period=self.max_period, tol=self.tol, weights=counts[used])
+        label_of = np.full(len(self.theta) + 1, UNRESOLVED, dtype=np.int32)
+        label_of[used] = part
+        return label_of[keys], catalogue  # keys == -1 picks the last entry
+
+
+def _label_function(label):
+    """``(function, keyword arguments)`` of a map function or a `functools.partial` of
+    one; None for a variable name."""
+    if isinstance(label, str):
+        return None
+    if isinstance(label, functools.partial):
+        if label.args:
+            raise ValueError(f"label = {label!r} fixes positional arguments; accepted: a "
+                             "map function, or functools.partial(map, **options)")
+        return label.func, dict(label.keywords)
+    if callable(label):
+        return label, {}
+    raise ValueError(
+        f"label must be a map function or the name of a data variable, got {label!r} "
+        f"({type(label).__name__}); accepted: sweep.maps.basins, motion, well, period, "
+        "inverted (or functools.partial of one with its options), any callable Dataset -> "
+        "DataArray that labels each trajectory on its own, or a variable name such as "
+        "'well'")
+
+
+def _variables(run_kwargs: dict) -> list[str]:
+    """The variables a run with these arguments stores."""
+    names = [v[0] for name in resolve(run_kwargs.get("observe", DEFAULT_OBSERVE))
+             for v in OBSERVABLES[name].variables]
+    names.append("status")
+    if run_kwargs.get("attractors") is not None:
+        names.append("attractor")
+    return names
+
+
+def _check(scene, grid, label, step, pilot, run_kwargs):
+    """Every argument refine can check before computing anything."""
+    if not isinstance(scene, Scene):
+        raise ValueError(f"scene must be a sweep.Scene, got {type(scene).__name__}")
+    varying = [d for d, n in zip(grid.dims, grid.shape) if n > 1] \
+        if isinstance(grid, Grid) else []
+    if len(varying) != 2:
+        got = (f"a grid of shape {dict(zip(grid.dims, grid.shape))}"
+               if isinstance(grid, Grid) else type(grid).__name__)
+        raise ValueError(f"refine needs a sweep.Grid with exactly two axes of more than one "
+                         f"value (a 2-D map; other axes may hold one value each), got {got}; "
+                         "accepted: e.g. Grid(theta0=..., omega0=...) (for more axes, "
+                         "refine each 2-D slice in a loop)")
+    step = check_step(step)
+    if pilot is not None:
+        from .._validate import check_count
+        pilot = check_count("pilot", pilot, minimum=2,
+                            accepted="None or an int >= 2 (points per initial-condition "
+                                     "axis)")
+    for name in _REFUSED:
+        if run_kwargs.get(name):
+            raise ValueError(f"refine runs one sweep per level and cannot use {name} = "
+                             f"{run_kwargs[name]!r}; accepted: refine's own sweep.run "
+                             f"arguments without {', '.join(_REFUSED)}")
+    function = _label_function(label)
+    if function is None:
+        known = _variables(run_kwargs)
+        if label not in known:
+            raise ValueError(f"label = {label!r} is not a variable of this run; accepted: "
+                             f"{', '.join(repr(k) for k in known)} (the variables of "
+                             "observe=...), or a map function")
+        return step, pilot, None, {}
+    func, options = function
+    try:  # the options must be the map's own keywords
+        inspect.signature(func).bind(None, **options)
+    except TypeError as error:
+        raise ValueError(f"label = {label!r}: {error}; accepted: the map's own keyword "
+                         "options") from None
+    except ValueError:  # no signature (a builtin): called as given
+        pass
+    if func is basins:
+        check_max_period(options.get("max_period", 8))
+        check_tolerance(options.get("tol", 1e-3))
+    return step, pilot, func, options
+
+
+def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
+           pilot: int | None = 41, **run_kwargs) -> xr.DataArray:
+    """The labels of a 2-D map, computing only the trajectories its boundaries need.
+
+    The grid's cells on lattice lines every ``step`` cells (and its last row and column)
+    are run first; a block of cells whose whole perimeter has one label is filled with
+    it, any other is split in four by its middle row and column, whose cells are run
+    next (one `sweep.run` of `sweep.Points` per level). A boundary that crosses a
+    block's perimeter is always seen; an island of another label lying entirely inside
+    a block whose perimeter agrees is not (see `sweep.maps._quadtree`).
+
+    Parameters
+    ----------
+    scene : Scene
+    grid : Grid
+        Exactly two axes of more than one value (any two: ``theta0`` and ``omega0``,
+        ``torque`` and ``damping``, ...; n0 x n1 cells, in grid order); any other axis
+        holds one value.
+    label : callable or str, default `sweep.maps.basins`
+        ``maps.basins``, ``maps.motion``, ``maps.well``, ``maps.period``,
+        ``maps.inverted``; one with options as ``functools.partial(maps.basins,
+        rest_position=True)``; any callable ``Dataset -> DataArray`` that labels each
+        trajectory on its own (its label must not depend on the other trajectories);
+        or the name of a data variable of the run (``"well"`` with ``capture``).
+    step : int, default 16
+        Cells between lattice lines, >= 2. The lattice costs about ``2 / step`` of the
+        cells; an island narrower than about ``step`` inside a block whose perimeter
+        agrees can be missed.
+    pilot : int or None, default 41
+        Forced `basins` run with ``stop_early=True`` and no ``attractors``: the
+        attractors are first catalogued by a pilot of ``pilot`` x ``pilot`` starts
+        (`sweep.maps.pilot_catalogue`) and every level stops on them (grids of
+        ``theta0`` and ``omega0`` only: a catalogue holds one scene's attractors).
+        None: no pilot. Ignored otherwise.
+    **run_kwargs
+        `sweep.run` arguments (``t_end``, ``dt``, ``observe``, ``stop_early``,
+        ``attractors``, ``device``, ...), the same for every level; ``progress``
+        defaults to False. Not ``checkpoint``, ``resume``, ``keep_checkpoint`` or
+        ``save_every``.
+
+    Returns
+    -------
+    xarray.DataArray, the grid's dims and shape
+        What ``label(sweep.run(scene, grid, **run_kwargs))`` returns (name, dtype,
+        coordinates with their attributes, attributes; for forced `basins` the
+        catalogue's ``attractor_theta``/``attractor_omega`` may be another point of
+        the same orbit), where every filled cell has its block's label, with:
+
+        - coordinate ``computed`` (bool, the grid's dims): True where the trajectory
+          was run, False where its label was filled in;
+        - attributes ``refine_step`` (the step), ``cells_computed`` (trajectories run,
+          the pilot's not counted), ``cells_total`` (n0 n1), ``cells_per_level``
+          (trajectories run at each level; level 0: the lattice), ``blocks_filled``,
+          ``pilot_cells`` (the pilot's trajectories, 0 without one).
+
+    Raises
+    ------
+    ValueError
+        Before anything is run: a grid without exactly two axes of more than one value, a step that is not an int >= 2,
+        a label that is neither callable nor a variable of the run, options the label
+        does not take, a refused run argument; then whatever `sweep.run` and the label
+        raise on a probe of one trajectory (the grid's first cell), before the lattice.
+
+    Examples
+    --------
+    >>> import numpy as np, sweep
+    >>> from sweep import maps
+    >>> scene = sweep.Scene(gravity=9.81, length=1.0, effects=(sweep.Damping(0.25),))
+    >>> grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, 129),
+    ...                   omega0=np.linspace(-12, 12, 129))
+    >>> wells = maps.refine(scene, grid, maps.well, t_end=40.0, dt=0.02,
+    ...                     observe=("capture",), stop_early=True)
+    >>> wells.attrs["cells_computed"] < grid.size
+    True
+    """
+    step, pilot, func, options = _check(scene, grid, label, step, pilot, run_kwargs)
+    kwargs = dict(run_kwargs)
+    kwargs.setdefault("progress", False)
+    dims = grid.dims
+    first, second = (d for d, n in zip(dims, grid.shape) if n > 1)
+    shape = (grid.axes[first].size, grid.axes[second].size)
+
+    def run(rows, cols):
+        columns = {d: float(values[0]) for d, values in grid.axes.items()}  # one value
+        columns[first], columns[second] = grid.axes[first][rows], grid.axes[second][cols]
+        return engine.run(scene, Points(**columns), **kwargs)
+
+    probe = run(np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64))
+    forced = False
+    if func is None:
+        template = probe[label]
+    elif func is basins:
+        template = basins(probe, **options)
+        forced = "strobe_theta" in probe
+    else:
+        template = func(probe, **options)
+    if not isinstance(template, xr.DataArray) or template.dims != ("point",):
+        raise ValueError(f"label = {label!r} gives {type(template).__name__} "
+                         f"{getattr(template, 'dims', '')} for a run of points; accepted: "
+                         "a map that labels each trajectory (one value per point)")
+    pilot_cells = 0
+    if forced and pilot is not None and kwargs.get("stop_early") \
+            and kwargs.get("attractors") is None and {first, second} <= set(INITIAL_AXES) \
+            and set(dims) <= set(INITIAL_AXES):
+        kwargs["attractors"] = pilot_catalogue(scene, grid, pilot, **kwargs)
+        pilot_cells = min(pilot, shape[0]) * min(pilot, shape[1])
+
+    codes = _Codes()
+    if forced:
+        attractors = _ForcedAttractors(options.get("max_period", 8), options.get("tol", 1e-3))
+
+        def keys(ds):
+            return attractors.keys(ds)
+    elif func is basins:  # unforced: the well, as basins reads it
+        def keys(ds):
+            index = well(ds)
+            if options.get("rest_position"):
+                index = xr.where(index.notnull(), 0.0, np.nan)
+            return codes.encode(index.values)
+    else:
+        def keys(ds):
+            values = ds[label] if func is None else func(ds, **options)
+            return codes.encode(values.values)
+
+    found = refine_field(shape, lambda rows, cols: keys(run(rows, cols)), step)
+    # the coordinates' attributes as the label passes them on (xr.where drops them)
+    coords = {d: xr.Variable(d, grid.axes[d], attrs=(template.coords[d] if d in
+                                                      template.coords else probe[d]).attrs)
+              for d in dims}
+    if forced:
+        values, catalogue = attractors.labels(found.labels.reshape(grid.shape))
+        out = xr.DataArray(values, coords=coords, dims=dims, name="basins")
+        out.attrs = dict(template.attrs)
+        out.attrs.update({f"attractor_{k}": catalogue[k] for k in
+                          ("theta", "omega", "period", "turns_per_period", "size")})
+    elif func is basins:
+        index = codes.decode(found.labels, np.float64).reshape(grid.shape)
+        wells = np.unique(index[np.isfinite(index)])
+        values = np.full(index.shape, UNRESOLVED, dtype=np.int32)
+        finite = np.isfinite(index)
+        values[finite] = np.searchsorted(wells, index[finite])
+        out = xr.DataArray(values, coords=coords, dims=dims, name="basins")
+        out.attrs = dict(template.attrs)
+        out.attrs["attractor_theta"] = (2 * np.pi * wells).astype(np.float64)
+    else:
+        values = codes.decode(found.labels, template.dtype).reshape(grid.shape)
+        out = xr.DataArray(values, coords=coords, dims=dims, name=template.name)
+        out.attrs = dict(template.attrs)
+    out = out.assign_coords(computed=(dims, found.computed.reshape(grid.shape)))
+    out["computed"].attrs = {"long_name": "trajectory run (True) or label filled in from "
+                                          "its block's perimeter (False)"}
+    out.attrs.update({"refine_step": step, "cells_computed": found.cells_computed,
+                      "cells_total": int(grid.size),
+                      "cells_per_level": np.array(found.cells_per_level, dtype=np.int64),
+                      "blocks_filled": found.blocks_filled, "pilot_cells": pilot_cells})
+    return out
