@@ -143,6 +143,27 @@ def test_forced_basins_script(tmp_path):
     assert "attractor catalogue (9 x 9 pilot)" in (tmp_path / "forced_basins.md").read_text()
 
 
+def test_refine_script(tmp_path):
+    """benchmarks/refine.py at 24 x 24 (forced) and 33 x 33 (wells), with its figure."""
+    refine = importlib.import_module("refine")
+    figure = tmp_path / "refine.png"
+    assert refine.main(["--size", "24", "--step", "4", "--pilot", "9", "--well-size", "33",
+                        "--well-step", "8", "--no-c-limit", "--out", str(tmp_path),
+                        "--figure", str(figure)]) == 0
+    result = json.loads((tmp_path / "refine.json").read_text())
+    for case, cells in (("forced", 24 * 24), ("well", 33 * 33)):
+        run = result[case]
+        assert run["cells"] == cells
+        assert 0 < run["refine"]["cells_computed"] <= cells
+        assert sum(run["refine"]["cells_per_level"]) == run["refine"]["cells_computed"]
+        assert run["refine"]["seconds"] > 0 and run["full"]["seconds"] > 0
+        assert 0 <= run["labels_differing"] <= cells
+    assert result["well"]["labels_differing"] == 0  # smooth boundaries
+    assert result["forced"]["refine"]["pilot_cells"] == 81
+    assert (tmp_path / "refine.md").read_text().startswith("# Adaptive boundary refinement")
+    assert figure.stat().st_size > 0
+
+
 def test_lyapunov_script(tmp_path):
     """Tiny sizes: the script runs, checks its NumPy baseline against sweep (the same
     step map, to rounding) and writes both result files."""
