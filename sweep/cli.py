@@ -282,6 +282,8 @@ def _command_run(args: argparse.Namespace) -> int:
     if args.dtype is not None:
         kwargs["dtype"] = args.dtype
     pilot = args.pilot if args.pilot is not None else options.get("pilot")
+    if options.get("refine"):
+        return _command_refine(args, scene, grid, kwargs, options, output, folder, pilot)
     if pilot is not None:
         from .maps.pilot import pilot_catalogue, pilot_grid
 
@@ -318,6 +320,53 @@ def _command_run(args: argparse.Namespace) -> int:
     if folder is not None:
         _checkpoint.remove(folder)
     print(f"wrote {output}: {_summary(ds, grid, seconds)}")
+    return 0
+
+
+def _command_refine(args, scene, grid, kwargs, options, output, folder, pilot) -> int:
+    """``sweep run`` of a run file with ``[run] refine = true``: `sweep.maps.refine`
+    of the grid with ``refine_label`` (default ``basins``) and ``refine_step``; writes
+    the map's labels with their ``computed`` mask (not the trajectories' variables)."""
+    from . import maps
+    from .io import save
+    from .maps.refine import refine
+    from .toml_spec import REFINE_MAPS
+
+    if folder is not None:
+        return _error("--checkpoint and --resume do not apply to [run] refine = true (it "
+                      "runs one sweep per level); accepted: sweep run without them")
+    name = options.get("refine_label", "basins")
+    label = getattr(maps, name) if name in REFINE_MAPS else name
+    scheduler = args.scheduler if args.scheduler is not None else options.get("scheduler")
+    client = _connect(scheduler) if scheduler is not None else None
+    if client is not None:
+        kwargs["client"] = client
+    if args.progress is not None:
+        kwargs["progress"] = args.progress
+    start = time.perf_counter()
+    try:
+        with _Sigterm(lambda: "sweep: terminated; no output written"), \
+                warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            labels = refine(scene, grid, label, step=options.get("refine_step", 16),
+                            pilot=41 if pilot is None else pilot, **kwargs)
+    except KeyboardInterrupt as exc:
+        word = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        print(f"sweep: {word}; no output written (a refined map is not resumable)",
+              file=sys.stderr)
+        return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
+    finally:
+        if client is not None:
+            client.close()
+    seconds = time.perf_counter() - start
+    for warning in caught:
+        print(f"sweep: warning: {' '.join(str(warning.message).split())}", file=sys.stderr)
+    save(labels.to_dataset(), output)
+    shape = " x ".join(f"{d} {n}" for d, n in zip(grid.dims, grid.shape))
+    computed = labels.attrs["cells_computed"]
+    print(f"wrote {output}: refined {labels.name} map ({shape}), {computed} of {grid.size} "
+          f"trajectories computed ({100 * computed / grid.size:.1f} %) in {seconds:.2f} s "
+          "wall time")
     return 0
 
 

@@ -44,6 +44,12 @@ parameter sets, `sweep.Points`)::
     pilot = 41                   # forced maps: find the attractors on 41 x 41 starts
                                  # first, then stop each trajectory on a match
                                  # (sweep run only; sweep.maps.pilot_catalogue)
+    refine = true                # sweep run only: write the labels of a 2-D map (a
+                                 # [grid] of two varying axes) computing only what its
+                                 # boundaries need (sweep.maps.refine)
+    refine_label = "basins"      # with refine: basins, motion, well, period, inverted,
+                                 # or a variable of the run ("basins")
+    refine_step = 16             # with refine: cells between lattice lines (>= 2; 16)
 
 ``units = "deg"`` is accepted for the angle-like axes ``theta0`` (deg),
 ``omega0`` (deg/s), ``forcing_phase`` (deg) and any effect parameter declared as an
@@ -69,8 +75,8 @@ from .kernels.spec import check_device, check_dtype
 from .observables import DEFAULT_OBSERVE, resolve
 from .physics import Scene, parameter_names, parameters
 
-__all__ = ["OPTION_KEYS", "RUN_KEYS", "TABLES", "angle_axes", "check_scheduler", "load_run",
-           "parse_run"]
+__all__ = ["OPTION_KEYS", "REFINE_MAPS", "RUN_KEYS", "TABLES", "angle_axes", "check_scheduler",
+           "load_run", "parse_run"]
 
 #: Top-level tables of a run file (one of grid and points).
 TABLES = ("scene", "grid", "run", "points")
@@ -78,11 +84,15 @@ TABLES = ("scene", "grid", "run", "points")
 #: Keys of the ``[run]`` table (keyword arguments of `sweep.run`).
 RUN_KEYS = ("t_end", "dt", "t0", "t_transient", "observe", "save_every", "method", "rtol",
             "atol", "chunk_size", "stop_early", "check_stability", "estimate_error",
-            "scheduler", "device", "strobe_samples", "dtype", "pilot")
+            "scheduler", "device", "strobe_samples", "dtype", "pilot", "refine",
+            "refine_label", "refine_step")
 
 #: Keys of ``[run]`` that say where the run executes, not what it computes: returned
 #: in ``options`` by `load_run`, never among the keyword arguments of `sweep.run`.
-OPTION_KEYS = ("scheduler", "pilot")
+OPTION_KEYS = ("scheduler", "pilot", "refine", "refine_label", "refine_step")
+
+#: ``refine_label`` names of `sweep.maps` functions (any other name: a variable).
+REFINE_MAPS = ("basins", "motion", "well", "period", "inverted")
 
 #: Keys of ``[run]`` that must be present.
 REQUIRED_RUN_KEYS = ("t_end", "dt")
@@ -460,4 +470,19 @@ def _run(source: str, table: dict) -> dict[str, Any]:
             accepted = "an int >= 2 (points per initial-condition axis)"
             if check_positive_int("pilot", kwargs["pilot"], accepted) < 2:
                 raise ValueError(f"pilot must be {accepted}, got {kwargs['pilot']!r}")
+        if "refine" in kwargs:
+            check_flag("refine", kwargs["refine"])
+        for key in ("refine_label", "refine_step"):
+            if key in kwargs and not kwargs.get("refine"):
+                raise ValueError(f"{key} is for refine = true, which this [run] table does "
+                                 "not set; accepted: refine = true with it, or neither")
+        if "refine_label" in kwargs and (not isinstance(kwargs["refine_label"], str)
+                                         or not kwargs["refine_label"]):
+            raise TypeError(f"refine_label must be a map name ({', '.join(REFINE_MAPS)}) "
+                            f"or a variable name, got {kwargs['refine_label']!r}")
+        if "refine_step" in kwargs:
+            accepted = "an int >= 2 (cells between lattice lines)"
+            if check_positive_int("refine_step", kwargs["refine_step"], accepted) < 2:
+                raise ValueError(f"refine_step must be {accepted}, got "
+                                 f"{kwargs['refine_step']!r}")
     return kwargs

@@ -411,3 +411,77 @@ def test_run_errors_come_from_the_probe_before_the_lattice(monkeypatch):
     with pytest.raises(ValueError, match="energy"):
         maps.refine(DAMPED, DAMPED_GRID, maps.basins, t_end=1.0, dt=0.02,
                     observe=("final",), progress=False)
+
+
+# ------------------------------------------------------------------ run files and CLI
+REFINE_RUN_FILE = """\
+[scene]
+gravity = 9.81
+length = 1.0
+
+[scene.damping]
+coefficient = 0.25
+
+[grid]
+theta0 = {start = -3.141592653589793, stop = 3.141592653589793, num = 129}
+omega0 = {start = -12.0, stop = 12.0, num = 129}
+
+[run]
+t_end = 40.0
+dt = 0.02
+observe = "capture"
+stop_early = true
+refine = true
+"""
+
+
+def sweep_cli(*argv):
+    import contextlib
+    import io
+
+    from sweep import cli
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = cli.main([str(a) for a in argv])
+    return code, out.getvalue(), err.getvalue()
+
+
+@pytest.mark.parametrize("extra, name", [("", "basins"),
+                                         ('refine_label = "well"\nrefine_step = 8\n', "well")])
+def test_run_file_with_refine(tmp_path, damped_full, extra, name):
+    """``[run] refine = true``: sweep run writes the refined map (labels, the computed
+    mask, the counts), which is maps.refine's, read back from the file."""
+    path = tmp_path / "run.toml"
+    path.write_text(REFINE_RUN_FILE + extra)
+    code, out, err = sweep_cli("run", path, "-o", tmp_path / "map.nc", "--no-progress")
+    assert code == 0, err
+    assert f"refined {name} map (theta0 129 x omega0 129)" in out and "computed" in out
+    saved = sweep.load(tmp_path / "map.nc")
+    label = getattr(maps, name)
+    step = 8 if extra else 16
+    want = maps.refine(DAMPED, DAMPED_GRID, label, step=step, **DAMPED_RUN)
+    np.testing.assert_array_equal(saved[name].values, want.values)
+    np.testing.assert_array_equal(saved["computed"].values, want["computed"].values)
+    assert saved[name].attrs["cells_computed"] == want.attrs["cells_computed"]
+    np.testing.assert_array_equal(want.values, label(damped_full).values)
+
+
+@pytest.mark.parametrize("extra, match", [
+    ("refine_step = 1\n", "refine_step must be an int >= 2"),
+    ("refine = 3\n", "refine"),
+])
+def test_run_file_refine_errors(tmp_path, extra, match):
+    path = tmp_path / "run.toml"
+    text = REFINE_RUN_FILE.replace("refine = true\n", "") if "refine =" in extra \
+        else REFINE_RUN_FILE
+    path.write_text(text + extra)
+    code, out, err = sweep_cli("run", path, "-o", tmp_path / "map.nc")
+    assert code != 0 and match in err
+    assert not (tmp_path / "map.nc").exists()
+
+
+def test_refine_keys_need_refine(tmp_path):
+    path = tmp_path / "run.toml"
+    path.write_text(REFINE_RUN_FILE.replace("refine = true\n", "refine_step = 8\n"))
+    code, out, err = sweep_cli("run", path, "-o", tmp_path / "map.nc")
+    assert code != 0 and "refine_step is for refine = true" in err
