@@ -154,8 +154,9 @@ def main(argv=None) -> int:
         run["effective_traj_steps_per_s"] = full_steps / run["seconds"]
     scene_w, grid_w, kwargs_w = well_case(args.well_size)
     warm(scene_w, grid_w, kwargs_w, False, 0)
-    result["well"], refined_well = compare(scene_w, grid_w, kwargs_w, maps.well, args.well_step, None,
-                                full=not args.no_full_well, repeats=args.repeats)
+    result["well"], refined_well = compare(scene_w, grid_w, kwargs_w, maps.well,
+                                           args.well_step, None, full=not args.no_full_well,
+                                           repeats=args.repeats)
     result["c_limit"] = None if args.no_c_limit else c_limit()
     if result["c_limit"]:
         for name in ("refine", "full"):

@@ -246,8 +246,7 @@ def test_damped_well_map_is_the_full_runs(damped_full, label):
     xr.testing.assert_identical(without_refinement(refined), full)
     check_bookkeeping(refined, 16)
     assert refined.attrs["cells_computed"] < 0.6 * refined.size  # 52 % at this size
-    # computed cells are the full run's trajectories: the mask marks exactly them
-    assert refined.attrs["pilot_cells"] == 0
+    assert refined.attrs["pilot_cells"] == 0  # pilots are for forced basins
 
 
 def test_torque_motion_map_with_singleton_axes():

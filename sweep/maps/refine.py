@@ -252,10 +252,11 @@ def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
     Raises
     ------
     ValueError
-        Before anything is run: a grid without exactly two axes of more than one value, a step that is not an int >= 2,
-        a label that is neither callable nor a variable of the run, options the label
-        does not take, a refused run argument; then whatever `sweep.run` and the label
-        raise on a probe of one trajectory (the grid's first cell), before the lattice.
+        Before anything is run: a grid without exactly two axes of more than one
+        value, a step that is not an int >= 2, a label that is neither callable nor a
+        variable of the run, options the label does not take, a refused run argument;
+        then whatever `sweep.run` and the label raise on a probe of one trajectory (the
+        grid's first cell), before the lattice.
 
     Examples
     --------
