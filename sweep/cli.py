@@ -228,9 +228,14 @@ def _run_quietly(scene, grid, **kwargs):
         warnings.simplefilter("always")
         ds = run(scene, grid, **kwargs)
     seconds = time.perf_counter() - start
+    _print_warnings(caught)
+    return ds, seconds
+
+
+def _print_warnings(caught) -> None:
+    """Each recorded warning as one ``sweep: warning:`` line on stderr."""
     for warning in caught:
         print(f"sweep: warning: {' '.join(str(warning.message).split())}", file=sys.stderr)
-    return ds, seconds
 
 
 def _summary(ds, grid, seconds: float) -> str:
@@ -724,8 +729,11 @@ def _command_explore(args: argparse.Namespace) -> int:
         from .explore.app import ExplorerApp, main_serve
     except ImportError as exc:
         raise ValueError(str(exc)) from None
-    return main_serve(ExplorerApp(scene, grid, **kwargs), port=args.port, host=args.host,
-                      open_browser=not args.no_browser)
+    with warnings.catch_warnings(record=True) as caught:  # e.g. the map it opens on
+        warnings.simplefilter("always")
+        app = ExplorerApp(scene, grid, **kwargs)
+    _print_warnings(caught)
+    return main_serve(app, port=args.port, host=args.host, open_browser=not args.no_browser)
 
 
 def _use_agg() -> None:

@@ -228,7 +228,7 @@ def _check_stroboscopic(names, scene: Scene, grid: Grid, settings) -> None:
                     f"observable {name!r}: the forcing period 2 pi / {float(frequency)!r} is "
                     f"not a whole number of steps dt = {settings.dt!r} ({steps:.6g}); "
                     f"accepted: dt = period / N, e.g. dt = "
-                    f"{2 * np.pi / (frequency * max(round(steps), 1))!r}")
+                    f"{float(2 * np.pi / (frequency * max(round(steps), 1)))!r}")
 
 
 def _extremes(values: dict[str, np.ndarray]) -> list[dict[str, float]]:

@@ -355,6 +355,21 @@ def test_unknown_run_keyword_is_refused():
         Explorer(scene, grid, dt=0.1)
 
 
+def test_a_forced_run_file_without_a_strobe_period_opens_on_motion():
+    """examples/forced.toml's dt = 0.01 does not divide its forcing period 3 pi: no
+    stroboscopic samples, so no basins; the explorer opens on the motion map and says
+    why (it used to refuse to start). Asking for basins explicitly is still refused.
+    Nothing is computed: the constructor only validates."""
+    scene, grid, kwargs = load_run("examples/forced.toml", {})
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, N), omega0=np.linspace(-3, 3, N))
+    with pytest.warns(UserWarning, match=r"attractor basins .* not a whole number of "
+                                         r"steps .* showing the motion map"):
+        e = Explorer(scene, grid, resolution=N, **kwargs)
+    assert e.state.quantity == "motion"
+    with pytest.raises(InvalidInput, match="not a whole number of steps"):
+        Explorer(scene, grid, resolution=N, quantity="basins", **kwargs)
+
+
 # ------------------------------------------------------------------ reproduction
 @pytest.mark.parametrize("make", [demo, wada], ids=["demo", "wada"])
 def test_toml_and_python_reproduce_the_map_exactly(make, tmp_path):

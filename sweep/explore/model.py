@@ -25,6 +25,7 @@ import os
 import tempfile
 import threading
 import time
+import warnings
 from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -466,15 +467,26 @@ class Explorer:
                  if n not in (x, y) and n not in AXES_INITIAL}
         if fixed:  # other axes: their first value goes into the scene
             scene = self._with_parameters(scene, fixed)
-        if quantity is None:
-            quantity = default_quantity(scene)
+        # the scene's natural map first; a run whose settings cannot give it (a forced
+        # scene whose dt does not divide the forcing period: no stroboscopic samples)
+        # opens on the motion map, with a warning that says why
+        chosen = quantity if quantity is not None else default_quantity(scene)
         extra = tuple((k, run_kwargs[k]) for k in PASSTHROUGH if k in run_kwargs)
-        state = State(scene=scene, view=View(x, y, ranges[x], ranges[y]), quantity=quantity,
+        state = State(scene=scene, view=View(x, y, ranges[x], ranges[y]), quantity=chosen,
                       t_end=run_kwargs["t_end"], dt=run_kwargs["dt"],
                       t_transient=run_kwargs.get("t_transient", 0.0),
                       method=run_kwargs.get("method", "rk4"), resolution=resolution,
                       start=start, extra=extra, device=run_kwargs.get("device", "cpu"))
-        self.validate(state, "explore")
+        try:
+            self.validate(state, "explore")
+        except InvalidInput as exc:
+            if quantity is not None or chosen == "motion":
+                raise
+            state = dataclasses.replace(state, quantity="motion")
+            self.validate(state, "explore")
+            warnings.warn(f"explore: the {QUANTITIES[chosen].label} map cannot be made with "
+                          f"these run settings ({exc}); showing the motion map",
+                          stacklevel=2)
         self.state = state
         self.home = state.view
         self._history = [state.view]
