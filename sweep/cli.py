@@ -152,6 +152,22 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("--cmap", metavar="NAME", help="matplotlib colormap")
     plot.set_defaults(handler=_command_plot)
 
+    fractions = commands.add_parser(
+        "fractions", help="the fraction of trajectories each label takes, with errors",
+        description="Label the trajectories of a netCDF file written by sweep (a map of "
+        "sweep.maps, or a variable) and print the fraction each label takes with its "
+        "standard error (sweep.maps.fractions: basin stability; binomial for random "
+        "samples, conservative for Sobol samples).")
+    fractions.add_argument("file", metavar="FILE.nc", help="netCDF file written by sweep")
+    fractions.add_argument("--label", default="basins", metavar="NAME",
+                           help="basins (default), motion, well, period, inverted, or a "
+                           "variable of the file")
+    fractions.add_argument("--convergence", action="store_true",
+                           help="also the estimates over the first 16, 32, ... trajectories")
+    fractions.add_argument("-o", "--output", metavar="OUT.csv",
+                           help="also write the table as CSV (its folder must exist)")
+    fractions.set_defaults(handler=_command_fractions)
+
     explore = commands.add_parser(
         "explore", help="explore maps in the browser, recomputed on every zoom",
         description="Start a local web app (sweep.explore; needs the explore extra) that "
@@ -364,8 +380,7 @@ def _command_refine(args, scene, grid, kwargs, options, output, folder, pilot) -
         if client is not None:
             client.close()
     seconds = time.perf_counter() - start
-    for warning in caught:
-        print(f"sweep: warning: {' '.join(str(warning.message).split())}", file=sys.stderr)
+    _print_warnings(caught)
     save(labels.to_dataset(), output)
     shape = " x ".join(f"{d} {n}" for d, n in zip(grid.dims, grid.shape))
     computed = labels.attrs["cells_computed"]
@@ -667,6 +682,36 @@ def _parse_selection(items: list[str]) -> dict[str, float]:
             raise ValueError(f"--sel {name} given twice; accepted: one value per dimension")
         selection[name] = math.radians(value) if degrees else value
     return selection
+
+
+def _command_fractions(args: argparse.Namespace) -> int:
+    """``sweep fractions``: label a file's trajectories, print each label's fraction and
+    standard error (`sweep.maps.fractions`), optionally write them as CSV."""
+    from . import maps
+    from .io import check_output_path
+    from .toml_spec import REFINE_MAPS
+
+    output = check_output_path(args.output) if args.output is not None else None
+    ds = _load(args.file)
+    if args.label in REFINE_MAPS:
+        labels = getattr(maps, args.label)(ds)
+    elif args.label in ds.data_vars:
+        labels = ds[args.label]
+    else:
+        raise ValueError(f"--label {args.label!r} is neither a map nor a variable of "
+                         f"{args.file!r}; accepted: {', '.join(REFINE_MAPS)}, or one of "
+                         f"{', '.join(map(str, ds.data_vars))}")
+    table = maps.fractions(labels, convergence=args.convergence)
+    frame = table.to_dataframe()
+    print(f"{args.file}: {int(table.attrs['samples'])} trajectories, {args.label} "
+          f"({table.attrs['standard_error_method'].split(':')[0]})")
+    print(frame.to_string())
+    if output is not None:
+        tmp = output.with_name(output.name + ".tmp")
+        frame.to_csv(tmp)
+        tmp.replace(output)  # never a half-written table
+        print(f"wrote {output}")
+    return 0
 
 
 def _command_plot(args: argparse.Namespace) -> int:

@@ -30,6 +30,15 @@ parameter sets, `sweep.Points`)::
     # dimension; other keys add columns
     # file = "starts.csv"
 
+    # or, instead of [grid]: points drawn in a box (sweep.sample), for basin fractions
+    [sample]
+    n = 20000                    # points (>= 1)
+    seed = 1                     # the same seed gives the same points
+    method = "sobol"             # scrambled Sobol ("sobol", default) or "random"
+    theta0 = [-3.141592653589793, 3.141592653589793]   # a range [lo, hi] per axis
+    omega0 = [-4.0, 4.0]
+    damping = 0.2                # a number: a constant column
+
     [run]                        # keyword arguments of sweep.run
     t_end = 100.0                # s (required)
     dt = 0.01                    # s (required)
@@ -78,8 +87,11 @@ from .physics import Scene, parameter_names, parameters
 __all__ = ["OPTION_KEYS", "REFINE_MAPS", "RUN_KEYS", "TABLES", "angle_axes", "check_scheduler",
            "load_run", "parse_run"]
 
-#: Top-level tables of a run file (one of grid and points).
-TABLES = ("scene", "grid", "run", "points")
+#: Top-level tables of a run file (one of grid, points and sample).
+TABLES = ("scene", "grid", "run", "points", "sample")
+
+#: The tables that say which trajectories run (one of them).
+ROWS_TABLES = ("grid", "points", "sample")
 
 #: Keys of the ``[run]`` table (keyword arguments of `sweep.run`).
 RUN_KEYS = ("t_end", "dt", "t0", "t_transient", "observe", "save_every", "method", "rtol",
@@ -190,17 +202,20 @@ def parse_run(spec: dict[str, Any], source: str = "run file", options: dict | No
         As `load_run`.
     """
     _check_keys(source, "top level of the file", spec, TABLES)
-    if "grid" in spec and "points" in spec:
-        raise ValueError(f"{source}: both [grid] and [points]; accepted: one of them (a "
-                         "grid's Cartesian product, or a table of points)")
+    given = [name for name in ROWS_TABLES if name in spec]
+    if len(given) > 1:
+        raise ValueError(f"{source}: both [{given[0]}] and [{given[1]}]; accepted: one of "
+                         "them (a grid's Cartesian product, a table of points, or points "
+                         "sampled in a box)")
     for name in ("grid", "run"):
-        if name not in spec and not (name == "grid" and "points" in spec):
+        if name not in spec and not (name == "grid" and given):
             raise ValueError(f"{source}: missing table [{name}]; required tables: grid (or "
-                             "points), run (scene is optional)")
+                             "points, or sample), run (scene is optional)")
     tables = {name: _table(source, name, spec.get(name, {})) for name in TABLES}
     scene = _scene(source, tables["scene"])
-    which = "points" if "points" in spec else "grid"
+    which = given[0] if given else "grid"
     grid = (_points(source, tables["points"], folder) if which == "points"
+            else _sample(source, tables["sample"]) if which == "sample"
             else _grid(source, tables["grid"]))
     with _context(source, which):
         grid.check_against(scene)
@@ -295,6 +310,39 @@ def _points(source: str, table: dict, folder) -> Points:
                          f"({', '.join(names)}) with lists of one length, or file")
     with _context(source, "points"):
         return Points(**columns)
+
+
+#: Keys of ``[sample]`` besides the axes' ranges.
+SAMPLE_KEYS = ("n", "seed", "method")
+
+
+def _sample(source: str, table: dict) -> Points:
+    """``[sample]`` -> `sweep.sample` (``n``, ``seed``, ``method``; per axis a range
+    ``[lo, hi]`` or a number, a constant column)."""
+    from .grid import sample
+
+    names = parameter_names()
+    _check_keys(source, "[sample]", table, SAMPLE_KEYS + names)
+    for key in ("n", "seed"):
+        if key not in table:
+            raise ValueError(f"{source}: [sample] needs {key}; accepted: n = points (an "
+                             "int >= 1), seed = an int >= 0, method = \"sobol\" or "
+                             "\"random\", and a range [lo, hi] per axis")
+    ranges = {}
+    for name, value in table.items():
+        if name in SAMPLE_KEYS:
+            continue
+        if isinstance(value, list) and len(value) == 2:
+            ranges[name] = tuple(value)
+        elif isinstance(value, (int, float)) and not isinstance(value, bool):
+            ranges[name] = float(value)
+        else:
+            raise ValueError(f"{source}: [sample] {name} = {value!r}; accepted: a range "
+                             "[lo, hi] (radians, rad/s and the parameters' own units) or "
+                             "one number (a constant column)")
+    with _context(source, "sample"):
+        return sample(table["n"], seed=table["seed"], method=table.get("method", "sobol"),
+                      **ranges)
 
 
 def _columns_file(source: str, file: Any, folder) -> dict[str, np.ndarray]:
