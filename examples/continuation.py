@@ -1,5 +1,8 @@
-"""Attractors continued along the forcing amplitude: which survive, and how their basins
-grow and shrink.
+"""Attractors continued along the forcing amplitude
+================================================
+
+Which attractors survive along the forcing amplitude, and how their basins grow
+and shrink.
 
 The damped driven pendulum below resonance (g/L = 1, c = 0.1, W = 0.8 rad/s) has a
 softening spring: as the forcing amplitude A grows, a large oscillation is born at a
@@ -61,4 +64,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    main()  # no SystemExit: the docs' gallery runs the script in-process

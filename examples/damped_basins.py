@@ -1,4 +1,5 @@
 """Basins of the damped pendulum: which well each start ends in (the spiral bands).
+================================================================================
 
 An unforced pendulum with damping c loses energy until it is captured in one of the
 wells theta = 2 pi k. Which well depends on how many turns it makes first, so the
@@ -60,4 +61,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    main()  # no SystemExit: the docs' gallery runs the script in-process

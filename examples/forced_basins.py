@@ -1,4 +1,5 @@
 """Basins of the driven pendulum: coexisting periodic attractors with fractal boundaries.
+======================================================================================
 
 theta'' = A cos(t) - c theta' - sin(theta) with c = 0.2 1/s, A = 1.66 rad/s^2 (g = L = 1,
 forcing frequency 1 rad/s; cos forcing is phase = pi/2). After a transient, each start
@@ -77,4 +78,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    main()  # no SystemExit: the docs' gallery runs the script in-process

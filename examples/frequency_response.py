@@ -1,4 +1,5 @@
 """Frequency-response curves: the softening resonance of the pendulum, with hysteresis.
+====================================================================================
 
 The forcing frequency is swept up and then down; each point starts from the previous
 point's final state. The linear model follows A / sqrt((w0^2 - W^2)^2 + (c W)^2) both
@@ -74,4 +75,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    main()  # no SystemExit: the docs' gallery runs the script in-process

@@ -1,4 +1,5 @@
 """Kapitza's pendulum: a fast vertical pivot drive makes the upside-down position stable.
+======================================================================================
 
 The pivot moves as y = a cos(nu t) (sweep.PivotDrive); averaging over the fast drive
 gives an effective potential whose maximum at the top turns into a minimum when
@@ -66,4 +67,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    main()  # no SystemExit: the docs' gallery runs the script in-process

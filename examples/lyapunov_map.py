@@ -1,4 +1,5 @@
 """Where the driven pendulum is chaotic: Lyapunov exponents along a drive and over a map.
+======================================================================================
 
 Left: both exponents of Taylor's damped driven pendulum (Classical Mechanics, ch. 12:
 phi'' + 2 beta phi' + w0^2 sin phi = gamma w0^2 cos(w t), w = 2 pi, w0 = 1.5 w,
@@ -98,4 +99,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    main()  # no SystemExit: the docs' gallery runs the script in-process

@@ -1,4 +1,5 @@
 """Stability chart of the damped Mathieu equation (linear pendulum, vertical pivot drive).
+=======================================================================================
 
 With the linear model and sweep.PivotDrive the pendulum obeys
 theta'' + c theta' + (g/L - (a nu^2 / L) cos(nu t)) theta = 0: the damped Mathieu
@@ -94,4 +95,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    main()  # no SystemExit: the docs' gallery runs the script in-process

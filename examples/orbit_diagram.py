@@ -1,4 +1,5 @@
 """Period doubling and periodicity: an orbit diagram and a periodicity map.
+========================================================================
 
 Left: the orbit (bifurcation) diagram of Taylor's damped driven pendulum (Classical
 Mechanics, ch. 12: phi'' + 2 beta phi' + w0^2 sin phi = gamma w0^2 cos(w t), w = 2 pi,
@@ -127,4 +128,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    main()  # no SystemExit: the docs' gallery runs the script in-process

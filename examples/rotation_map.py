@@ -1,4 +1,5 @@
 """Where does the driven pendulum rotate instead of librate?
+=========================================================
 
 A damped pendulum driven by A sin(W t) settles, after a transient, into a steady
 motion: a libration (bounded oscillation) or a rotation (net turns every period, in
@@ -58,4 +59,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    main()  # no SystemExit: the docs' gallery runs the script in-process

@@ -1,4 +1,5 @@
 """The seed notebook's seven cases: linear versus nonlinear simple pendulum.
+=========================================================================
 
 Reproduces the seven cases of the worked example the project grew out of (the
 Portuguese notebook "Pendulo Simples", ``/work/shared/seed``): each case integrates the
@@ -103,7 +104,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -481,4 +481,4 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    main()  # no SystemExit: the docs' gallery runs the script in-process

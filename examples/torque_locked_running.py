@@ -1,4 +1,5 @@
 """Locked versus running: the pendulum with a constant torque (tilted washboard).
+==============================================================================
 
 theta'' = tau - c theta' - (g/L) sin(theta) is also the RCSJ model of a Josephson
 junction (angle = phase, torque = bias current, mean angular velocity = DC voltage).
@@ -82,4 +83,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    main()  # no SystemExit: the docs' gallery runs the script in-process

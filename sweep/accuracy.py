@@ -370,7 +370,7 @@ def reference(scene: Scene, sample, *, t_end: float, t0: float = 0.0, kind: str 
 
 
 def state_error(scene: Scene, theta, omega, theta_ref, omega_ref) -> np.ndarray:
-    """Per-trajectory error [rad]: max(|d theta|, |d omega| / omega_n)."""
+    """Per-trajectory error [rad]: ``max(|d theta|, |d omega| / omega_n)``."""
     w0 = scene.natural_frequency
     return np.maximum(np.abs(np.asarray(theta) - theta_ref),
                       np.abs(np.asarray(omega) - omega_ref) / w0)

@@ -222,10 +222,3 @@ def test_a_declaration_that_clashes_is_refused(spring):
     with pytest.raises(ValueError, match="kernel symbol 'om' is reserved"):
         sweep.physics.register(Reserved)
     assert "clash" not in sweep.physics.EFFECTS and "reserved" not in sweep.physics.EFFECTS
-
-
-def test_the_readme_table_of_effects_is_the_declarations():
-    """The README's table of effects and parameters is written from the declarations
-    (`sweep.physics.parameter_table`); regenerate it when an effect is added."""
-    readme = (Path(__file__).parents[1] / "README.md").read_text()
-    assert sweep.physics.parameter_table() in readme

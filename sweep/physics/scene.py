@@ -61,15 +61,16 @@ def parameter_info() -> dict[str, tuple[str, str]]:
 
 
 def parameter_table() -> str:
-    """The README's table of the scene's effects and parameters, as Markdown, written
-    from the declarations (a test checks that the README holds it)."""
+    """The table of the scene's effects and parameters, as Markdown, written from the
+    declarations (the documentation's page on scenes includes it, written when the site
+    is built; a ``|`` inside a cell is escaped so that the row keeps its columns)."""
     rows = ["| effect | term in theta'' | conservative | argument | grid axis | units | "
             "meaning |", "|---|---|---|---|---|---|---|"]
     state, pendulum = BASE_PARAMETERS[:2], BASE_PARAMETERS[2:]
     groups = [("initial state", "", "", [(p, "(grid only)") for p in state]),
               ("`Scene` (always)", "- (g/L) f(theta)", "yes",
                [(p, f"`{p.field}`") for p in pendulum])]
-    groups += [(f"`{cls.__name__}`", cls.declaration.equation,
+    groups += [(f"`{cls.__name__}`", cls.declaration.equation.replace("|", "\\|"),
                 "yes" if cls.declaration.conservative else "no",
                 [(p, f"`{p.field}`") for p in cls.declaration.parameters])
                for cls in EFFECTS.values()]
