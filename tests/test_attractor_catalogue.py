@@ -113,7 +113,7 @@ def test_the_catalogue_survives_a_file_and_run_arguments(catalogue, tmp_path):
 def test_float32_with_a_catalogue(catalogue, full_labels):
     """The catalogue's tolerance (1e-3) is far above float32's rounding: the labels of
     a float32 run with it are the float32 full run's (both compared on the starts
-    where float32 and float64 agree, see the float32 section of the README)."""
+    where float32 and float64 agree, see docs/guide/integrators.md, float32)."""
     ds = sweep.run(SCENE, _grid(21), **EARLY, attractors=catalogue, dtype="float32")
     full32 = maps.basins(sweep.run(SCENE, _grid(21), **FULL, dtype="float32"))
     np.testing.assert_array_equal(maps.basins(ds).values, full32.values)

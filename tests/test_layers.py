@@ -4,7 +4,7 @@ function) points down or sideways within a layer, never up, and there is no circ
     cli -> maps, accuracy, plot, toml_spec, distributed, diskspace -> engine -> execution, io
         -> kernels, grid, stability -> physics, methods, observables -> _config, ...
 
-The README's layout section draws the same picture.
+The documentation's layout section (docs/guide/extending.md) draws the same picture.
 """
 
 import ast

@@ -17,7 +17,7 @@ A block costs BLOCK times the most step attempts of its trajectories
 last table): 4.4-5.1x the speed of one trajectory per block (with libm's power, the
 faster scalar choice) at the same tolerance, 3.8-4.1x on an uneven grid; 5.4-6.2x
 against one trajectory per block with the previous sine (whose longer latency slowed
-the one-at-a-time kernel more than the lanes; README, Methods).
+the one-at-a-time kernel more than the lanes; docs/guide/integrators.md).
 The controller's factor ``err ** -0.2`` is computed with the lanes, vectorised
 (`sweep.kernels.vecmath.inverse_fifth_root`: a guess from the float's bits and Newton
 steps, no libm call); what is left scalar is a finished lane's write-out.
