@@ -22,8 +22,23 @@ import pytest
 import sweep
 import sweep.execution.local
 
+import compile_log
+
+# numba's cache index updates under a lock (as sweep.kernels.build does), also for the
+# tests that call sweep.kernels.vecmath's helpers directly: pytest-xdist's workers
+# share the cache folders
+sweep.kernels.cache._serialise_numba_index()
+
 matplotlib.use("Agg")  # no display on CI
 os.environ.setdefault("MPLBACKEND", "Agg")
+
+
+def pytest_configure(config):
+    compile_log.pytest_configure(config)  # SWEEP_COMPILE_LOG=file: log numba's compiles
+
+
+def pytest_runtest_setup(item):
+    compile_log.pytest_runtest_setup(item)
 
 
 @pytest.fixture

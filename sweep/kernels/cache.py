@@ -56,6 +56,47 @@ def _write_once(path: Path, text: str) -> None:
     os.replace(tmp, path)
 
 
+def _serialise_numba_index() -> None:
+    """Make numba's update of a cache index one step for concurrent processes.
+
+    numba (0.68) saves a compiled signature by reading the function's index (``.nbi``),
+    picking the first free data file name (``<function>.1.nbc``, ``.2.nbc``, ...),
+    rewriting the index and writing the data, each file atomically but the whole without
+    a lock. Two processes saving *different* signatures of one function at once (two
+    pytest-xdist workers or Dask workers compiling a `sweep.kernels.vecmath` helper for
+    float32 and float64) can both pick ``.1.nbc``: the index left may then map one
+    signature to the other's machine code, which a later process loads and runs
+    (reproduced by forcing that interleaving; same-signature saves are harmless).
+    Here each save holds an exclusive advisory lock (``flock``) on the cache folder, so
+    the read, the choice and the writes of one save happen together. Without ``fcntl``
+    (Windows) or a numba that moved the class, nothing changes. Called by `build` and
+    `sweep.maps._strobe` (not at ``import sweep``, which imports no numba)."""
+    try:
+        import fcntl
+
+        from numba.core.caching import IndexDataCacheFile
+    except ImportError:  # pragma: no cover - Windows, or numba's internals moved
+        return
+    save = IndexDataCacheFile.save
+    if getattr(save, "_sweep_serialised", False):
+        return
+
+    @functools.wraps(save)
+    def serialised_save(self, key, data):
+        try:
+            folder = os.open(self._cache_path, os.O_RDONLY)
+        except (OSError, AttributeError):  # pragma: no cover - as numba would have failed
+            return save(self, key, data)
+        try:
+            fcntl.flock(folder, fcntl.LOCK_EX)
+            return save(self, key, data)
+        finally:
+            os.close(folder)  # releases the lock
+
+    serialised_save._sweep_serialised = True
+    IndexDataCacheFile.save = serialised_save
+
+
 def _problem(path: Path, own: bool) -> str | None:
     """What lets another user change the folder ``path``, or None.
 
@@ -176,7 +217,7 @@ def _module_dir() -> Path:
     return private
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def build(spec: KernelSpec):
     """Return the compiled kernel for ``spec`` (memoised; disk-cached by numba).
 
@@ -197,6 +238,7 @@ def build(spec: KernelSpec):
         Once per process, when the cache folder could be changed by another user (see
         the module's docstring); kernels are then built in a private folder.
     """
+    _serialise_numba_index()
     text = source(spec)
     digest = hashlib.sha1(text.encode()).hexdigest()[:16]
     name = f"sweep_kernel_{digest}"

@@ -17,6 +17,10 @@ import numpy as np
 from numba import njit, prange, types
 from numba.typed import Dict
 
+from ..kernels.cache import _serialise_numba_index
+
+_serialise_numba_index()  # this module's cache=True functions save under the lock too
+
 __all__ = ["bucket_keys", "periods"]
 
 TWO_PI = 2.0 * math.pi

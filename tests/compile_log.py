@@ -1,0 +1,122 @@
+"""Where a test run's time goes to numba compiling: a pytest plugin.
+
+``SWEEP_COMPILE_LOG=compile.jsonl python -m pytest ...`` writes one JSON line per numba
+compile (a cache miss: loads from numba's disk cache are not compiles) with the test
+that triggered it, the function (``sweep_kernel_<hash>.kernel`` for a generated kernel,
+with its `KernelSpec`), and the seconds it took, nested compiles (the helpers a kernel
+calls) counted in the outermost one. Under pytest-xdist every worker writes
+``compile.<worker>.jsonl``. ``python tests/compile_log.py compile*.jsonl`` sums them:
+per test, per spec, and the specs that several tests compiled.
+
+tests/conftest.py calls its two hooks; they do nothing unless the variable is set.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from collections import defaultdict
+
+_ENV = "SWEEP_COMPILE_LOG"
+
+
+class _Recorder:
+    """A numba event listener (numba.core.event.Listener's on_start / on_end)."""
+
+    def __init__(self, path):
+        self.handle = open(path, "a")  # noqa: SIM115 - open for the whole run
+        self.test = "<collection>"
+        self.depth = 0
+        self.started = 0.0
+        self.specs = {}  # generated module name -> repr of its KernelSpec
+
+    def on_start(self, event):
+        if self.depth == 0:
+            self.started = time.perf_counter()
+        self.depth += 1
+
+    def on_end(self, event):
+        self.depth -= 1
+        if self.depth:
+            return
+        dispatcher = event.data["dispatcher"]
+        func = getattr(dispatcher, "py_func", None)
+        module = getattr(func, "__module__", "?")
+        name = f"{module}.{getattr(func, '__qualname__', '?')}"
+        self.handle.write(json.dumps({
+            "test": self.test, "function": name, "spec": self.specs.get(module),
+            "seconds": round(time.perf_counter() - self.started, 4),
+            "args": str(event.data.get("args"))[:200],
+        }) + "\n")
+        self.handle.flush()
+
+
+def pytest_configure(config):
+    path = os.environ.get(_ENV)
+    if not path:
+        return
+    worker = os.environ.get("PYTEST_XDIST_WORKER")
+    if worker:
+        root, ext = os.path.splitext(path)
+        path = f"{root}.{worker}{ext}"
+    import hashlib
+
+    from numba.core import event
+
+    import sweep.kernels.cache as cache
+
+    class Recorder(_Recorder, event.Listener):
+        pass
+
+    recorder = Recorder(path)
+    event.register("numba:compile", recorder)
+    source = cache.source
+
+    def recording_source(spec):  # cache.build names the module by the source's hash
+        text = source(spec)
+        name = "sweep_kernel_" + hashlib.sha1(text.encode()).hexdigest()[:16]
+        recorder.specs[name] = repr(spec)
+        return text
+
+    cache.source = recording_source
+    config._sweep_compile_log = recorder
+
+
+def pytest_runtest_setup(item):
+    recorder = getattr(item.config, "_sweep_compile_log", None)
+    if recorder is not None:
+        recorder.test = item.nodeid
+
+
+def _summary(paths):
+    rows = []
+    for path in paths:
+        with open(path) as handle:
+            rows += [json.loads(line) for line in handle]
+    total = sum(r["seconds"] for r in rows)
+    per_test, per_spec, tests_of = defaultdict(float), defaultdict(float), defaultdict(set)
+    for r in rows:
+        per_test[r["test"]] += r["seconds"]
+        key = r["spec"] or r["function"]
+        per_spec[key] += r["seconds"]
+        tests_of[key].add(r["test"].split("::")[0])
+    kernels = {r["spec"] for r in rows if r["spec"]}
+    print(f"{len(rows)} compiles, {total:.0f} s; {len(kernels)} generated kernels")
+    print("\nper test file:")
+    per_file = defaultdict(float)
+    for test, s in per_test.items():
+        per_file[test.split("::")[0]] += s
+    for name, s in sorted(per_file.items(), key=lambda kv: -kv[1])[:40]:
+        print(f"{s:8.1f}  {name}")
+    print("\nper test:")
+    for name, s in sorted(per_test.items(), key=lambda kv: -kv[1])[:40]:
+        print(f"{s:8.1f}  {name}")
+    print("\nper spec or function:")
+    for name, s in sorted(per_spec.items(), key=lambda kv: -kv[1])[:40]:
+        print(f"{s:8.1f}  {name[:300]}  [{', '.join(sorted(tests_of[name]))[:200]}]")
+
+
+if __name__ == "__main__":
+    _summary(sys.argv[1:])

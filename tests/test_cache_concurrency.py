@@ -1,0 +1,98 @@
+"""The kernel cache under concurrent writers: pytest-xdist's workers (and Dask's, on one
+machine) compile into one cache folder at once.
+
+sweep writes a generated module atomically (`sweep.kernels.cache._write_once`) and numba
+writes each cache file atomically (a unique temporary file, then ``os.replace``), but
+numba's update of a function's index is a read-modify-write without a lock:
+`sweep.kernels.cache` serialises it (``_serialise_numba_index``), checked here by
+forcing the interleaving that otherwise maps one signature to another's machine code.
+"""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+
+from numba.core import caching
+
+from sweep.kernels import cache
+
+cache._serialise_numba_index()  # as build() does (conftest.py has too)
+
+#: One process: wait for the start file, run the linear model's one-trajectory kernel,
+#: report the result and whether the kernel was compiled or loaded from the disk cache.
+SCRIPT = textwrap.dedent("""
+    import json, os, sys, time
+    import sweep
+    from sweep import kernels
+    while not os.path.exists(sys.argv[1]):
+        time.sleep(0.005)
+    ds = sweep.run(sweep.Scene(model="linear"), sweep.Grid(theta0=[0.1]), t_end=1.0,
+                   dt=0.01, observe=("final",))
+    kernel = kernels.build(kernels.KernelSpec("linear", (), ("final",), block=1))
+    print(json.dumps({"theta": float(ds.theta_final[0]),
+                      "hits": sum(kernel.stats.cache_hits.values()),
+                      "misses": sum(kernel.stats.cache_misses.values())}))
+""")
+
+
+def test_two_processes_compiling_one_kernel_at_once_share_the_cache(tmp_path):
+    env = {**os.environ, "SWEEP_CACHE_DIR": str(tmp_path / "cache")}
+    env.pop("NUMBA_CACHE_DIR", None)  # numba's files beside the modules, in tmp_path
+    start = tmp_path / "start"
+
+    def launch():
+        return subprocess.Popen([sys.executable, "-c", SCRIPT, str(start)], env=env,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+    both = [launch(), launch()]
+    time.sleep(0.5)  # both importing sweep; then they compile together
+    start.touch()
+    reports = []
+    for process in both:
+        out, err = process.communicate(timeout=300)
+        assert process.returncode == 0, err
+        reports.append(json.loads(out.splitlines()[-1]))
+    assert reports[0]["theta"] == reports[1]["theta"]
+    assert all(r["misses"] == 1 and r["hits"] == 0 for r in reports)  # both compiled
+
+    later = launch()
+    out, err = later.communicate(timeout=300)  # start exists: runs at once
+    assert later.returncode == 0, err
+    report = json.loads(out.splitlines()[-1])
+    assert report == {"theta": reports[0]["theta"], "hits": 1, "misses": 0}
+    modules = sorted(p.name for p in (tmp_path / "cache" / "kernels").glob("*.py"))
+    assert len(modules) == 1, modules  # one module, written once, no temporary left
+
+
+def test_numba_index_updates_are_serialised(tmp_path, monkeypatch):
+    """Two savers of different signatures of one function, each reading the index
+    before the other wrote it (the read made slow): without the lock both take
+    ``.1.nbc`` and one signature's entry names the other's data."""
+    load = caching.IndexDataCacheFile._load_index
+
+    def slow_load(self):
+        overloads = load(self)
+        time.sleep(0.3)
+        return overloads
+
+    monkeypatch.setattr(caching.IndexDataCacheFile, "_load_index", slow_load)
+    stamp = (1.0, 100)
+
+    def index():  # numba makes one per process and function
+        return caching.IndexDataCacheFile(str(tmp_path), "f-1.py311", stamp)
+
+    savers = [threading.Thread(target=index().save, args=(key, data))
+              for key, data in (("float64 key", "float64 code"), ("int64 key", "int64 code"))]
+    for thread in savers:
+        thread.start()
+    for thread in savers:
+        thread.join()
+    fresh = index()
+    assert fresh.load("float64 key") == "float64 code"
+    assert fresh.load("int64 key") == "int64 code"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f-1.py311.1.nbc", "f-1.py311.2.nbc",
+                                                          "f-1.py311.nbi"]
