@@ -24,8 +24,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
-import os
-import platform
 import shutil
 import statistics
 import sys
@@ -33,30 +31,16 @@ import threading
 import time
 from pathlib import Path
 
-import numba
 import numpy as np
 
 import sweep
 from sweep.cli import demo_inputs
 from sweep.explore.model import Explorer, Requests, rss_bytes
 
+from _machine import machine
+
 HERE = Path(__file__).resolve().parent
 PERIOD = 2 * np.pi  # the forced scene's forcing period [s] (W = 1 rad/s)
-
-
-def machine() -> str:
-    """A one-line description of this machine (as benchmarks/forced_basins.py)."""
-    cpu = platform.processor() or "unknown CPU"
-    try:
-        with open("/proc/cpuinfo") as handle:
-            for line in handle:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return f"{cpu}, {os.cpu_count()} cores, numba {numba.__version__}, " \
-           f"{numba.get_num_threads()} threads"
 
 
 def damped(size: int):
@@ -219,7 +203,8 @@ def browser_latencies(make, size: int, count: int) -> dict | None:
                 "const m = Bokeh.documents[0].get_model_by_name('map');"
                 "m.x_range.setv({start: arguments[0], end: arguments[1]});"
                 "m.y_range.setv({start: arguments[2], end: arguments[3]});", x0, x1, y0, y1)
-            _until(driver, lambda s: s["n"] == size * size and np.isclose(s["x"], x0)
+            _until(driver, lambda s, x0=x0, x1=x1, y0=y0: s["n"] == size * size
+                   and np.isclose(s["x"], x0)
                    and np.isclose(s["x"] + s["dw"], x1) and np.isclose(s["y"], y0), 120,
                    step=0.01)
             latencies.append(time.perf_counter() - begin)

@@ -39,7 +39,7 @@ import sweep
 from sweep import accuracy, maps
 
 import run_all
-from forced_basins import machine
+from _machine import machine
 
 DTYPES = ("float64", "float32")
 
@@ -188,7 +188,7 @@ def markdown(r) -> str:
                      f"{rate['float32'] / rate['float64']:.2f}x |")
     lines += ["", "## RK4's error at t_end against the reference (max over the starts, rad)",
               ""]
-    for key, row in r["precision"].items():
+    for row in r["precision"].values():
         lines += [f"**{row['title']}**", "", "| dt [s] | float64 error | float32 error | "
                   "float64 s/1e6 traj. | float32 s/1e6 traj. |", "|---|---|---|---|---|"]
         for k, dt in enumerate(row["dt"]):

@@ -6,9 +6,10 @@ observed (stroboscopic samples for the attractor search), RK4 with 100 steps per
 
 By default the whole map is run, end to end (``sweep.run`` then ``maps.basins``), once
 as specified, once with ``stop_early`` and once with ``stop_early`` and an attractor
-catalogue from a coarse pilot run (``--pilot N``: N x N starts; its time is counted); ``--rows N`` runs a band of N theta0 rows
-(all omega0 columns) and extrapolates the full map's time linearly (trajectories are
-independent, the time per trajectory-step is flat in the number of trajectories).
+catalogue from a coarse pilot run (``--pilot N``: N x N starts; its time is counted);
+``--rows N`` runs a band of N theta0 rows (all omega0 columns) and extrapolates the
+full map's time linearly (trajectories are independent, the time per trajectory-step is
+flat in the number of trajectories).
 
 The end-to-end time is set against the C limit (`run_all.py`'s fastest C of the same
 algorithm, built with the flags of the last ``run_all.py`` search in
@@ -29,68 +30,20 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
-import tempfile
 import time
 from pathlib import Path
 
-import numba
 import numpy as np
 
 import sweep
 from sweep import maps
 
+from _c_builds import c_limit
+from _machine import machine
+
 STEPS_PER_PERIOD = 100
 TRANSIENT_PERIODS = 300
 OBSERVED_PERIODS = 20
-
-
-def machine() -> str:
-    """A one-line description of this machine."""
-    cpu = platform.processor() or "unknown CPU"
-    try:
-        with open("/proc/cpuinfo") as handle:
-            for line in handle:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return f"{cpu}, {os.cpu_count()} cores, numba {numba.__version__}, " \
-           f"{numba.get_num_threads()} threads"
-
-
-def c_limit(repeats: int = 3) -> dict | None:
-    """The C limit's throughput, best of ``repeats`` calls on run_all's full-scene
-    workload (2^17 trajectories x 2000 steps); None without gcc."""
-    import run_all  # here, not at the top: run_all imports this module
-
-    flags = None
-    try:
-        found = json.loads((Path(__file__).parent / "results" / "run_all.json").read_text())
-        flags = [f for f in found["c_limit"]["flags"] if f not in run_all.C_BASE_FLAGS]
-    except (OSError, KeyError, ValueError):
-        pass
-    if flags is None:  # no search on record: its first 512-bit candidate at block 4096
-        flags = run_all.c_limit_candidates("avx512f" in run_all.cpu_flags(), (4096,))
-        flags = next(iter(flags.values()))
-    n, steps = 2**17, 2000
-    th0, om0 = run_all.initial_states(*run_all.grid_axes(n))
-    with tempfile.TemporaryDirectory() as tmp:
-        fn = run_all.build_c_one(Path(tmp), "limit", flags)
-        if not callable(fn):
-            return None
-        run_all.call_c(fn, th0[:64], om0[:64], 10)  # load the library, warm the threads
-        best = min(_seconds(lambda: run_all.call_c(fn, th0, om0, steps))
-                   for _ in range(repeats))
-    return {"flags": " ".join(flags), "traj_steps_per_s": th0.size * steps / best}
-
-
-def _seconds(fn) -> float:
-    start = time.perf_counter()
-    fn()
-    return time.perf_counter() - start
 
 
 def main(argv=None) -> int:
@@ -147,7 +100,7 @@ def main(argv=None) -> int:
             "matched_fraction": float((ds.attractor >= 0).mean()) if catalogue else 0.0,
             "labelling_seconds": label_s,
             "full_map_seconds_extrapolated": (run_s + label_s) * scale,
-            "attractors": int(len(labels[name].attrs["attractor_size"])),
+            "attractors": len(labels[name].attrs["attractor_size"]),
             "unresolved_fraction": float((labels[name] == maps.UNRESOLVED).mean()),
         }
     result["full"]["trajectory_steps_per_second"] = grid.size * steps / result["full"][

@@ -44,10 +44,12 @@ import sweep
 from sweep import maps
 
 try:
-    from forced_basins import OBSERVED_PERIODS, STEPS_PER_PERIOD, TRANSIENT_PERIODS, machine
+    from _machine import machine
+    from forced_basins import OBSERVED_PERIODS, STEPS_PER_PERIOD, TRANSIENT_PERIODS
 except ImportError:  # pragma: no cover - run from elsewhere
     sys.path.insert(0, str(Path(__file__).parent))
-    from forced_basins import OBSERVED_PERIODS, STEPS_PER_PERIOD, TRANSIENT_PERIODS, machine
+    from _machine import machine
+    from forced_basins import OBSERVED_PERIODS, STEPS_PER_PERIOD, TRANSIENT_PERIODS
 
 STEPS = 2000
 DT = 0.01
@@ -147,7 +149,7 @@ def _basin_map(size: int, pilot: int) -> dict:
         label_s = time.perf_counter() - start
         found[name] = {"seconds": pilot_s + run_s + label_s, "pilot_seconds": pilot_s,
                        "run_seconds": run_s, "labelling_seconds": label_s,
-                       "attractors": int(len(labels[name].attrs["attractor_size"]))}
+                       "attractors": len(labels[name].attrs["attractor_size"])}
     resolved = labels["full"].values != maps.UNRESOLVED
     for name in ("stop_early", "catalogue"):
         differ = (labels[name].values != labels["full"].values) & resolved

@@ -35,7 +35,7 @@ import numpy as np
 import sweep
 
 try:  # the machine description of the basin benchmark
-    from forced_basins import machine
+    from _machine import machine
 except ImportError:  # pragma: no cover - run from elsewhere
     def machine() -> str:
         return "unknown machine"

@@ -44,8 +44,9 @@ import numpy as np
 import sweep
 from sweep import maps
 
-from forced_basins import OBSERVED_PERIODS, STEPS_PER_PERIOD, TRANSIENT_PERIODS, c_limit, \
-    machine
+from _c_builds import c_limit
+from _machine import machine
+from forced_basins import OBSERVED_PERIODS, STEPS_PER_PERIOD, TRANSIENT_PERIODS
 
 
 def forced_case(size: int):

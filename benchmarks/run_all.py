@@ -48,8 +48,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import ctypes
-import itertools
 import json
 import math
 import os
@@ -70,15 +68,38 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent))
 
-from forced_basins import machine
-
 import sweep
 from sweep import _config
 from sweep import kernels as _kernels
 from sweep.kernels import vecmath as _vecmath
 
-G_OVER_L, DAMPING, AMPLITUDE, FREQUENCY, PHASE = 1.0, 0.5, 1.2, 2.0 / 3.0, 0.0
-DT = 0.01
+# the C reference and the full scene, and the machine's description: re-exported, so
+# run_all.X names them as before (tests/test_benchmark_scripts.py, float32.py)
+from _c_builds import (  # noqa: F401
+    AMPLITUDE,
+    C_BASE_FLAGS,
+    C_BLOCKS,
+    C_CHECK_STEPS,
+    C_CHECK_TOL,
+    C_FIXED,
+    C_SOURCE,
+    DAMPING,
+    DT,
+    FREQUENCY,
+    G_OVER_L,
+    NARROW,
+    PHASE,
+    WIDE,
+    build_c,
+    build_c_one,
+    c_limit_candidates,
+    c_limit_variations,
+    call_c,
+    grid_axes,
+    initial_states,
+)
+from _machine import cpu_flags, gcc_info, machine, machine_details, native_vector_registers  # noqa: F401
+
 REPEATS = 1  # best of at least this many calls (--repeats)
 MIN_SECONDS = 0.0  # every timing repeats until this much wall time (--quick: 0.3 s)
 VEC_FLAGS = set(_config.FASTMATH)  # sweep's kernels' fast-math flags (no reassoc)
@@ -106,18 +127,6 @@ def scene_of(model="nonlinear", damping=True, forcing=True):
     if forcing:
         effects.append(sweep.Forcing(AMPLITUDE, FREQUENCY, PHASE))
     return sweep.Scene(gravity=G_OVER_L, length=1.0, model=model, effects=tuple(effects))
-
-
-def grid_axes(n):
-    """(theta0, omega0) axes with n trajectories: 2 x 1 aspect like 512 x 256."""
-    cols = max(1, round(math.sqrt(n / 2)))
-    rows = max(1, n // cols)
-    return np.linspace(-np.pi, np.pi, rows), np.linspace(-2.0, 2.0, cols)
-
-
-def initial_states(theta0, omega0):
-    th, om = np.meshgrid(theta0, omega0, indexing="ij")
-    return th.ravel().copy(), om.ravel().copy()
 
 
 def run_kernel(spec, scene, theta0, omega0, steps):
@@ -269,181 +278,6 @@ def jax_rk4(th0, om0, steps):
     return time.perf_counter() - start, (np.asarray(th), np.asarray(om))
 
 
-# ------------------------------------------------------------------------ C reference
-# Every build: gcc C_BASE_FLAGS + the variant's flags. Never -ffast-math (reassociation
-# would break the sine's magic-number rounding and exact reduction). -ffp-contract=fast
-# fuses a*b + c into FMAs wherever gcc likes (sweep's kernels write theirs explicitly,
-# sweep._config.FASTMATH, but the fastest C may fuse more); -ffp-contract=off fuses
-# none but the sine's explicit fma() calls.
-C_SOURCE = HERE / "c_reference" / "pendulum.c"
-C_BASE_FLAGS = ["-O3", "-march=native", "-fopenmp", "-shared", "-fPIC"]
-C_BLOCKS = (64, 128, 256, 512, 1024, 2048, 4096)  # the limit's block-size sweep
-C_CHECK_STEPS = 100  # the agreement check's horizon (t = 1)
-C_CHECK_TOL = 1e-12  # max |C - sweep| of the final state allowed after C_CHECK_STEPS
-WIDE = "-mprefer-vector-width=512"
-
-#: The weaker builds, kept as rows named for what they are. (gcc 12.2 takes this Zen 4
-#: for znver3 under -march=native but, with AVX-512 enabled and no 256-bit tuning for
-#: AMD, still emits 512-bit zmm code by default: `native_vector_registers` checks.)
-NARROW = "-mprefer-vector-width=256"
-C_FIXED = {
-    "C, -march=native, libm sin, no FMA":
-        ["-DSIN_VARIANT=0", "-ffp-contract=off"],
-    "C, -march=native, glibc vector sin (libmvec), no FMA":
-        ["-DSIN_VARIANT=1", "-ffp-contract=off"],
-    "C, -march=native, polynomial sin, FMA only where written (its fma())":
-        ["-DSIN_VARIANT=4", "-ffp-contract=off"],
-    "C, 256-bit (-mprefer-vector-width=256), polynomial sin, FMA":
-        [NARROW, "-DSIN_VARIANT=4", "-ffp-contract=fast"],
-    "C, -march=native, previous polynomial sin (both polynomials), FMA":
-        ["-DSIN_VARIANT=2", "-ffp-contract=fast"],
-    "C, -march=native, glibc vector sin (libmvec), FMA":
-        ["-DSIN_VARIANT=1", "-ffp-contract=fast"],
-    "C, linear model (no sin), -march=native, no FMA":
-        ["-DLINEAR", "-ffp-contract=off"],
-}
-
-
-def native_vector_registers() -> str | None:
-    """Which vector registers gcc's -march=native code uses for the polynomial-sine
-    kernel here ('zmm (512-bit)', 'ymm (256-bit)', ...), from its assembly."""
-    gcc = shutil.which("gcc")
-    if gcc is None:
-        return None
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "p.s"
-        proc = subprocess.run([gcc, "-O3", "-march=native", "-fopenmp", "-S",
-                               "-DSIN_VARIANT=4", str(C_SOURCE), "-o", str(out)],
-                              capture_output=True, text=True, check=False)
-        if proc.returncode != 0:
-            return None
-        asm = out.read_text()
-    for reg, bits in (("zmm", 512), ("ymm", 256), ("xmm", 128)):
-        if re.search(rf"%{reg}\d", asm):
-            return f"{reg} ({bits}-bit)"
-    return "none"
-
-
-def cpu_flags() -> set[str]:
-    """The CPU's feature flags from /proc/cpuinfo (empty where unreadable)."""
-    try:
-        with open("/proc/cpuinfo") as handle:
-            for line in handle:
-                if line.startswith("flags"):
-                    return set(line.split(":", 1)[1].split())
-    except OSError:
-        pass
-    return set()
-
-
-def c_limit_candidates(avx512: bool, blocks=C_BLOCKS) -> dict[str, list[str]]:
-    """The limit search, first phase: the same algorithm at its fastest (polynomial
-    sine in SIMD lanes, FMA contraction, forcing sine once per step for the whole call,
-    512-bit vectors where the CPU has AVX-512), one build per block size."""
-    width = [WIDE] if avx512 else []
-    label = "512-bit" if avx512 else "-march=native"
-    return {f"C limit search: {label}, polynomial sin, FMA, forcing table, block {b}":
-            [*width, "-DSIN_VARIANT=4", "-ffp-contract=fast", "-DFORCING_TABLE",
-             f"-DBLOCK={b}"] for b in blocks}
-
-
-def c_limit_variations(best_flags: list[str], avx512: bool) -> dict[str, list[str]]:
-    """Second phase, at the best block: one option changed at a time."""
-    block = next(f for f in best_flags if f.startswith("-DBLOCK="))
-    width = [WIDE] if avx512 else []
-    label = "512-bit" if avx512 else "-march=native"
-    n = block.split("=")[1]
-    out = {
-        f"C limit search: {label}, previous polynomial sin (both polynomials, quadrant "
-        f"from bits), FMA, forcing table, block {n}":
-            [*width, "-DSIN_VARIANT=3", "-ffp-contract=fast", "-DFORCING_TABLE", block],
-        f"C limit search: {label}, polynomial sin, FMA, forcing per block and step "
-        f"(sweep's layout), block {n}":
-            [*width, "-DSIN_VARIANT=4", "-ffp-contract=fast", block],
-    }
-    if avx512:
-        out[f"C limit search: 256-bit (-mprefer-vector-width=256), polynomial sin, FMA, "
-            f"forcing table, block {n}"] = [NARROW, "-DSIN_VARIANT=4", "-ffp-contract=fast",
-                                            "-DFORCING_TABLE", block]
-    return out
-
-
-_LIB_NUMBER = itertools.count()
-
-
-def build_c_one(build_dir: Path, key: str, flags: list[str]):
-    """Compile pendulum.c with ``flags``; a ctypes function, or an error string, or
-    None if gcc is absent."""
-    gcc = shutil.which("gcc")
-    if gcc is None:
-        return None
-    lib = build_dir / f"pendulum_{next(_LIB_NUMBER)}.so"
-    cmd = [gcc, *C_BASE_FLAGS, *flags, str(C_SOURCE), "-o", str(lib), "-lm"]
-    proc = subprocess.run(cmd, check=False, capture_output=True, text=True)
-    if proc.returncode != 0:
-        return "build failed: " + (proc.stderr.strip().splitlines() or ["?"])[-1]
-    fn = ctypes.CDLL(str(lib)).pendulum_rk4
-    fn.restype = None
-    p = ctypes.POINTER(ctypes.c_double)
-    fn.argtypes = [ctypes.c_int64, p, p, *[ctypes.c_double] * 7, ctypes.c_int64, p, p]
-    return fn
-
-
-def build_c(build_dir: Path, variants=None):
-    """{variant: ctypes function or error string}; None if gcc is absent."""
-    if shutil.which("gcc") is None:
-        return None
-    variants = C_FIXED if variants is None else variants
-    return {name: build_c_one(build_dir, name, flags) for name, flags in variants.items()}
-
-
-def gcc_info() -> dict:
-    """gcc's version and what -march=native means to it (None without gcc)."""
-    gcc = shutil.which("gcc")
-    if gcc is None:
-        return {"compiler": None}
-    version = subprocess.run([gcc, "--version"], capture_output=True, text=True,
-                             check=False).stdout.splitlines()[0]
-    target = subprocess.run([gcc, "-march=native", "-Q", "--help=target"],
-                            capture_output=True, text=True, check=False).stdout
-    march = re.search(r"^\s+-march=\s+(\S+)", target, re.M)
-    return {"compiler": version, "march_native": march.group(1) if march else None,
-            "march_native_vector_registers": native_vector_registers()}
-
-
-def machine_details() -> dict:
-    """CPU model (lscpu), cores, SIMD flags, compiler, numba: the report's machine."""
-    info = {"cpu_model": None, "cores": os.cpu_count()}
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True, check=False).stdout
-        for line in out.splitlines():
-            key, _, value = line.partition(":")
-            key, value = key.strip(), value.strip()
-            if key in ("Model name", "Vendor ID", "CPU family", "Model",
-                       "Thread(s) per core", "Core(s) per socket", "Hypervisor vendor"):
-                info[key] = value
-        info["cpu_model"] = info.pop("Model name", None)
-    except OSError:
-        pass
-    flags = cpu_flags()
-    info["simd"] = " ".join(f for f in ("avx2", "fma", "avx512f", "avx512dq", "avx512vl")
-                            if f in flags)
-    info["avx512f"] = "avx512f" in flags
-    import llvmlite
-    info.update(gcc_info(), numba=numba.__version__, llvmlite=llvmlite.__version__,
-                numba_threads=numba.get_num_threads())
-    return info
-
-
-def call_c(fn, th0, om0, steps):
-    n = th0.size
-    th, om = np.empty(n), np.empty(n)
-    p = ctypes.POINTER(ctypes.c_double)
-    fn(n, th0.ctypes.data_as(p), om0.ctypes.data_as(p), G_OVER_L, DAMPING, AMPLITUDE,
-       FREQUENCY, PHASE, 0.0, DT, steps, th.ctypes.data_as(p), om.ctypes.data_as(p))
-    return th, om
-
-
 # ------------------------------------------------------------------ vecmath in numba
 # not cached: numba cannot show the machine code of a kernel loaded from its disk cache
 @njit(fastmath=VEC_FLAGS, cache=False)
@@ -556,8 +390,9 @@ def main(argv=None) -> int:
     total = time.perf_counter()
     load_start = os.getloadavg()[0]
     n_threads = numba.get_num_threads()
-    result = {"machine": machine(), "machine_details": machine_details(), "mode": "quick" if args.quick else
-              ("full" if args.full else "default"), "repeats": REPEATS,
+    result = {"machine": machine(), "machine_details": machine_details(),
+              "mode": "quick" if args.quick else ("full" if args.full else "default"),
+              "repeats": REPEATS,
               "workload": {"trajectories": n_traj, "steps": steps, "dt": DT,
                            "g_over_L": G_OVER_L, "damping": DAMPING, "amplitude": AMPLITUDE,
                            "frequency": FREQUENCY, "observe": "final", "dtype": "float64"},
@@ -601,7 +436,8 @@ def main(argv=None) -> int:
     sweep_full = thr[full_name]["traj_steps_per_s"]
 
     # the forcing sine per lane, as when the grid varies the forcing frequency or phase
-    spec = _kernels.KernelSpec("nonlinear", ("damping", "forcing"), ("final",), shared_forcing=False)
+    spec = _kernels.KernelSpec("nonlinear", ("damping", "forcing"), ("final",),
+                               shared_forcing=False)
     run_kernel(spec, scene_of(), [0.1], [0.0], 1)
     seconds, got = timed(lambda: run_kernel(spec, scene_of(), theta0, omega0, steps))
     per_lane = "sweep: nonlinear, damping, forcing [forcing sine per lane, as when W varies]"
@@ -681,7 +517,7 @@ def main(argv=None) -> int:
     else:
         try:
             seconds, got = jax_rk4(th0, om0, steps)
-        except Exception as error:  # a broken JAX install must not sink the suite
+        except Exception as error:  # noqa: BLE001 - a broken JAX install must not sink the suite
             result["notes"].append(f"JAX failed ({type(error).__name__}: {error}): skipped")
             print(f"  JAX failed: {error}", flush=True)
         else:
@@ -966,7 +802,8 @@ def markdown(r) -> str:
         "at the start and again at the end of the run; the better time is shown.",
         "- Max abs diff: final theta and omega against `sweep.run`'s, over the same "
         "trajectories. sweep uses the polynomial sine of `sweep.kernels.vecmath` and fuses "
-        "the multiply-adds it writes explicitly (FMA); the alternatives use libm's or glibc's vector sine "
+        "the multiply-adds it writes explicitly (FMA); the alternatives use libm's or glibc's "
+        "vector sine "
         "(each within an ulp of sin) and fuse other products or none. This workload is "
         "chaotic (c = 0.5, A = 1.2, W = 2/3): over 2000 steps it amplifies those "
         "last-bit differences to about 1e-10. That is the same work done with "

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import matplotlib
 import numpy as np
+import xarray
 
 import sweep
 from sweep import maps
@@ -32,7 +33,7 @@ matplotlib.use("Agg")
 FREQUENCY = 0.8  # rad/s
 
 
-def compute(size: int) -> "xarray.Dataset":
+def compute(size: int) -> xarray.Dataset:
     """size x size starts in [-pi, pi] x [-2, 2] rad/s at 2 size amplitudes in
     [0.02, 0.4] rad/s^2; 184 periods of transient, 16 observed."""
     period = 2 * np.pi / FREQUENCY
@@ -52,7 +53,7 @@ def main(argv=None) -> int:
     parser.add_argument("--out", type=Path, default=Path("examples/output/continuation"))
     args = parser.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
-    labels, fractions = maps.continuation(compute(args.size), along="forcing_amplitude")
+    _labels, fractions = maps.continuation(compute(args.size), along="forcing_amplitude")
     fig = sweep.plot.basin_fractions(
         fractions, title="damped driven pendulum (g/L = 1, c = 0.1, W = 0.8): basins")
     sweep.plot.save_figure(fig, args.out / "continuation.png", dpi=80)

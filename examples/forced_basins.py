@@ -8,8 +8,8 @@ the periodic orbit the samples sit on (period, turns per period) and labels the 
 by it. With ``stop_early=True`` each start stops as soon as its 16 latest samples repeat,
 so ``--periods`` is only an upper bound; with a pilot (``--pilot N``, default 41: N x N
 starts find the attractors first, `sweep.maps.pilot_catalogue`) a start stops as soon
-as it follows one of them, about 2.4x sooner on this map. The boundaries between basins are fractal: the boundary basin entropy exceeds
-log 2 (Daza et al. 2016).
+as it follows one of them, about 2.4x sooner on this map. The boundaries between basins
+are fractal: the boundary basin entropy exceeds log 2 (Daza et al. 2016).
 
 Usage::
 

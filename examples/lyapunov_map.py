@@ -23,6 +23,7 @@ from pathlib import Path
 
 import matplotlib
 import numpy as np
+import xarray
 
 import sweep
 
@@ -33,7 +34,7 @@ W0 = 1.5 * DRIVE             # natural frequency [rad/s]
 BETA = W0 / 4                # damping constant [1/s]: c = 2 beta
 
 
-def taylor(gammas) -> "xarray.Dataset":
+def taylor(gammas) -> xarray.Dataset:
     """Both exponents against gamma, from rest; 100 periods of transient, 200 observed,
     200 steps per period."""
     scene = sweep.Scene(gravity=W0 ** 2, length=1.0,
@@ -45,7 +46,7 @@ def taylor(gammas) -> "xarray.Dataset":
                      observe=("lyapunov",), progress=False)
 
 
-def chaos_map(size: int) -> "xarray.Dataset":
+def chaos_map(size: int) -> xarray.Dataset:
     """lambda_max over A in [0.8, 1.6] rad/s^2 x W in [0.4, 1.0] rad/s from rest."""
     scene = sweep.Scene(gravity=1.0, length=1.0,
                         effects=(sweep.Damping(0.5), sweep.Forcing(1.2, 2 / 3)))

@@ -82,7 +82,7 @@ def main(argv=None) -> int:
                          title=f"Damped Mathieu equation (c = {C} 1/s, g/L = 1)")
     ax = fig.axes[0]
     edges = tongue_edges()
-    for k, (label, a, nu) in enumerate(edges):
+    for k, (_label, a, nu) in enumerate(edges):
         ax.plot(a, nu, "w-", lw=0.8, label="undamped tongue edges" if k == 0 else None)
     if edges:
         ax.legend(loc="upper right", fontsize=8)

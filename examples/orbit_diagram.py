@@ -24,6 +24,7 @@ from pathlib import Path
 
 import matplotlib
 import numpy as np
+import xarray
 
 import sweep
 from sweep import maps
@@ -38,7 +39,7 @@ DT = 0.05  # s, for the periodicity map: every forcing period a whole number of 
 FREQUENCIES = (0.4, 1.0)  # rad/s, the periodicity map's forcing frequencies
 
 
-def cascade(size: int) -> "xarray.Dataset":
+def cascade(size: int) -> xarray.Dataset:
     """Taylor's pendulum over ``size`` gammas in [1.06, 1.087]: 64 strobe samples."""
     scene = sweep.Scene(gravity=W0 ** 2, length=1.0, effects=(
         sweep.Damping(2 * BETA), sweep.Forcing(W0 ** 2, DRIVE, np.pi / 2)))
@@ -86,12 +87,12 @@ def periodicity_run(size: int, observe=("strobe", "lyapunov")) -> tuple:
     grid = sweep.Grid(forcing_amplitude=np.linspace(0.8, 1.6, size),
                       forcing_frequency=frequencies(size, dt), theta0=[0.0], omega0=[0.0])
     longest = 2 * np.pi / FREQUENCIES[0]
-    n_steps = int(round((500.0 + 16 * longest) / dt))
+    n_steps = int(round((500.0 + 16 * longest) / dt))  # noqa: RUF046 - NumPy 1.x
     return scene, grid, dict(t_end=n_steps * dt, dt=dt, t_transient=500.0,
                              observe=tuple(observe), progress=False)
 
 
-def periodicity(size: int) -> "xarray.Dataset":
+def periodicity(size: int) -> xarray.Dataset:
     """Strobe samples and lambda_max of `periodicity_run` (size)."""
     scene, grid, kwargs = periodicity_run(size)
     return sweep.run(scene, grid, **kwargs)

@@ -16,8 +16,8 @@ from .physics import Damping as Damping
 from .physics import Forcing as Forcing
 from .physics import PivotDrive as PivotDrive
 from .physics import QuadraticDrag as QuadraticDrag
-from .physics import Torque as Torque
 from .physics import Scene as Scene
+from .physics import Torque as Torque
 
 #: Submodules imported on first use, so that ``import sweep`` stays cheap (no
 #: matplotlib): ``sweep.plot``, ``sweep.maps``, ... ``sweep.metrics`` and

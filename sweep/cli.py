@@ -285,8 +285,8 @@ def _command_run(args: argparse.Namespace) -> int:
     checkpoint, elsewhere if need be, without recomputing. The output file is only
     ever written whole, at the end.
     """
-    from .execution import checkpoint as _checkpoint
     from .diskspace import check_space
+    from .execution import checkpoint as _checkpoint
     from .io import check_output_path, save
     from .toml_spec import load_run
 
@@ -486,14 +486,14 @@ class _Sigterm:
     def _force(self) -> None:
         """End the process now: the main thread did not stop in time."""
         try:
-            if self._say_lock.acquire(timeout=1.0):  # never wait on a stuck main thread
-                if not self._said:
-                    self._said = True
-                    try:
-                        line = self._line()
-                    except Exception:  # noqa: BLE001 - the exit must not depend on it
-                        line = "sweep: terminated"
-                    os.write(2, (line + "\n").encode())
+            # never wait on a stuck main thread
+            if self._say_lock.acquire(timeout=1.0) and not self._said:
+                self._said = True
+                try:
+                    line = self._line()
+                except Exception:  # noqa: BLE001 - the exit must not depend on it
+                    line = "sweep: terminated"
+                os.write(2, (line + "\n").encode())
             from .execution import lock as _lock
             from .io import discard_partial_files
 

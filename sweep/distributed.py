@@ -85,9 +85,9 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     import warnings
 
     from . import diskspace, engine, io
-    from .kernels import failure_summary, status_counts
     from .execution.progress import progress_bar
     from .grid import Grid, Points
+    from .kernels import failure_summary, status_counts
 
     for name in _NOT_STREAMED:
         if name in run_kwargs:
@@ -103,7 +103,7 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
         check_client(client)
     path = io.check_output_path(path)
     needed = diskspace.check_space(path, scene, grid, **run_kwargs)
-    first, *rest = grid.dims
+    first = grid.dims[0]
     axes = grid.axes
     inner = grid.size // grid.shape[0]
     if rows_per_task is None:

@@ -25,12 +25,21 @@ from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
 from .execution.progress import progress_bar
 from .grid import Grid, ParameterRows
-from .kernels import (KernelSpec, build, check_device, check_dtype, check_method_fits,
-                      check_observables_fit, check_tangent_fits, declarations, failure_summary, n_columns,
-                      status_counts)
+from .kernels import (
+    KernelSpec,
+    build,
+    check_device,
+    check_dtype,
+    check_method_fits,
+    check_observables_fit,
+    check_tangent_fits,
+    declarations,
+    failure_summary,
+    n_columns,
+    status_counts,
+)
 from .methods import METHODS
-from .observables import (DEFAULT_OBSERVE, OBSERVABLES, STROBE_SAMPLES, STROBE_SAMPLES_RANGE,
-                          resolve)
+from .observables import DEFAULT_OBSERVE, OBSERVABLES, STROBE_SAMPLES, STROBE_SAMPLES_RANGE, resolve
 from .physics import EFFECTS, Scene
 
 __all__ = ["run", "warm_up", "estimate_error", "default_chunk_size", "RunSettings", "METHODS"]
@@ -907,7 +916,7 @@ def estimate_error(scene: Scene, grid: Grid, *, sample: int = 32, seed: int = 0,
         "error_estimate_max": float(errors.max()) if errors.size else float("nan"),
         "error_estimate_rms": float(np.sqrt(np.mean(errors**2))) if errors.size
         else float("nan"),
-        "error_estimate_sample": int(len(picks)),
+        "error_estimate_sample": len(picks),
         "error_estimate_method": how,
     }
 

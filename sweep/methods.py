@@ -39,8 +39,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from fractions import Fraction
-from functools import lru_cache
-from typing import Union
+from functools import cache
 
 __all__ = [
     "ButcherTableau",
@@ -59,7 +58,7 @@ __all__ = [
     "rooted_trees",
 ]
 
-Number = Union[Fraction, float]
+Number = Fraction | float
 
 # Float coefficients (irrational ones, e.g. cube roots) are exact only to rounding: a sum
 # of a handful of O(1) terms is off by a few ulps of 1, so 64 eps is a safe bound for
@@ -113,7 +112,7 @@ def _is_zero(x: Number) -> bool:
 
 
 # ------------------------------------------------------------------ order conditions
-@lru_cache(maxsize=None)
+@cache
 def rooted_trees(order: int) -> tuple[tuple, ...]:
     """All rooted trees with ``order`` nodes, each as a canonical nested tuple (the
     sorted tuple of its subtrees; a leaf is ``()``).
@@ -413,7 +412,7 @@ class SplittingMethod:
         return self._evaluations()[1]
 
 
-Method = Union[ButcherTableau, SplittingMethod]
+Method = ButcherTableau | SplittingMethod
 
 # --------------------------------------------------------------------------- the data
 F = Fraction

@@ -13,7 +13,8 @@ Names available to the snippets: ``th, om`` (state, unwrapped angle), ``th0, om0
 model), ``vsin``/``vcos`` (`sweep.kernels.vecmath`: vectorisable, use them rather than
 ``math.sin``/``math.cos``), ``k_state`` (step index of the state), ``dt``, ``t0`` and
 ``TWO_PI``; the text ``TENSION_TERMS`` becomes the rod-tension terms the scene's effects
-declare (nothing for damping and forcing). Snippets are per trajectory: ``out[i, ...]`` is this trajectory's row.
+declare (nothing for damping and forcing). Snippets are per trajectory: ``out[i, ...]`` is
+this trajectory's row.
 
 Every variable that lives from one snippet to the next (set in ``init``, read in
 ``update``, ``settled`` or ``final``) is declared in ``state`` with its dtype: the
@@ -277,15 +278,18 @@ OBSERVABLES: dict[str, Observable] = {
                 "        for acc_sb_j in range(acc_sb_r // 2):\n"
                 "            acc_sb_x = acc_sb_o + acc_sb_j\n"
                 "            acc_sb_y = acc_sb_o + acc_sb_r - 1 - acc_sb_j\n"
-                "            out[i, acc_sb_x], out[i, acc_sb_y] = out[i, acc_sb_y], out[i, acc_sb_x]\n"
+                "            out[i, acc_sb_x], out[i, acc_sb_y] = "
+                "out[i, acc_sb_y], out[i, acc_sb_x]\n"
                 "        for acc_sb_j in range((NSTROBE - acc_sb_r) // 2):\n"
                 "            acc_sb_x = acc_sb_o + acc_sb_r + acc_sb_j\n"
                 "            acc_sb_y = acc_sb_o + NSTROBE - 1 - acc_sb_j\n"
-                "            out[i, acc_sb_x], out[i, acc_sb_y] = out[i, acc_sb_y], out[i, acc_sb_x]\n"
+                "            out[i, acc_sb_x], out[i, acc_sb_y] = "
+                "out[i, acc_sb_y], out[i, acc_sb_x]\n"
                 "        for acc_sb_j in range(NSTROBE // 2):\n"
                 "            acc_sb_x = acc_sb_o + acc_sb_j\n"
                 "            acc_sb_y = acc_sb_o + NSTROBE - 1 - acc_sb_j\n"
-                "            out[i, acc_sb_x], out[i, acc_sb_y] = out[i, acc_sb_y], out[i, acc_sb_x]"
+                "            out[i, acc_sb_x], out[i, acc_sb_y] = "
+                "out[i, acc_sb_y], out[i, acc_sb_x]"
             ),
             # settled: the ring is full and periodic with some p <= min(N/2, STROBE_MAX_PERIOD)
             # within STROBE_TOL (STROBE_TOL_FLOAT32 in a float32 kernel; the kernel

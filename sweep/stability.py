@@ -297,7 +297,7 @@ def drive_error(tableau: ButcherTableau, x: float) -> float:
     return float(max(abs(y / -1.0 - 1.0), abs(v / -1j - 1.0)))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def drive_step_limit(tableau: ButcherTableau, tolerance: float = DRIVE_TOLERANCE) -> float:
     """Largest ``x = W dt`` [rad per step] up to which `drive_error` stays within
     ``tolerance``: a scan in steps of 1 % from 1e-6, then bisection."""

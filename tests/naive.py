@@ -90,8 +90,8 @@ def integrate(theta0, omega0, *, t_end, dt, t0=0.0, t_transient=0.0, save_every=
     -------
     dict
         ``theta_final, omega_final, winding, theta_max, amplitude, omega_mean, tension_min,
-        tension_max, energy_initial, energy_final, top_distance_max`` (floats), ``time_all, theta_all,
-        omega_all`` (every state, arrays of length n_steps + 1) and, when
+        tension_max, energy_initial, energy_final, top_distance_max`` (floats),
+        ``time_all, theta_all, omega_all`` (every state, arrays of length n_steps + 1) and, when
         ``save_every`` is given, ``time, theta, omega`` at steps 0, k, 2k, ...
     """
     p = {"model": model, "gravity": float(gravity), "length": float(length),

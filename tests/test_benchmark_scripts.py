@@ -239,7 +239,7 @@ def test_dopri5_lanes_table_of_the_work_precision_script():
     work_precision = importlib.import_module("work_precision")
     block = sweep._config.ADAPTIVE_BLOCK
     rows, table = work_precision.dopri5_lanes(64, 1, tolerances=(1e-6,))
-    assert sweep._config.ADAPTIVE_BLOCK == block and sweep._config.VECTOR_CONTROLLER
+    assert block == sweep._config.ADAPTIVE_BLOCK and sweep._config.VECTOR_CONTROLLER
     assert [row["scene"] for row in rows] == ["libration", "separatrix", "rotation",
                                               "forced", "uneven"]
     for row in rows:

@@ -90,7 +90,8 @@ def test_frequencies_that_differ_per_trajectory_are_each_honoured():
     spec = KernelSpec("nonlinear", ("damping", "forcing"), ("final", "amplitude"))
     _assert_same(_call(spec, params), _one_by_one(spec, params))
     # and one frequency per call, with the shared sine, is the same again
-    shared = KernelSpec("nonlinear", ("damping", "forcing"), ("final", "amplitude"), shared_forcing=True)
+    shared = KernelSpec("nonlinear", ("damping", "forcing"), ("final", "amplitude"),
+                        shared_forcing=True)
     _assert_same(_one_by_one(shared, params), _call(spec, params))
 
 
@@ -119,8 +120,8 @@ def test_every_fixed_step_method_is_the_same_for_any_blocking(method):
     params = _table(30, damping=0.0 if conservative else 0.5)
     if conservative:  # no damping at all, not even row 5's overflowing one
         params[5, sweep.physics.parameter_names().index("damping")] = 0.0
-    spec = [KernelSpec("nonlinear", () if conservative else ("damping", "forcing"), ("final", "energy"),
-                       method=method, block=block) for block in (1, 8, 128)]
+    spec = [KernelSpec("nonlinear", () if conservative else ("damping", "forcing"),
+                       ("final", "energy"), method=method, block=block) for block in (1, 8, 128)]
     first = _call(spec[0], params)
     for other in spec[1:]:
         _assert_same(first, _call(other, params))

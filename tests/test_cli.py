@@ -326,9 +326,9 @@ def test_run_file_errors_name_the_key(spec, words):
 
 
 def test_unreadable_and_malformed_files_name_the_file(tmp_path):
-    with pytest.raises(ValueError, match="missing.toml"):
+    with pytest.raises(ValueError, match=r"missing\.toml"):
         load_run(tmp_path / "missing.toml")
-    with pytest.raises(ValueError, match="bad.toml.*not valid TOML.*line 2"):
+    with pytest.raises(ValueError, match=r"bad\.toml.*not valid TOML.*line 2"):
         load_run(write(tmp_path, "[grid]\ntheta0 = = 1\n", "bad.toml"))
     with pytest.raises(ValueError, match="cannot read run file"):
         load_run(tmp_path)

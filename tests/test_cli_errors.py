@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
-from sweep import cli
-
 # the valid run file of test_cli, which each case below breaks in one place
-from test_cli import RUN_FILE as GOOD  # noqa: E402
+from test_cli import RUN_FILE as GOOD
+
+from sweep import cli
 
 
 def _edit(old, new):

@@ -12,6 +12,7 @@ import xarray as xr
 import sweep
 from sweep import cli
 from sweep.toml_spec import load_run
+
 from test_resume import Interrupt, chunk_files
 
 distributed = pytest.importorskip("distributed")
@@ -75,13 +76,13 @@ def test_option_and_key_run_on_the_cluster(scheduler, local, tmp_path, monkeypat
         return real(self, *args, **kwargs)
 
     monkeypatch.setattr(distributed.Client, "submit", counting)
-    code, out, err = call("run", run_file, "-o", tmp_path / "a.nc", "--scheduler", scheduler)
+    code, _out, err = call("run", run_file, "-o", tmp_path / "a.nc", "--scheduler", scheduler)
     assert code == 0, err
     assert submitted.count("run_chunk_task") == 8  # 36 trajectories in chunks of 5
     _same(sweep.load(tmp_path / "a.nc"), reference)
     keyed = tmp_path / "keyed.toml"
     keyed.write_text(RUN_FILE + f'scheduler = "{scheduler}"\n')
-    code, out, err = call("run", keyed, "-o", tmp_path / "b.nc")
+    code, _out, err = call("run", keyed, "-o", tmp_path / "b.nc")
     assert code == 0, err
     assert submitted.count("run_chunk_task") == 16
     _same(sweep.load(tmp_path / "b.nc"), reference)

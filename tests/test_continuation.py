@@ -362,8 +362,8 @@ def test_a_run_without_strobe_samples_is_refused_saying_observe_strobe():
     ds = _tiny()
     without = xr.Dataset({"final_theta": ds.strobe_theta.isel(strobe=-1, drop=True)})
     for bad in (without, ds.drop_vars("strobe_omega"), ds.strobe_theta):
-        with pytest.raises(ValueError, match="continuation needs stroboscopic samples "
-                                             ".*observe=\\('strobe',\\)"):
+        with pytest.raises(ValueError, match=r"continuation needs stroboscopic samples "
+                                             r".*observe=\('strobe',\)"):
             maps.continuation(bad, along="forcing_amplitude")
 
 

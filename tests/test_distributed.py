@@ -123,7 +123,7 @@ def test_kernel_is_not_recompiled_per_task(client):
     tasks = {}
     for record in stream.data:
         if "sweep-chunk" in str(record["key"]):
-            compute = [s for s in record["startstops"] if s["action"] == "compute"][0]
+            compute = next(s for s in record["startstops"] if s["action"] == "compute")
             tasks.setdefault(record["worker"], []).append(
                 (compute["start"], compute["stop"] - compute["start"]))
     assert sum(len(v) for v in tasks.values()) == grid.size // 60
@@ -161,7 +161,7 @@ def test_checkpoint_with_a_client_resumes_identically(client, tmp_path):
 
 def test_bad_client_is_refused_before_any_compute():
     grid = sweep.Grid(theta0=[0.1])
-    with pytest.raises(TypeError, match="client must be None or a dask.distributed.Client"):
+    with pytest.raises(TypeError, match=r"client must be None or a dask\.distributed\.Client"):
         sweep.run(FORCED, grid, t_end=1.0, dt=0.01, client="tcp://127.0.0.1:8786")
 
 
@@ -194,7 +194,7 @@ def test_streamed_locally_flags_nonfinite_and_validates_first(tmp_path):
         path = run_to_netcdf(tmp_path / "out.nc", scene, grid, rows_per_task=1, **kw)
     _same(local, sweep.load(path))
     # the whole grid is validated before any block runs: nothing is written
-    with pytest.raises(ValueError, match="exceeds RK4.s stability limit"):
+    with pytest.raises(ValueError, match=r"exceeds RK4.s stability limit"):
         run_to_netcdf(tmp_path / "no.nc", scene, grid, t_end=2.0, dt=0.01)
     with pytest.raises(ValueError, match="does not take checkpoint="):
         run_to_netcdf(tmp_path / "no.nc", scene, grid, t_end=2.0, dt=0.01,

@@ -15,9 +15,16 @@ import pytest
 import sweep
 from sweep import maps
 from sweep.explore import model
+from sweep.explore.model import (
+    QUANTITIES,
+    Cancelled,
+    CancelToken,
+    Explorer,
+    InvalidInput,
+    Requests,
+    centres,
+)
 from sweep.physics import Effect, EffectDeclaration, Parameter, register, unregister
-from sweep.explore.model import (QUANTITIES, CancelToken, Cancelled, Explorer, InvalidInput,
-                                 Requests, centres)
 from sweep.toml_spec import load_run
 
 N = 24  # pixels per axis: small maps, the code paths are those of 400 x 400
@@ -80,7 +87,7 @@ def test_state_grid_run_image_is_sweep_run_and_maps():
     assert result.legend and all("well" in text for _, text in result.legend
                                  if math.isfinite(_))
     for (row, col) in [(0, 0), (N // 2, N // 2), (N - 1, 3)]:
-        value, text = result.legend[int(result.image[row, col])]
+        value, _text = result.legend[int(result.image[row, col])]
         assert value == expected[row, col]
     assert result.title == "well" and "rest at theta" in result.description
 

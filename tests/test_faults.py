@@ -24,14 +24,13 @@ import xarray as xr
 
 import sweep
 import sweep.distributed
-from sweep import cli
-from sweep import diskspace
+from sweep import cli, diskspace
 from sweep import io as sweep_io
 from sweep.execution import checkpoint as ckpt
 from sweep.execution import lock as _lock
 from sweep.toml_spec import load_run
-from test_resume import (RUN_FILE, SLOW_RUN_FILE, WAIT_S, Interrupt, call, chunk_files,
-                         identical)
+
+from test_resume import RUN_FILE, SLOW_RUN_FILE, WAIT_S, Interrupt, call, chunk_files, identical
 
 SCENE = sweep.Scene(effects=(sweep.Damping(0.3),))
 FORCED = sweep.Scene(effects=(sweep.Damping(0.3), sweep.Forcing(1.0, 2.0)))

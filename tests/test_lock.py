@@ -17,8 +17,19 @@ import pytest
 import sweep
 from sweep.execution import checkpoint as ckpt
 from sweep.execution import lock as _lock
-from test_resume import (CHUNK, GRID, KWARGS, SCENE, SLOW_RUN_FILE, WAIT_S, Interrupt,
-                         _finish, _sweep, chunk_files)
+
+from test_resume import (
+    CHUNK,
+    GRID,
+    KWARGS,
+    SCENE,
+    SLOW_RUN_FILE,
+    WAIT_S,
+    Interrupt,
+    _finish,
+    _sweep,
+    chunk_files,
+)
 
 HOST = socket.gethostname()
 

@@ -295,7 +295,7 @@ def test_the_unforced_pendulum_has_a_zero_exponent_pair():
 def test_adaptive_and_symplectic_methods_are_refused(no_compute):
     forced = sweep.Scene(effects=(sweep.Damping(0.1), sweep.Forcing(1.0, 1.0)))
     grid = sweep.Grid(theta0=[0.1], omega0=[0.0])
-    with pytest.raises(ValueError, match="'lyapunov'.*'dopri5' is adaptive; accepted: "
+    with pytest.raises(ValueError, match=r"'lyapunov'.*'dopri5' is adaptive; accepted: "
                                          "'euler', 'heun', 'rk4', 'rk38'"):
         sweep.run(forced, grid, t_end=1.0, dt=0.1, method="dopri5", observe=("lyapunov",))
     with pytest.raises(ValueError, match="'verlet' is symplectic; accepted: 'euler'"):

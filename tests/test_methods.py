@@ -18,8 +18,8 @@ import pytest
 import sweep
 from sweep import Status, _config, maps, methods
 from sweep import kernels as _kernels
-from sweep.kernels import vecmath as _vecmath
 from sweep.accuracy import ellipk, exact, state_error
+from sweep.kernels import vecmath as _vecmath
 from sweep.methods import METHODS, ButcherTableau, SplittingMethod
 
 ALL_OBSERVE = ("final", "winding", "theta_max", "amplitude", "tension", "energy")
@@ -194,8 +194,8 @@ def test_generated_kernels_contain_only_the_scene_terms(method):
                                                      (False, True)):
         if conservative and (damping or forcing):
             continue
-        spec = _kernels.KernelSpec(model, ("damping",) * damping + ("forcing",) * forcing, ("final",),
-                                     method=method)
+        spec = _kernels.KernelSpec(model, ("damping",) * damping + ("forcing",) * forcing,
+                                   ("final",), method=method)
         text = _kernels.source(spec)
         assert ("vsin(th)" in text) == (model == "nonlinear")
         assert ("vsin(W" in text) == forcing

@@ -20,11 +20,12 @@ a spurious relative failure when theta or omega happens to pass near zero.
 import itertools
 import math
 
-import naive
 import numpy as np
 import pytest
 
 import sweep
+
+import naive
 
 ALL_OBSERVE = ("final", "winding", "theta_max", "amplitude", "omega_mean", "tension",
                "energy")

@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import math
 
-import naive
 import numpy as np
 import pytest
 
 import sweep
 from sweep import kernels, maps, toml_spec
 from sweep.kernels import KernelSpec
+
+import naive
 
 scipy_integrate = pytest.importorskip("scipy.integrate")
 scipy_special = pytest.importorskip("scipy.special")
@@ -442,11 +443,13 @@ PIVOT_SCENE = sweep.Scene(effects=(sweep.PivotDrive(0.01, 10.0),))
 TORQUE_SCENE = sweep.Scene(effects=(sweep.Torque(0.5),))
 BAD_RUNS = [
     ("negative drag axis", sweep.Scene(effects=(sweep.QuadraticDrag(0.1),)),
-     dict(drag=[0.1, -0.2]), {}, ValueError, r"grid axis 'drag' has value -0\.2 at index 1; accepted: finite numbers >= 0 \(1/rad\)"),
+     dict(drag=[0.1, -0.2]), {}, ValueError,
+     r"grid axis 'drag' has value -0\.2 at index 1; accepted: finite numbers >= 0 \(1/rad\)"),
     ("nan torque axis", TORQUE_SCENE, dict(torque=[0.1, NAN]), {}, ValueError,
      r"grid axis 'torque' has non-finite value nan at index 1; accepted: finite numbers"),
     ("negative pivot amplitude axis", PIVOT_SCENE, dict(pivot_amplitude=[-0.01]), {},
-     ValueError, r"grid axis 'pivot_amplitude' has value -0\.01 at index 0; accepted: finite numbers >= 0 \(m\)"),
+     ValueError, r"grid axis 'pivot_amplitude' has value -0\.01 at index 0; accepted: "
+     r"finite numbers >= 0 \(m\)"),
     ("inf pivot frequency axis", PIVOT_SCENE, dict(pivot_frequency=[INF]), {}, ValueError,
      r"grid axis 'pivot_frequency' has non-finite value inf at index 0; accepted: finite numbers"),
     ("torque axis without the effect", sweep.Scene(), dict(torque=[0.1]), {}, ValueError,

@@ -133,7 +133,7 @@ def test_map_squeezes_size_one_dimensions_and_names_them_in_the_title(maps):
 
 
 def test_map_refuses_other_than_two_dimensions(maps, sampled):
-    with pytest.raises(ValueError, match="2-D.*theta0, omega0, time"):
+    with pytest.raises(ValueError, match=r"2-D.*theta0, omega0, time"):
         plot.map(sampled.theta)
     with pytest.raises(ValueError, match="2-D"):
         plot.map(maps.winding.isel(theta0=0))
@@ -154,7 +154,7 @@ def test_map_draws_into_given_axes(maps):
 def test_select_takes_the_nearest_point_and_refuses_unknown_names(sampled):
     one = plot.select(sampled.theta, theta0=0.1, time=4.96)
     assert one.dims == ("omega0",) and float(one.theta0) == 0.0 and float(one.time) == 5.0
-    with pytest.raises(ValueError, match="'phi'.*theta0, omega0, time"):
+    with pytest.raises(ValueError, match=r"'phi'.*theta0, omega0, time"):
         plot.select(sampled, phi=1.0)
     with pytest.raises(TypeError, match="theta0"):
         plot.select(sampled, theta0="x")
@@ -179,9 +179,9 @@ def test_trajectory_draws_several_with_a_legend(sampled):
 
 
 def test_trajectory_errors(sampled, maps):
-    with pytest.raises(ValueError, match="'time' dimension.*save_every"):
+    with pytest.raises(ValueError, match=r"'time' dimension.*save_every"):
         plot.trajectory(maps)
-    with pytest.raises(ValueError, match="12 trajectories remain.*length, theta0"):
+    with pytest.raises(ValueError, match=r"12 trajectories remain.*length, theta0"):
         plot.trajectory(sampled.expand_dims(length=[1.0, 2.0, 3.0, 4.0]), omega0=0.0)
     with pytest.raises(ValueError, match="cannot select 'time'"):
         plot.trajectory(sampled, time=1.0)

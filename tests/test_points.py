@@ -89,7 +89,7 @@ def test_bad_points_are_refused_naming_axis_value_and_accepted(axes, message):
 def test_points_needing_an_effect_the_scene_lacks_are_refused(no_compute):
     with pytest.raises(ValueError, match="points axis 'forcing_phase' needs a forcing"):
         sweep.run(DAMPED, sweep.Points(forcing_phase=[0.0, 1.0]), **BASE)
-    with pytest.raises(TypeError, match="grid must be a sweep.Grid or sweep.Points"):
+    with pytest.raises(TypeError, match=r"grid must be a sweep\.Grid or sweep\.Points"):
         sweep.run(DAMPED, {"theta0": [1.0]}, **BASE)
 
 
@@ -309,7 +309,7 @@ def test_run_file_points_inline_from_csv_and_from_netcdf(tmp_path, damped_pair):
     for name, points in (("csv", 'file = "starts.csv"'), ("nc", 'file = "starts.nc"')):
         (folder / f"{name}.toml").write_text(RUN_FILE.format(points=points))
     for path in (inline, folder / "csv.toml", folder / "nc.toml"):  # relative to the file
-        scene, points, kwargs = load_run(path)
+        _scene, points, _kwargs = load_run(path)
         assert isinstance(points, sweep.Points)
         for axis in ("theta0", "omega0"):  # repr round trip: the exact values
             np.testing.assert_array_equal(points.axes[axis], ds[axis].values)

@@ -7,6 +7,8 @@ wiring against the full run of the same grid.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from scipy import ndimage
@@ -64,8 +66,8 @@ def naive(field: np.ndarray, step: int):
             for c, d in ((c0, cm), (cm, c1)):
                 visit(a, b, c, d)
 
-    for a, b in zip(rows[:-1], rows[1:]):
-        for c, d in zip(cols[:-1], cols[1:]):
+    for a, b in itertools.pairwise(rows):
+        for c, d in itertools.pairwise(cols):
             visit(a, b, c, d)
     return out, computed
 
@@ -397,7 +399,7 @@ def test_points_and_other_objects_are_refused(no_compute):
     points = sweep.grid.Points(theta0=[0.0, 1.0], omega0=[0.0, 1.0])
     with pytest.raises(ValueError, match="got Points"):
         maps.refine(DAMPED, points, maps.well, **DAMPED_RUN)
-    with pytest.raises(ValueError, match="scene must be a sweep.Scene"):
+    with pytest.raises(ValueError, match=r"scene must be a sweep\.Scene"):
         maps.refine("scene", DAMPED_GRID, maps.well, **DAMPED_RUN)
 
 
@@ -474,7 +476,7 @@ def test_run_file_refine_errors(tmp_path, extra, match):
     text = REFINE_RUN_FILE.replace("refine = true\n", "") if "refine =" in extra \
         else REFINE_RUN_FILE
     path.write_text(text + extra)
-    code, out, err = sweep_cli("run", path, "-o", tmp_path / "map.nc")
+    code, _out, err = sweep_cli("run", path, "-o", tmp_path / "map.nc")
     assert code != 0 and match in err
     assert not (tmp_path / "map.nc").exists()
 
@@ -482,5 +484,5 @@ def test_run_file_refine_errors(tmp_path, extra, match):
 def test_refine_keys_need_refine(tmp_path):
     path = tmp_path / "run.toml"
     path.write_text(REFINE_RUN_FILE.replace("refine = true\n", "refine_step = 8\n"))
-    code, out, err = sweep_cli("run", path, "-o", tmp_path / "map.nc")
+    code, _out, err = sweep_cli("run", path, "-o", tmp_path / "map.nc")
     assert code != 0 and "refine_step is for refine = true" in err

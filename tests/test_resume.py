@@ -21,9 +21,9 @@ import pytest
 import xarray as xr
 
 import sweep
+from sweep import cli
 from sweep.execution import checkpoint as ckpt
 from sweep.execution import local
-from sweep import cli
 from sweep.toml_spec import load_run
 
 SCENE = sweep.Scene(effects=(sweep.Damping(0.3),))
@@ -174,7 +174,9 @@ def test_sweep_version_is_part_of_the_fingerprint(tmp_path, monkeypatch):
 def test_bad_checkpoint_arguments_are_refused_before_any_compute(tmp_path, monkeypatch):
     folder = tmp_path / "ck"
     interrupted(monkeypatch, folder, 2)
-    run = lambda **kw: sweep.run(SCENE, GRID, chunk_size=CHUNK, **KWARGS, **kw)
+    def run(**kw):
+        return sweep.run(SCENE, GRID, chunk_size=CHUNK, **KWARGS, **kw)
+
     with pytest.raises(ValueError, match=r"already holds a run \(2 finished chunks\); "
                                          r"accepted: resume=True"):
         run(checkpoint=folder)  # never overwrite finished work by mistake

@@ -5,11 +5,11 @@ is `sweep.sample` (the same points), and ``sweep fractions`` prints (and writes)
 import numpy as np
 import pandas as pd
 import pytest
+from test_cli import call, write
 
 import sweep
 from sweep import maps
 from sweep.toml_spec import parse_run
-from test_cli import call, write
 
 SCENE = """
 [scene]

@@ -5,10 +5,11 @@ import math
 import numpy as np
 import pytest
 
-import naive
 import sweep
 from sweep import maps
 from sweep.observables import STROBE_SAMPLES
+
+import naive
 
 PERIOD_STEPS = 40
 

@@ -5,10 +5,11 @@ checkpoints and run files, and refused where it cannot apply."""
 import numpy as np
 import pytest
 
-import naive
 import sweep
 from sweep import maps
 from sweep.toml_spec import load_run
+
+import naive
 
 PERIOD_STEPS = 40
 FREQUENCY = 1.3  # rad/s

@@ -23,14 +23,19 @@ from functools import partial
 
 import numpy as np
 
-from .model import (QUANTITIES, Explorer, InvalidInput, MapResult, Requests, State,
-                    Trajectory)
+from .model import QUANTITIES, Explorer, InvalidInput, MapResult, Requests, State, Trajectory
 
 try:
     import panel as pn
     from bokeh.events import Tap
-    from bokeh.models import (BasicTicker, ColorBar, ColumnDataSource, FixedTicker,
-                              LinearColorMapper, Range1d)
+    from bokeh.models import (
+        BasicTicker,
+        ColorBar,
+        ColumnDataSource,
+        FixedTicker,
+        LinearColorMapper,
+        Range1d,
+    )
     from bokeh.palettes import Category10_10, Category20_20, Viridis256
     from bokeh.plotting import figure
 except ImportError as exc:  # pragma: no cover - the extra is missing

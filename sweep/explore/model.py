@@ -1027,7 +1027,7 @@ class Explorer:
         kwargs = dict(t_end=state.t_end, dt=state.dt, t_transient=state.t_transient,
                       method=state.method, **dict(state.extra))
         observe = ["final", "winding"]
-        steps = int(round((state.t_end - kwargs.get("t0", 0.0)) / state.dt))
+        steps = int(round((state.t_end - kwargs.get("t0", 0.0)) / state.dt))  # noqa: RUF046 - NumPy 1.x
         kwargs["save_every"] = max(1, math.ceil(steps / TRAJECTORY_SAMPLES))
         if _forced(state.scene) and "forcing_frequency" not in (v.x, v.y):
             frequency = state.scene.forcing.frequency
@@ -1067,8 +1067,9 @@ class Explorer:
         for name, value in state.start:
             if name not in axes:
                 axes[name] = float(value)
+        imports = ", from sweep import maps" if "maps." in q.expression else ""
         comment = (f"the explorer's map: {q.label}; after sweep run, image = {q.expression} "
-                   f"(ds = sweep.load(OUT.nc){', from sweep import maps' if 'maps.' in q.expression else ''})")
+                   f"(ds = sweep.load(OUT.nc){imports})")
         if self.uses_pilot(state):
             comment += ("\n# pilot = 41 catalogues the attractors on this window (the "
                         "explorer's pilot used its home window): the labels are the same, "
@@ -1322,7 +1323,7 @@ class Requests:
                                                                                     result))
             except Cancelled:
                 self.on_cancel(request)
-            except Exception as exc:  # reported to the page, never raised into the loop
+            except Exception as exc:  # noqa: BLE001 - reported to the page, never raised into the loop
                 self.on_error(request, exc)
             finally:
                 with self._condition:

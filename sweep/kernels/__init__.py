@@ -16,9 +16,22 @@ the engine, the execution back ends or the maps.
 
 from .cache import build
 from .source import source
-from .spec import (DEVICES, DTYPES, KernelSpec, Status, check_device, check_dtype,
-                   check_method_fits, check_observables_fit, check_tangent_fits, declarations,
-                   failure_summary, method_of, n_columns, status_counts)
+from .spec import (
+    DEVICES,
+    DTYPES,
+    KernelSpec,
+    Status,
+    check_device,
+    check_dtype,
+    check_method_fits,
+    check_observables_fit,
+    check_tangent_fits,
+    declarations,
+    failure_summary,
+    method_of,
+    n_columns,
+    status_counts,
+)
 
 __all__ = ["DEVICES", "DTYPES", "KernelSpec", "Status", "build", "check_device", "check_dtype",
            "check_method_fits",

@@ -29,8 +29,14 @@ import re
 
 from .fixed import NL, _drives
 from .lanes import indent
-from .snippets import (failed_samples, failed_status, ok_test, renormalisations, snippets,
-                       stop_source)
+from .snippets import (
+    failed_samples,
+    failed_status,
+    ok_test,
+    renormalisations,
+    snippets,
+    stop_source,
+)
 from .spec import KernelSpec, Status, n_columns
 from .steppers import STEPPERS
 from .terms import load_lines
@@ -47,12 +53,12 @@ def available() -> str | None:
     else the reason, for the error message."""
     try:
         from numba import cuda
-    except Exception as exc:  # pragma: no cover - numba without its CUDA target
+    except Exception as exc:  # noqa: BLE001  # pragma: no cover - numba without its CUDA target
         return f"numba's CUDA target cannot be imported ({exc})"
     try:
         if cuda.is_available():
             return None
-    except Exception as exc:  # pragma: no cover - broken driver or toolkit
+    except Exception as exc:  # noqa: BLE001  # pragma: no cover - broken driver or toolkit
         return f"numba.cuda could not reach a GPU ({exc})"
     return ("no CUDA GPU was found (numba.cuda.is_available() is False: no NVIDIA GPU, "
             "driver or CUDA toolkit; install with pip install 'sweep[cuda]')")

@@ -24,8 +24,14 @@ from dataclasses import dataclass, field
 from ..observables import OBSERVABLES
 from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet, scalar_lanes
 from .precision import float64_symbols
-from .snippets import (failed_samples, failed_status, ok_test, renormalisations, snippets,
-                       stop_source)
+from .snippets import (
+    failed_samples,
+    failed_status,
+    ok_test,
+    renormalisations,
+    snippets,
+    stop_source,
+)
 from .spec import KernelSpec, Status, n_columns
 from .steppers import STEPPERS
 from .terms import column_of, drive_sine

@@ -121,8 +121,8 @@ def single_loads(text: str, keep) -> str:
 
 
 # a compiled kernel's head: the step is its third parameter
-_HEAD = re.compile(r"^(?P<head>@(?:njit|cuda\.jit)[^\n]*\ndef \w+\(params, t0, )dt(?P<rest>,[^)]*\):\n)"
-                   r"(?P<indent>[ \t]+)", re.MULTILINE)
+_HEAD = re.compile(r"^(?P<head>@(?:njit|cuda\.jit)[^\n]*\ndef \w+\(params, t0, )dt"
+                   r"(?P<rest>,[^)]*\):\n)(?P<indent>[ \t]+)", re.MULTILINE)
 # products that are times: a step count times the step, a stage's offset c dt, a
 # forcing period in steps
 _TIMES = re.compile(r"(\b(?:step|k_state|ks)\b|\((?:step|ks) \+ 1\)|\(acc_n_steady - 1\)|"

@@ -4,8 +4,13 @@ from __future__ import annotations
 
 import re
 
-from ..observables import (ATTRACTOR_MATCHES, ATTRACTOR_TOL, OBSERVABLES, STROBE_TOL,
-                           STROBE_TOL_FLOAT32)
+from ..observables import (
+    ATTRACTOR_MATCHES,
+    ATTRACTOR_TOL,
+    OBSERVABLES,
+    STROBE_TOL,
+    STROBE_TOL_FLOAT32,
+)
 from .lanes import indent
 from .spec import KernelSpec, Status
 from .terms import tension_terms

@@ -41,11 +41,26 @@ from ..observables import OBSERVABLES
 from .adaptive import adaptive_kernel
 from .cuda import cuda_kernel, device_functions
 from .fixed import fixed_kernel
-from .precision import (HEADER, clock, float64_symbols, single, single_drive_values,
-                        single_loads, wrapper)
+from .precision import (
+    HEADER,
+    clock,
+    float64_symbols,
+    single,
+    single_drive_values,
+    single_loads,
+    wrapper,
+)
 from .refill import refill_kernel
-from .spec import (KernelSpec, check_device, check_dtype, check_method_fits, check_observables_fit, check_tangent_fits,
-                   method_of, tangent)
+from .spec import (
+    KernelSpec,
+    check_device,
+    check_dtype,
+    check_method_fits,
+    check_observables_fit,
+    check_tangent_fits,
+    method_of,
+    tangent,
+)
 from .terms import accel_jacobian_source, accel_source, energy_source
 
 __all__ = ["source"]

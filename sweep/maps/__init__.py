@@ -7,10 +7,19 @@ continuation, and adaptive refinement of a 2-D map toward its boundaries (`refin
 ``sweep.metrics`` and ``sweep.response``.
 """
 
-from .labels import (UNRESOLVED, amplitude, attractor_catalogue, basins, identify_attractors,
-                     inverted, motion, natural_frequency_squared, well)
 from .continuation import continuation
 from .fractions import fractions
+from .labels import (
+                     UNRESOLVED,
+                     amplitude,
+                     attractor_catalogue,
+                     basins,
+                     identify_attractors,
+                     inverted,
+                     motion,
+                     natural_frequency_squared,
+                     well,
+)
 from .period import NO_PERIOD, period
 from .pilot import pilot_catalogue, pilot_grid
 from .refine import refine

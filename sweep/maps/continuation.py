@@ -16,8 +16,14 @@ import numpy as np
 import xarray as xr
 
 from .._validate import check_quantity
-from .labels import (UNRESOLVED, check_max_period, check_tolerance, identify_attractors,
-                     strobe_axes, strobe_table)
+from .labels import (
+    UNRESOLVED,
+    check_max_period,
+    check_tolerance,
+    identify_attractors,
+    strobe_axes,
+    strobe_table,
+)
 from .period import NO_PERIOD
 
 __all__ = ["continuation", "set_distance"]

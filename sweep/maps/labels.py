@@ -19,9 +19,9 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ..kernels import Status
 from .._timesteps import transient_steps
 from .._validate import check_count, check_numbers, check_quantity
+from ..kernels import Status
 from . import _strobe
 
 __all__ = ["motion", "well", "basins", "attractor_catalogue", "amplitude", "inverted",

@@ -178,7 +178,7 @@ def _check_int(name: str, value: Any, low: int, high: int | None, accepted: str)
     """Return ``value`` as an int in ``[low, high]`` or raise ValueError saying so."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
         # ValueError, not TypeError: every bad parameter value raises ValueError here
-        raise ValueError(f"{name} must be {accepted}, got {value!r}")  # noqa: TRY004
+        raise ValueError(f"{name} must be {accepted}, got {value!r}")
     value = int(value)
     if value < low or (high is not None and value > high):
         raise ValueError(f"{name} must be {accepted}, got {value!r}")
@@ -193,7 +193,7 @@ def _check_rng(rng: Any) -> np.random.Generator:
                 "Generator, BitGenerator or SeedSequence")
     if isinstance(rng, (bool, np.bool_, str, bytes)):
         # ValueError, not TypeError, as in _check_int
-        raise ValueError(f"rng must be {accepted}, got {rng!r}")  # noqa: TRY004
+        raise ValueError(f"rng must be {accepted}, got {rng!r}")
     try:
         return np.random.default_rng(rng)
     except (TypeError, ValueError):
@@ -203,7 +203,7 @@ def _check_rng(rng: Any) -> np.random.Generator:
 def _check_sizes(name: str, values: Any, low: int, high: int, accepted: str) -> list[int]:
     """Return a sorted list of distinct ints in ``[low, high]`` (at least two)."""
     if isinstance(values, (numbers.Number, str, bytes)):
-        raise ValueError(  # noqa: TRY004 (see _check_int)
+        raise ValueError(
             f"{name} must be a sequence of {accepted}, got {values!r}"
         )
     try:

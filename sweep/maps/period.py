@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from . import _strobe
 from .._validate import check_count
+from . import _strobe
 from .labels import check_tolerance, map_coords, strobe_axes, strobe_table
 
 __all__ = ["NO_PERIOD", "period"]

@@ -25,8 +25,17 @@ from ..grid import Grid, Points
 from ..observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
 from ..physics import Scene
 from ._quadtree import check_step, refine_field
-from .labels import (UNRESOLVED, _orbit, _same_orbit, attractor_catalogue, basins,
-                     check_max_period, check_tolerance, identify_attractors, well)
+from .labels import (
+    UNRESOLVED,
+    _orbit,
+    _same_orbit,
+    attractor_catalogue,
+    basins,
+    check_max_period,
+    check_tolerance,
+    identify_attractors,
+    well,
+)
 from .pilot import pilot_catalogue
 
 __all__ = ["refine"]

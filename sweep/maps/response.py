@@ -9,10 +9,10 @@ import numpy as np
 import xarray as xr
 
 from .. import engine
-from . import labels as maps
 from .._validate import check_axis, check_choice, check_count, check_quantity
 from ..grid import Grid
 from ..physics import Forcing, Scene
+from . import labels as maps
 
 __all__ = ["frequency_response"]
 

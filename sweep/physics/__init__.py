@@ -5,11 +5,17 @@ later adds its parameters); code inside sweep calls `parameter_names` and
 `parameter_info`.
 """
 
-from .effect import (EFFECTS, Drive, Effect, EffectDeclaration, Parameter, register,
-                     unregister)
+from .effect import EFFECTS, Drive, Effect, EffectDeclaration, Parameter, register, unregister
 from .effects import Damping, Forcing, PivotDrive, QuadraticDrag, Torque
-from .scene import (BASE_PARAMETERS, MODELS, Scene, parameter_info, parameter_names,
-                    parameter_table, parameters)
+from .scene import (
+    BASE_PARAMETERS,
+    MODELS,
+    Scene,
+    parameter_info,
+    parameter_names,
+    parameter_table,
+    parameters,
+)
 
 __all__ = ["BASE_PARAMETERS", "Damping", "Drive", "EFFECTS", "Effect", "EffectDeclaration",
            "Forcing", "MODELS", "PARAMETERS", "PARAMETER_INFO", "Parameter", "PivotDrive",

@@ -47,6 +47,8 @@ import re
 from dataclasses import dataclass, fields
 from typing import Any, ClassVar
 
+import numpy as np
+
 from .._validate import check_real
 
 __all__ = ["Drive", "Effect", "EffectDeclaration", "EFFECTS", "Parameter", "RESERVED_SYMBOLS",
@@ -115,7 +117,7 @@ class Parameter:
     def is_outside(self, value) -> Any:
         """True (elementwise) where ``value`` violates the lower bound."""
         if self.minimum is None:
-            return value != value  # never, with the caller's shape
+            return np.zeros(np.shape(value), dtype=bool)  # never, with the caller's shape
         return value <= self.minimum if self.strict else value < self.minimum
 
 

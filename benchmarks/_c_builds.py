@@ -1,0 +1,171 @@
+"""The C reference (``c_reference/pendulum.c``) built with gcc and called through ctypes,
+on run_all.py's full scene, and the C limit that forced_basins.py and refine.py set
+their maps against (`c_limit`). Shared by run_all.py, forced_basins.py and refine.py
+(and run_all re-exports these names for the tests).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import itertools
+import json
+import math
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from _machine import C_SOURCE, cpu_flags
+
+#: run_all.py's full scene: g/L, damping, forcing amplitude, frequency and phase; step
+G_OVER_L, DAMPING, AMPLITUDE, FREQUENCY, PHASE = 1.0, 0.5, 1.2, 2.0 / 3.0, 0.0
+DT = 0.01
+
+
+def grid_axes(n):
+    """(theta0, omega0) axes with n trajectories: 2 x 1 aspect like 512 x 256."""
+    cols = max(1, round(math.sqrt(n / 2)))
+    rows = max(1, n // cols)
+    return np.linspace(-np.pi, np.pi, rows), np.linspace(-2.0, 2.0, cols)
+
+
+def initial_states(theta0, omega0):
+    th, om = np.meshgrid(theta0, omega0, indexing="ij")
+    return th.ravel().copy(), om.ravel().copy()
+
+
+# ------------------------------------------------------------------------ C reference
+# Every build: gcc C_BASE_FLAGS + the variant's flags. Never -ffast-math (reassociation
+# would break the sine's magic-number rounding and exact reduction). -ffp-contract=fast
+# fuses a*b + c into FMAs wherever gcc likes (sweep's kernels write theirs explicitly,
+# sweep._config.FASTMATH, but the fastest C may fuse more); -ffp-contract=off fuses
+# none but the sine's explicit fma() calls.
+C_BASE_FLAGS = ["-O3", "-march=native", "-fopenmp", "-shared", "-fPIC"]
+C_BLOCKS = (64, 128, 256, 512, 1024, 2048, 4096)  # the limit's block-size sweep
+C_CHECK_STEPS = 100  # the agreement check's horizon (t = 1)
+C_CHECK_TOL = 1e-12  # max |C - sweep| of the final state allowed after C_CHECK_STEPS
+WIDE = "-mprefer-vector-width=512"
+
+#: The weaker builds, kept as rows named for what they are. (gcc 12.2 takes this Zen 4
+#: for znver3 under -march=native but, with AVX-512 enabled and no 256-bit tuning for
+#: AMD, still emits 512-bit zmm code by default: `native_vector_registers` checks.)
+NARROW = "-mprefer-vector-width=256"
+C_FIXED = {
+    "C, -march=native, libm sin, no FMA":
+        ["-DSIN_VARIANT=0", "-ffp-contract=off"],
+    "C, -march=native, glibc vector sin (libmvec), no FMA":
+        ["-DSIN_VARIANT=1", "-ffp-contract=off"],
+    "C, -march=native, polynomial sin, FMA only where written (its fma())":
+        ["-DSIN_VARIANT=4", "-ffp-contract=off"],
+    "C, 256-bit (-mprefer-vector-width=256), polynomial sin, FMA":
+        [NARROW, "-DSIN_VARIANT=4", "-ffp-contract=fast"],
+    "C, -march=native, previous polynomial sin (both polynomials), FMA":
+        ["-DSIN_VARIANT=2", "-ffp-contract=fast"],
+    "C, -march=native, glibc vector sin (libmvec), FMA":
+        ["-DSIN_VARIANT=1", "-ffp-contract=fast"],
+    "C, linear model (no sin), -march=native, no FMA":
+        ["-DLINEAR", "-ffp-contract=off"],
+}
+
+
+def c_limit_candidates(avx512: bool, blocks=C_BLOCKS) -> dict[str, list[str]]:
+    """The limit search, first phase: the same algorithm at its fastest (polynomial
+    sine in SIMD lanes, FMA contraction, forcing sine once per step for the whole call,
+    512-bit vectors where the CPU has AVX-512), one build per block size."""
+    width = [WIDE] if avx512 else []
+    label = "512-bit" if avx512 else "-march=native"
+    return {f"C limit search: {label}, polynomial sin, FMA, forcing table, block {b}":
+            [*width, "-DSIN_VARIANT=4", "-ffp-contract=fast", "-DFORCING_TABLE",
+             f"-DBLOCK={b}"] for b in blocks}
+
+
+def c_limit_variations(best_flags: list[str], avx512: bool) -> dict[str, list[str]]:
+    """Second phase, at the best block: one option changed at a time."""
+    block = next(f for f in best_flags if f.startswith("-DBLOCK="))
+    width = [WIDE] if avx512 else []
+    label = "512-bit" if avx512 else "-march=native"
+    n = block.split("=")[1]
+    out = {
+        f"C limit search: {label}, previous polynomial sin (both polynomials, quadrant "
+        f"from bits), FMA, forcing table, block {n}":
+            [*width, "-DSIN_VARIANT=3", "-ffp-contract=fast", "-DFORCING_TABLE", block],
+        f"C limit search: {label}, polynomial sin, FMA, forcing per block and step "
+        f"(sweep's layout), block {n}":
+            [*width, "-DSIN_VARIANT=4", "-ffp-contract=fast", block],
+    }
+    if avx512:
+        out[f"C limit search: 256-bit (-mprefer-vector-width=256), polynomial sin, FMA, "
+            f"forcing table, block {n}"] = [NARROW, "-DSIN_VARIANT=4", "-ffp-contract=fast",
+                                            "-DFORCING_TABLE", block]
+    return out
+
+
+_LIB_NUMBER = itertools.count()
+
+
+def build_c_one(build_dir: Path, key: str, flags: list[str]):
+    """Compile pendulum.c with ``flags``; a ctypes function, or an error string, or
+    None if gcc is absent."""
+    gcc = shutil.which("gcc")
+    if gcc is None:
+        return None
+    lib = build_dir / f"pendulum_{next(_LIB_NUMBER)}.so"
+    cmd = [gcc, *C_BASE_FLAGS, *flags, str(C_SOURCE), "-o", str(lib), "-lm"]
+    proc = subprocess.run(cmd, check=False, capture_output=True, text=True)
+    if proc.returncode != 0:
+        return "build failed: " + (proc.stderr.strip().splitlines() or ["?"])[-1]
+    fn = ctypes.CDLL(str(lib)).pendulum_rk4
+    fn.restype = None
+    p = ctypes.POINTER(ctypes.c_double)
+    fn.argtypes = [ctypes.c_int64, p, p, *[ctypes.c_double] * 7, ctypes.c_int64, p, p]
+    return fn
+
+
+def build_c(build_dir: Path, variants=None):
+    """{variant: ctypes function or error string}; None if gcc is absent."""
+    if shutil.which("gcc") is None:
+        return None
+    variants = C_FIXED if variants is None else variants
+    return {name: build_c_one(build_dir, name, flags) for name, flags in variants.items()}
+
+
+def call_c(fn, th0, om0, steps):
+    n = th0.size
+    th, om = np.empty(n), np.empty(n)
+    p = ctypes.POINTER(ctypes.c_double)
+    fn(n, th0.ctypes.data_as(p), om0.ctypes.data_as(p), G_OVER_L, DAMPING, AMPLITUDE,
+       FREQUENCY, PHASE, 0.0, DT, steps, th.ctypes.data_as(p), om.ctypes.data_as(p))
+    return th, om
+
+
+def c_limit(repeats: int = 3) -> dict | None:
+    """The C limit's throughput, best of ``repeats`` calls on run_all's full-scene
+    workload (2^17 trajectories x 2000 steps); None without gcc."""
+    flags = None
+    try:
+        found = json.loads((Path(__file__).parent / "results" / "run_all.json").read_text())
+        flags = [f for f in found["c_limit"]["flags"] if f not in C_BASE_FLAGS]
+    except (OSError, KeyError, ValueError):
+        pass
+    if flags is None:  # no search on record: its first 512-bit candidate at block 4096
+        flags = c_limit_candidates("avx512f" in cpu_flags(), (4096,))
+        flags = next(iter(flags.values()))
+    n, steps = 2**17, 2000
+    th0, om0 = initial_states(*grid_axes(n))
+    with tempfile.TemporaryDirectory() as tmp:
+        fn = build_c_one(Path(tmp), "limit", flags)
+        if not callable(fn):
+            return None
+        call_c(fn, th0[:64], om0[:64], 10)  # load the library, warm the threads
+        best = min(_seconds(lambda: call_c(fn, th0, om0, steps))
+                   for _ in range(repeats))
+    return {"flags": " ".join(flags), "traj_steps_per_s": th0.size * steps / best}
+
+
+def _seconds(fn) -> float:
+    start = time.perf_counter()
+    fn()
+    return time.perf_counter() - start

@@ -1,0 +1,103 @@
+"""What the benchmarks say about the machine they ran on: one line for a report
+(`machine`), the CPU's feature flags (`cpu_flags`) and run_all.py's details (CPU,
+SIMD, gcc and what -march=native means to it, numba: `machine_details`)."""
+
+from __future__ import annotations
+
+import os
+import platform
+import re
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numba
+
+#: The C reference's source (`native_vector_registers` compiles it to assembly)
+C_SOURCE = Path(__file__).resolve().parent / "c_reference" / "pendulum.c"
+
+
+def machine() -> str:
+    """A one-line description of this machine."""
+    cpu = platform.processor() or "unknown CPU"
+    try:
+        with open("/proc/cpuinfo") as handle:
+            for line in handle:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return f"{cpu}, {os.cpu_count()} cores, numba {numba.__version__}, " \
+           f"{numba.get_num_threads()} threads"
+
+
+def cpu_flags() -> set[str]:
+    """The CPU's feature flags from /proc/cpuinfo (empty where unreadable)."""
+    try:
+        with open("/proc/cpuinfo") as handle:
+            for line in handle:
+                if line.startswith("flags"):
+                    return set(line.split(":", 1)[1].split())
+    except OSError:
+        pass
+    return set()
+
+
+def native_vector_registers() -> str | None:
+    """Which vector registers gcc's -march=native code uses for the polynomial-sine
+    kernel here ('zmm (512-bit)', 'ymm (256-bit)', ...), from its assembly."""
+    gcc = shutil.which("gcc")
+    if gcc is None:
+        return None
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "p.s"
+        proc = subprocess.run([gcc, "-O3", "-march=native", "-fopenmp", "-S",
+                               "-DSIN_VARIANT=4", str(C_SOURCE), "-o", str(out)],
+                              capture_output=True, text=True, check=False)
+        if proc.returncode != 0:
+            return None
+        asm = out.read_text()
+    for reg, bits in (("zmm", 512), ("ymm", 256), ("xmm", 128)):
+        if re.search(rf"%{reg}\d", asm):
+            return f"{reg} ({bits}-bit)"
+    return "none"
+
+
+def gcc_info() -> dict:
+    """gcc's version and what -march=native means to it (None without gcc)."""
+    gcc = shutil.which("gcc")
+    if gcc is None:
+        return {"compiler": None}
+    version = subprocess.run([gcc, "--version"], capture_output=True, text=True,
+                             check=False).stdout.splitlines()[0]
+    target = subprocess.run([gcc, "-march=native", "-Q", "--help=target"],
+                            capture_output=True, text=True, check=False).stdout
+    march = re.search(r"^\s+-march=\s+(\S+)", target, re.M)
+    return {"compiler": version, "march_native": march.group(1) if march else None,
+            "march_native_vector_registers": native_vector_registers()}
+
+
+def machine_details() -> dict:
+    """CPU model (lscpu), cores, SIMD flags, compiler, numba: the report's machine."""
+    info = {"cpu_model": None, "cores": os.cpu_count()}
+    try:
+        out = subprocess.run(["lscpu"], capture_output=True, text=True, check=False).stdout
+        for line in out.splitlines():
+            key, _, value = line.partition(":")
+            key, value = key.strip(), value.strip()
+            if key in ("Model name", "Vendor ID", "CPU family", "Model",
+                       "Thread(s) per core", "Core(s) per socket", "Hypervisor vendor"):
+                info[key] = value
+        info["cpu_model"] = info.pop("Model name", None)
+    except OSError:
+        pass
+    flags = cpu_flags()
+    info["simd"] = " ".join(f for f in ("avx2", "fma", "avx512f", "avx512dq", "avx512vl")
+                            if f in flags)
+    info["avx512f"] = "avx512f" in flags
+    import llvmlite
+    info.update(gcc_info(), numba=numba.__version__, llvmlite=llvmlite.__version__,
+                numba_threads=numba.get_num_threads())
+    return info
