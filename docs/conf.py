@@ -92,3 +92,21 @@ html_theme_options = {
     "footer_end": ["sphinx-version", "theme-version"],
 }
 html_show_sourcelink = False
+
+
+# -- Constants ---------------------------------------------------------------------------
+def _constant_docstring(app, what, name, obj, options, lines):
+    """A module constant without a docstring of its own (``NO_PERIOD = -1``, ``METHODS``)
+    would show its type's docstring ("int([x]) -> integer"): show its value instead."""
+    import inspect
+
+    own = inspect.getdoc(type(obj))
+    if what not in ("data", "attribute") or not own or "\n".join(lines).strip() != own.strip():
+        return
+    text = repr(obj)
+    lines[:] = ([f"The constant ``{text}``."] if len(text) <= 60 else
+                [f"A ``{type(obj).__name__}``; the module's description says what it holds."])
+
+
+def setup(app):
+    app.connect("autodoc-process-docstring", _constant_docstring, priority=100)
