@@ -63,6 +63,10 @@ def test_a_second_process_is_refused_and_a_killed_holder_is_taken_over(tmp_path)
             time.sleep(0.01)
         holder = json.loads((folder / _lock.LOCK).read_text())
         assert holder["pid"] == first.pid and holder["host"] == HOST
+        # stopped, the first run holds its lock and stays alive however long the second
+        # takes to start (its whole run takes ~3 s: on a busy machine, as under
+        # pytest-xdist, it could end and release the lock before the second looked)
+        first.send_signal(signal.SIGSTOP)
         # a second `sweep run` on the same folder while the first is alive
         second = subprocess.run([sys.executable, "-m", "sweep", "run", str(run_file), "-o",
                                  str(tmp_path / "other.nc"), "--checkpoint", str(folder),
