@@ -28,18 +28,7 @@ def check_real(
     ValueError
         If it is not finite or is below ``minimum`` (or equal, when ``strict``).
     """
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise TypeError(f"{name} must be {accepted}, got {value!r} ({type(value).__name__})")
-    try:
-        value = float(value)
-    except OverflowError:  # an int beyond the float range
-        raise ValueError(f"{name} must be {accepted}, got {value!r} (beyond the float "
-                         "range)") from None
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be {accepted}, got {value!r}")
-    if minimum is not None and (value < minimum or (strict and value == minimum)):
-        raise ValueError(f"{name} must be {accepted}, got {value!r}")
-    return value
+    return _number(name, value, minimum, strict, False, accepted, TypeError)
 
 
 class ArgumentTypeError(TypeError, ValueError):
@@ -115,8 +104,15 @@ def check_quantity(
         ``"{name} must be {accepted}, got {value!r}"`` for NaN, an infinity not
         allowed, or a value below ``minimum`` (or equal to it, when ``strict``).
     """
+    return _number(name, value, minimum, strict, allow_inf, accepted, ArgumentTypeError)
+
+
+def _number(name: str, value: Any, minimum: float | None, strict: bool, allow_inf: bool,
+            accepted: str, wrong_type: type[Exception]) -> float:
+    """`check_real` and `check_quantity`: ``value`` as a float; ``wrong_type`` for a
+    value that is not a real number."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise ArgumentTypeError(f"{name} must be {accepted}, got {_got(value)}")
+        raise wrong_type(f"{name} must be {accepted}, got {_got(value)}")
     try:
         number = float(value)
     except OverflowError:  # an int beyond the float range
@@ -125,7 +121,7 @@ def check_quantity(
     finite = math.isfinite(number) or (allow_inf and number == math.inf)
     if not finite or (minimum is not None
                       and (number < minimum or (strict and number == minimum))):
-        raise ValueError(f"{name} must be {accepted}, got {value!r}")
+        raise ValueError(f"{name} must be {accepted}, got {number!r}")
     return number
 
 
