@@ -37,8 +37,13 @@ def catalogue():
 
 
 @pytest.fixture(scope="module")
-def full_labels():
-    return maps.basins(sweep.run(SCENE, _grid(41), **FULL))
+def full_run():
+    return sweep.run(SCENE, _grid(41), **FULL)
+
+
+@pytest.fixture(scope="module")
+def full_labels(full_run):
+    return maps.basins(full_run)
 
 
 def test_the_pilot_finds_the_three_attractors(catalogue):
@@ -58,6 +63,23 @@ def test_labels_are_the_full_runs_on_every_start(catalogue, full_labels):
         np.testing.assert_array_equal(labels.attrs[key], full_labels.attrs[key])
     assert (ds.attractor >= 0).mean() > 0.99
     assert "attractor" in ds.attrs["observe"].split()
+
+
+def test_the_period_map_of_a_catalogue_run_is_the_full_runs(catalogue, full_run):
+    """A trajectory stopped on a catalogued attractor keeps too few stroboscopic
+    samples to show its period (it read -1 everywhere): it gets the catalogued orbit's,
+    which is what the full run's own samples give, start by start; and -1 is the
+    unresolved row of the fractions."""
+    early = sweep.run(SCENE, _grid(41), **EARLY, attractors=catalogue)
+    full = maps.period(full_run)
+    assert (full > 0).all()
+    periods = maps.period(early)
+    np.testing.assert_array_equal(periods.values, full.values)
+    periods[0, 0] = -1  # as a start that settles on nothing would read
+    table = maps.fractions(periods)
+    assert table.unresolved.sel(label=-1).item()
+    assert not table.unresolved.sel(label=[1, 2]).any()
+    assert table["count"].sel(label=-1).item() == 1
 
 
 def test_trajectories_stop_once_matched(catalogue):

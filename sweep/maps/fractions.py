@@ -28,13 +28,15 @@ SPREAD = ("spread of R independent replicates (randomised QMC): sample standard 
 
 def _unresolved_code(labels, unresolved):
     """The label value that means 'no label', from the argument or the labels' own
-    attributes (``unresolved`` of `sweep.maps.basins`, the ``unresolved`` flag of
-    `sweep.maps.motion`); None when there is none."""
+    attributes (``unresolved`` of `sweep.maps.basins`, ``no_period`` of
+    `sweep.maps.period`, the ``unresolved`` flag of `sweep.maps.motion`); None when
+    there is none."""
     if unresolved is not None:
         return unresolved
     attrs = getattr(labels, "attrs", {})
-    if "unresolved" in attrs:
-        return attrs["unresolved"]
+    for key in ("unresolved", "no_period"):
+        if key in attrs:
+            return attrs[key]
     meanings = str(attrs.get("flag_meanings", "")).split()
     if "unresolved" in meanings and "flag_values" in attrs:
         return np.asarray(attrs["flag_values"])[meanings.index("unresolved")]

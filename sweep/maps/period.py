@@ -40,7 +40,9 @@ def period(ds: xr.Dataset, *, max_period: int | None = None, tol: float = 1e-3
     xarray.DataArray, int32, grid dims
         ``1 .. max_period``, or ``NO_PERIOD`` (-1) where none is found: chaotic or
         quasi-periodic motion, a transient too short to settle, a period longer than
-        ``max_period``, or a failed trajectory. Attributes: ``max_period``, ``tol``.
+        ``max_period``, or a failed trajectory. A trajectory of a run with an attractor
+        catalogue (``attractors=``) that matched one gets the catalogued orbit's period.
+        Attributes: ``max_period``, ``tol``, ``no_period``.
 
     Raises
     ------
@@ -60,6 +62,14 @@ def period(ds: xr.Dataset, *, max_period: int | None = None, tol: float = 1e-3
     theta, omega, dims = strobe_table(ds)
     found, _ = _strobe.periods(theta, omega, max_period, tol)
     found = np.where(found > 0, found, NO_PERIOD).astype(np.int32)
+    if "attractor" in ds.data_vars and "attractors_period" in ds.attrs:
+        # a trajectory stopped on a catalogued attractor kept too few samples to show
+        # its period: it is the catalogued orbit's
+        index = np.asarray(ds["attractor"].transpose(*dims).values, float).reshape(-1)
+        matched = np.isfinite(index) & (index >= 0)  # NaN: a failed trajectory
+        known = np.asarray(ds.attrs["attractors_period"]).reshape(-1)[
+            index[matched].astype(np.int64)]
+        found[matched] = np.where(known <= max_period, known, NO_PERIOD)
     shape = tuple(ds.sizes[d] for d in dims)
     out = xr.DataArray(found.reshape(shape), coords=map_coords(ds, dims), dims=dims,
                        name="period")
