@@ -19,6 +19,7 @@ that says how to resume.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import signal
@@ -240,18 +241,41 @@ def _run_quietly(scene, grid, **kwargs):
     from .engine import run
 
     start = time.perf_counter()
+    with _warnings_as_lines():
+        ds = run(scene, grid, **kwargs)
+    return ds, time.perf_counter() - start
+
+
+@contextlib.contextmanager
+def _warnings_as_lines():
+    """Record the warnings raised in the block; once it has ended without an exception,
+    print each as one ``sweep: warning:`` line on stderr."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        ds = run(scene, grid, **kwargs)
-    seconds = time.perf_counter() - start
-    _print_warnings(caught)
-    return ds, seconds
-
-
-def _print_warnings(caught) -> None:
-    """Each recorded warning as one ``sweep: warning:`` line on stderr."""
+        yield
     for warning in caught:
         print(f"sweep: warning: {' '.join(str(warning.message).split())}", file=sys.stderr)
+
+
+def _shape(grid) -> str:
+    """``theta0 3 x omega0 4``; for points ``12 points of theta0, omega0``."""
+    if grid.dims == ("point",):
+        return f"{grid.size} points of {', '.join(grid.axes)}"
+    return " x ".join(f"{name} {size}" for name, size in zip(grid.dims, grid.shape))
+
+
+def _client(args: argparse.Namespace, options: dict):
+    """The Dask client of ``--scheduler`` or ``[run] scheduler``; None without one."""
+    scheduler = args.scheduler if args.scheduler is not None else options.get("scheduler")
+    return _connect(scheduler) if scheduler is not None else None
+
+
+def _stopped(exc: KeyboardInterrupt) -> tuple[str, int]:
+    """How a run stopped by Ctrl-C or SIGTERM (`Terminated`) says so: the word and the
+    exit status."""
+    if isinstance(exc, Terminated):
+        return "terminated", EXIT_TERMINATED
+    return "interrupted", EXIT_INTERRUPTED
 
 
 def _summary(ds, grid, seconds: float) -> str:
@@ -259,10 +283,8 @@ def _summary(ds, grid, seconds: float) -> str:
     ``12 trajectories (12 points of theta0, omega0) ...``."""
     from .kernels import Status
 
-    shape = (" x ".join(f"{name} {size}" for name, size in zip(grid.dims, grid.shape))
-             if grid.dims != ("point",) else f"{grid.size} points of {', '.join(grid.axes)}")
     failed = int(np.count_nonzero(ds.status.values != Status.OK))
-    return (f"{grid.size} trajectories ({shape}) in {seconds:.2f} s wall time, "
+    return (f"{grid.size} trajectories ({_shape(grid)}) in {seconds:.2f} s wall time, "
             f"{failed} non-finite")
 
 
@@ -311,8 +333,7 @@ def _command_run(args: argparse.Namespace) -> int:
         pilot_grid(grid, pilot)  # refuse a bad pilot before any compute
     else:  # with a pilot, after it: its catalogue adds variables
         check_space(output, scene, grid, **kwargs)
-    scheduler = args.scheduler if args.scheduler is not None else options.get("scheduler")
-    client = _connect(scheduler) if scheduler is not None else None
+    client = _client(args, options)
     bar = "\n" if args.progress or (args.progress is None and sys.stderr.isatty()) else ""
     stop = _Sigterm(lambda: f"{bar}sweep: terminated (the running chunk did not end within "
                     f"{TERMINATE_WAIT_S:g} s of SIGTERM and was abandoned); "
@@ -328,9 +349,9 @@ def _command_run(args: argparse.Namespace) -> int:
             saving = True
             save(ds, output)
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM (Terminated)
-        word = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        word, status = _stopped(exc)
         stop.say(f"{bar}sweep: {word}; {_resume_hint(args, folder, output)}")
-        return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
+        return status
     except OSError as exc:  # a full disk: keep what the checkpoint holds, say how to use it
         if folder is None or not (folder / _checkpoint.MANIFEST).is_file():
             raise
@@ -358,35 +379,30 @@ def _command_refine(args, scene, grid, kwargs, options, output, folder, pilot) -
                       "runs one sweep per level); accepted: sweep run without them")
     name = options.get("refine_label", "basins")
     label = getattr(maps, name) if name in REFINE_MAPS else name
-    scheduler = args.scheduler if args.scheduler is not None else options.get("scheduler")
-    client = _connect(scheduler) if scheduler is not None else None
+    client = _client(args, options)
     if client is not None:
         kwargs["client"] = client
     if args.progress is not None:
         kwargs["progress"] = args.progress
     start = time.perf_counter()
     try:
-        with _Sigterm(lambda: "sweep: terminated; no output written"), \
-                warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
+        with _Sigterm(lambda: "sweep: terminated; no output written"), _warnings_as_lines():
             labels = refine(scene, grid, label, step=options.get("refine_step", 16),
                             pilot=41 if pilot is None else pilot, **kwargs)
     except KeyboardInterrupt as exc:
-        word = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        word, status = _stopped(exc)
         print(f"sweep: {word}; no output written (a refined map is not resumable)",
               file=sys.stderr)
-        return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
+        return status
     finally:
         if client is not None:
             client.close()
     seconds = time.perf_counter() - start
-    _print_warnings(caught)
     save(labels.to_dataset(), output)
-    shape = " x ".join(f"{d} {n}" for d, n in zip(grid.dims, grid.shape))
     computed = labels.attrs["cells_computed"]
-    print(f"wrote {output}: refined {labels.name} map ({shape}), {computed} of {grid.size} "
-          f"trajectories computed ({100 * computed / grid.size:.1f} %) in {seconds:.2f} s "
-          "wall time")
+    print(f"wrote {output}: refined {labels.name} map ({_shape(grid)}), {computed} of "
+          f"{grid.size} trajectories computed ({100 * computed / grid.size:.1f} %) in "
+          f"{seconds:.2f} s wall time")
     return 0
 
 
@@ -774,10 +790,8 @@ def _command_explore(args: argparse.Namespace) -> int:
         from .explore.app import ExplorerApp, main_serve
     except ImportError as exc:
         raise ValueError(str(exc)) from None
-    with warnings.catch_warnings(record=True) as caught:  # e.g. the map it opens on
-        warnings.simplefilter("always")
+    with _warnings_as_lines():  # e.g. the map it opens on
         app = ExplorerApp(scene, grid, **kwargs)
-    _print_warnings(caught)
     return main_serve(app, port=args.port, host=args.host, open_browser=not args.no_browser)
 
 
