@@ -736,10 +736,7 @@ class Explorer:
             return self.home.x_range
         if name == self.home.y:
             return self.home.y_range
-        if name in AXES_INITIAL:
-            return self._default_range(state.scene, name)
-        value = state.scene.parameters().get(name, 1.0)
-        return (0.5 * value, 1.5 * value) if value else (0.0, 1.0)
+        return self._default_range(state.scene, name)
 
     # -- history -----------------------------------------------------------------
     def zoom(self, x_range, y_range) -> State:
@@ -902,8 +899,6 @@ class Explorer:
 
     @staticmethod
     def _run(state: State, grid: Grid, kwargs: dict):
-        import warnings
-
         with warnings.catch_warnings():  # failures are in the status, shown per start
             warnings.simplefilter("ignore", RuntimeWarning)
             return sweep_run(state.scene, grid, progress=False, **kwargs)
