@@ -41,6 +41,7 @@ from ..engine import run as sweep_run
 from ..grid import Grid
 from ..kernels import Status
 from ..methods import METHODS
+from ..observables import STROBE_SAMPLES_RANGE
 from ..physics import BASE_PARAMETERS, EFFECTS, MODELS, Scene, parameters
 
 __all__ = ["AXES_INITIAL", "CancelToken", "Cancelled", "Control", "Explorer", "InvalidInput",
@@ -1029,7 +1030,8 @@ class Explorer:
             if frequency > 0:
                 period = 2 * math.pi / frequency
                 observed = state.t_end - kwargs.get("t0", 0.0) - state.t_transient
-                samples = int(min(4096, max(2, math.floor(observed / period + 1e-9))))
+                low, high = STROBE_SAMPLES_RANGE
+                samples = int(min(high, max(low, math.floor(observed / period + 1e-9))))
                 steps_per_period = period / state.dt
                 if abs(steps_per_period - round(steps_per_period)) < 1e-6 * steps_per_period:
                     observe.append("strobe")
