@@ -286,25 +286,25 @@ class _Session:
         v = self.explorer.state.view
         if np.allclose(window, (v.x_range, v.y_range), rtol=1e-12, atol=0.0):
             return  # our own change (history), or nothing new
-        try:
-            self.explorer.zoom(*window)
-        except InvalidInput as exc:
-            self.view_error.object = f"{exc}"
-            self.view_error.visible = True
-            return
-        self.view_error.visible = False
-        self._submit()
+        if self._move_view(lambda: self.explorer.zoom(*window)):
+            self._submit()
 
     def _history(self, move) -> None:
+        if self._move_view(move):
+            self._apply_view()
+            self._submit()
+
+    def _move_view(self, move) -> bool:
+        """Run ``move`` (a change of view); show its refusal above the map, or clear it.
+        True when the view moved."""
         try:
             move()
         except InvalidInput as exc:
             self.view_error.object = f"{exc}"
             self.view_error.visible = True
-            return
+            return False
         self.view_error.visible = False
-        self._apply_view()
-        self._submit()
+        return True
 
     def _apply_view(self) -> None:
         """Put the explorer's view on the figure (ranges, labels, axis selectors)."""
