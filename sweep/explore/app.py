@@ -23,7 +23,7 @@ from functools import partial
 
 import numpy as np
 
-from .model import QUANTITIES, Explorer, InvalidInput, MapResult, Requests, State, Trajectory
+from .model import QUANTITIES, Explorer, InvalidInput, MapResult, Requests, Trajectory
 
 try:
     import panel as pn
@@ -104,7 +104,6 @@ class _Session:
         self.doc = pn.state.curdoc
         self.latest = 0
         self.result: MapResult | None = None
-        self.shown: State | None = None
         self.pending_zoom = None
         self._build()
         self.requests = Requests(self.explorer, self._from_worker(self._show),
@@ -370,12 +369,8 @@ class _Session:
 
     def _tapped(self, event) -> None:
         """A click on the map: the trajectory of the nearest pixel's start."""
-        if self.result is None or self.result.preview:
-            target = self.result
-        else:
-            target = self.result
         try:
-            traj = self.explorer.trajectory(event.x, event.y, target)
+            traj = self.explorer.trajectory(event.x, event.y, self.result)
         except InvalidInput as exc:
             self.info.object = f"**refused**: {exc}"
             return
