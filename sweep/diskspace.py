@@ -8,7 +8,6 @@ command line and `sweep.distributed`, which call it before computing.
 
 from __future__ import annotations
 
-import inspect
 import os
 import shutil
 from pathlib import Path
@@ -20,16 +19,6 @@ from . import engine
 from .io import _size, file_size_bound, to_dataset
 
 __all__ = ["check_space", "estimate_size", "layout"]
-
-
-def _prepared(scene, grid, run_kwargs: dict):
-    """``(settings, spec, chunk_size)`` of ``sweep.run(scene, grid, **run_kwargs)``:
-    validated in full as `sweep.run` does, nothing computed."""
-    bound = inspect.signature(engine.run).bind(scene, grid, **run_kwargs)
-    bound.apply_defaults()
-    wanted = inspect.signature(engine._prepare).parameters
-    return engine._prepare(**{name: value for name, value in bound.arguments.items()
-                              if name in wanted})
 
 
 def layout(scene, grid, **run_kwargs) -> xr.Dataset:
@@ -50,12 +39,12 @@ def layout(scene, grid, **run_kwargs) -> xr.Dataset:
     -------
     xarray.Dataset
     """
-    settings, spec, _ = _prepared(scene, grid, run_kwargs)
+    settings, spec, _ = engine.prepare(scene, grid, **run_kwargs)
     return _layout(scene, grid, settings, spec, run_kwargs.get("attractors"))
 
 
 def _layout(scene, grid, settings, spec, attractors) -> xr.Dataset:
-    """`layout` of a run whose arguments `_prepared` has checked."""
+    """`layout` of a run whose arguments `sweep.engine.prepare` has checked."""
     from .execution.local import allocate
 
     rows = allocate(spec, settings, 0)  # the kernel's arrays, 0 trajectories long
@@ -117,7 +106,7 @@ def check_space(path, scene, grid, **run_kwargs) -> int:
     from .execution import checkpoint as _checkpoint
 
     path = Path(path)
-    settings, spec, chunk_size = _prepared(scene, grid, run_kwargs)
+    settings, spec, chunk_size = engine.prepare(scene, grid, **run_kwargs)
     output = file_size_bound(_layout(scene, grid, settings, spec,
                                      run_kwargs.get("attractors")))
     folder = path.parent if str(path.parent) else Path(".")

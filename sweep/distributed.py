@@ -79,7 +79,6 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
         the cause (`sweep.io.write_error`); no partial file is left.
     """
     import contextlib
-    import inspect
     import os
     import tempfile
     import warnings
@@ -94,11 +93,7 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
             raise ValueError(f"run_to_netcdf does not take {name}= (accepted: the other "
                              "arguments of sweep.run; client, progress and rows_per_task "
                              "as its own)")
-    bound = inspect.signature(engine.run).bind(scene, grid, **run_kwargs)
-    bound.apply_defaults()
-    prepared = {k: v for k, v in bound.arguments.items()
-                if k in inspect.signature(engine._prepare).parameters}
-    _, _, chunk_size = engine._prepare(**prepared)  # whole-grid validation, no compute
+    _, _, chunk_size = engine.prepare(scene, grid, **run_kwargs)  # validation, no compute
     if client is not None:
         check_client(client)
     path = io.check_output_path(path)

@@ -42,7 +42,8 @@ from .methods import METHODS
 from .observables import DEFAULT_OBSERVE, OBSERVABLES, STROBE_SAMPLES, STROBE_SAMPLES_RANGE, resolve
 from .physics import EFFECTS, Scene
 
-__all__ = ["run", "warm_up", "estimate_error", "default_chunk_size", "RunSettings", "METHODS"]
+__all__ = ["run", "prepare", "warm_up", "estimate_error", "default_chunk_size", "RunSettings",
+           "METHODS"]
 
 #: Default tolerances of the adaptive methods (per step, RMS norm over theta, omega):
 #: about 1e-6 global error on a few periods of the pendulum.
@@ -766,6 +767,24 @@ def run(
     return ds
 
 
+def prepare(scene: Scene, grid: Grid, **run_kwargs):
+    """Validate ``run(scene, grid, **run_kwargs)`` in full, as `run` does, computing
+    nothing.
+
+    Returns
+    -------
+    settings : RunSettings
+    spec : sweep.kernels.KernelSpec
+        The kernel the run would use.
+    chunk_size : int
+    """
+    bound = inspect.signature(run).bind(scene, grid, **run_kwargs)
+    bound.apply_defaults()
+    wanted = inspect.signature(_prepare).parameters
+    return _prepare(**{name: value for name, value in bound.arguments.items()
+                       if name in wanted})
+
+
 def warm_up(scene: Scene, grid: Grid, **kwargs) -> KernelSpec:
     """Compile (or load from the disk cache) the kernel that ``run(scene, grid,
     **kwargs)`` would use, integrating nothing: to time a run apart from compilation.
@@ -784,11 +803,7 @@ def warm_up(scene: Scene, grid: Grid, **kwargs) -> KernelSpec:
     sweep.kernels.KernelSpec
         What was compiled.
     """
-    bound = inspect.signature(run).bind(scene, grid, **kwargs)
-    bound.apply_defaults()
-    wanted = inspect.signature(_prepare).parameters
-    settings, spec, _ = _prepare(**{name: value for name, value in bound.arguments.items()
-                                    if name in wanted})
+    settings, spec, _ = prepare(scene, grid, **kwargs)
     _integrate(build(spec), grid.table(scene, 0, 0), settings,
                _allocate(spec, settings, 0))  # no trajectories: compiles, runs nothing
     return spec

@@ -174,8 +174,8 @@ def test_checkpoint_estimate_bounds_its_chunk_files(tmp_path):
     folder = tmp_path / "ck"
     sweep.run(scene, _grid(n), chunk_size=300, checkpoint=folder, keep_checkpoint=True,
               **kwargs)
-    settings, spec, chunk_size = diskspace._prepared(scene, _grid(n),
-                                                     {"chunk_size": 300, **kwargs})
+    settings, spec, chunk_size = sweep.engine.prepare(scene, _grid(n), chunk_size=300,
+                                                      **kwargs)
     bound = ckpt.size_bound(spec, settings, n * n, chunk_size)
     stored = ckpt.stored_bytes(folder)
     assert len(chunk_files(folder)) == 6
