@@ -36,6 +36,7 @@ import numpy as np
 
 from .. import io as sweep_io
 from .. import maps
+from .._validate import check_count
 from ..diskspace import layout as run_layout
 from ..engine import run as sweep_run
 from ..grid import Grid
@@ -640,11 +641,8 @@ class Explorer:
                     raise ValueError(f"range of {name} must be finite with start < end, got "
                                      f"({lo!r}, {hi!r})")
             low, high = RESOLUTION_RANGE
-            r = state.resolution
-            if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or \
-                    not low <= r <= high:
-                raise ValueError(f"resolution must be an integer from {low} to {high} "
-                                 f"(pixels per axis), got {r!r}")
+            check_count("resolution", state.resolution, minimum=low, maximum=high,
+                        accepted=f"an integer from {low} to {high} (pixels per axis)")
             run_layout(state.scene, self.grid(state), **self.run_kwargs(state))
         except InvalidInput:
             raise
