@@ -106,19 +106,27 @@ class ParameterRows:
     def _declared() -> dict:
         return {p.axis: p for p in parameters()}
 
-    def _check_name(self, name: str, declared: dict) -> None:
-        if name not in declared:
-            raise ValueError(
-                f"unknown {self._what} {name!r}; accepted axis names: {', '.join(declared)}"
-            )
-
-    def _check_bounds(self, name: str, array: np.ndarray, declared: dict) -> None:
-        bad = declared[name].is_outside(array)
-        if bad.any():
-            raise ValueError(
-                f"{self._what} {name!r} has value {float(array[bad][0])!r} at index "
-                f"{int(np.flatnonzero(bad)[0])}; accepted: {declared[name].accepted(True)}"
-            )
+    def _checked(self, axes: dict, column) -> dict[str, np.ndarray]:
+        """``axes`` checked, in the order given: at least one, each a declared name,
+        each made an array by ``column(name, values)`` (which checks its form) and
+        within its parameter's accepted values."""
+        declared = self._declared()
+        if not axes:
+            raise ValueError(f"{type(self).__name__} needs at least one axis; accepted axis "
+                             f"names: {', '.join(declared)}")
+        checked = {}
+        for name, values in axes.items():
+            if name not in declared:
+                raise ValueError(f"unknown {self._what} {name!r}; accepted axis names: "
+                                 f"{', '.join(declared)}")
+            array = checked[name] = column(name, values)
+            bad = declared[name].is_outside(array)
+            if bad.any():
+                raise ValueError(
+                    f"{self._what} {name!r} has value {float(array[bad][0])!r} at index "
+                    f"{int(np.flatnonzero(bad)[0])}; accepted: {declared[name].accepted(True)}"
+                )
+        return checked
 
     @property
     def axes(self) -> dict[str, np.ndarray]:
@@ -241,18 +249,9 @@ class Grid(ParameterRows):
     _what = "grid axis"
 
     def __init__(self, **axes) -> None:
-        declared = self._declared()
-        if not axes:
-            raise ValueError(
-                "Grid needs at least one axis; accepted axis names: " + ", ".join(declared)
-            )
-        checked = {}
-        for name, values in axes.items():
-            self._check_name(name, declared)
-            array = checked[name] = check_axis(name, values)
-            self._check_bounds(name, array, declared)
+        self._axes = self._checked(axes, check_axis)
+        for array in self._axes.values():
             array.flags.writeable = False
-        self._axes = checked
 
     @property
     def dims(self) -> tuple[str, ...]:
@@ -345,16 +344,7 @@ class Points(ParameterRows):
     _what = "points axis"
 
     def __init__(self, **axes) -> None:
-        declared = self._declared()
-        if not axes:
-            raise ValueError(
-                "Points needs at least one axis; accepted axis names: " + ", ".join(declared)
-            )
-        checked = {}
-        for name, values in axes.items():
-            self._check_name(name, declared)
-            checked[name] = array = self._column(name, values)
-            self._check_bounds(name, array, declared)
+        checked = self._checked(axes, self._column)
         lengths = {name: a.size for name, a in checked.items() if a.ndim == 1}
         if len(set(lengths.values())) > 1:
             raise ValueError(
