@@ -7,6 +7,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._validate import check_flag
+
 __all__ = ["fractions"]
 
 #: The dimension `fractions` reads as independent replicates (R runs of
@@ -130,8 +132,7 @@ def fractions(labels, *, convergence: bool = False, unresolved=None) -> xr.Datas
     >>> table.fraction.values.round(3).tolist(), table.unresolved.values.tolist()
     ([0.167, 0.333, 0.5], [True, False, False])
     """
-    if not isinstance(convergence, (bool, np.bool_)):
-        raise TypeError(f"convergence must be True or False, got {convergence!r}")
+    convergence = check_flag("convergence", convergence)
     code = _unresolved_code(labels, unresolved)
     if isinstance(labels, xr.DataArray) and REPLICATE in labels.dims:
         other = [d for d in labels.dims if d != REPLICATE]
