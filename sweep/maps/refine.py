@@ -20,6 +20,7 @@ import numpy as np
 import xarray as xr
 
 from .. import engine
+from .._validate import check_count
 from ..engine import INITIAL_AXES
 from ..grid import Grid, Points
 from ..observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
@@ -158,11 +159,11 @@ def _variables(run_kwargs: dict) -> list[str]:
 
 
 def _check(scene, grid, label, step, pilot, run_kwargs):
-    """Every argument refine can check before computing anything."""
+    """Every argument refine can check before computing anything; returns them checked,
+    with the grid's two varying axes."""
     if not isinstance(scene, Scene):
         raise ValueError(f"scene must be a sweep.Scene, got {type(scene).__name__}")
-    varying = [d for d, n in zip(grid.dims, grid.shape) if n > 1] \
-        if isinstance(grid, Grid) else []
+    varying = [d for d in grid.dims if grid.varies(d)] if isinstance(grid, Grid) else []
     if len(varying) != 2:
         got = (f"a grid of shape {dict(zip(grid.dims, grid.shape))}"
                if isinstance(grid, Grid) else type(grid).__name__)
@@ -172,7 +173,6 @@ def _check(scene, grid, label, step, pilot, run_kwargs):
                          "refine each 2-D slice in a loop)")
     step = check_step(step)
     if pilot is not None:
-        from .._validate import check_count
         pilot = check_count("pilot", pilot, minimum=2,
                             accepted="None or an int >= 2 (points per initial-condition "
                                      "axis)")
@@ -188,7 +188,7 @@ def _check(scene, grid, label, step, pilot, run_kwargs):
             raise ValueError(f"label = {label!r} is not a variable of this run; accepted: "
                              f"{', '.join(repr(k) for k in known)} (the variables of "
                              "observe=...), or a map function")
-        return step, pilot, None, {}
+        return step, pilot, None, {}, varying
     func, options = function
     try:  # the options must be the map's own keywords
         inspect.signature(func).bind(None, **options)
@@ -200,7 +200,7 @@ def _check(scene, grid, label, step, pilot, run_kwargs):
     if func is basins:
         check_max_period(options.get("max_period", 8))
         check_tolerance(options.get("tol", 1e-3))
-    return step, pilot, func, options
+    return step, pilot, func, options, varying
 
 
 def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
@@ -279,11 +279,11 @@ def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
     >>> wells.attrs["cells_computed"] < grid.size
     True
     """
-    step, pilot, func, options = _check(scene, grid, label, step, pilot, run_kwargs)
+    step, pilot, func, options, (first, second) = _check(scene, grid, label, step, pilot,
+                                                          run_kwargs)
     kwargs = dict(run_kwargs)
     kwargs.setdefault("progress", False)
     dims = grid.dims
-    first, second = (d for d, n in zip(dims, grid.shape) if n > 1)
     shape = (grid.axes[first].size, grid.axes[second].size)
 
     def run(rows, cols):
