@@ -291,15 +291,12 @@ def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
         columns[first], columns[second] = grid.axes[first][rows], grid.axes[second][cols]
         return engine.run(scene, Points(**columns), **kwargs)
 
+    def labelled(ds):
+        return ds[label] if func is None else func(ds, **options)
+
     probe = run(np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64))
-    forced = False
-    if func is None:
-        template = probe[label]
-    elif func is basins:
-        template = basins(probe, **options)
-        forced = "strobe_theta" in probe
-    else:
-        template = func(probe, **options)
+    template = labelled(probe)
+    forced = func is basins and "strobe_theta" in probe
     if not isinstance(template, xr.DataArray) or template.dims != ("point",):
         raise ValueError(f"label = {label!r} gives {type(template).__name__} "
                          f"{getattr(template, 'dims', '')} for a run of points; accepted: "
@@ -314,9 +311,7 @@ def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
     codes = _Codes()
     if forced:
         attractors = _ForcedAttractors(options.get("max_period", 8), options.get("tol", 1e-3))
-
-        def keys(ds):
-            return attractors.keys(ds)
+        keys = attractors.keys
     elif func is basins:  # unforced: the well, as basins reads it
         def keys(ds):
             index = well(ds)
@@ -325,33 +320,28 @@ def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
             return codes.encode(index.values)
     else:
         def keys(ds):
-            values = ds[label] if func is None else func(ds, **options)
-            return codes.encode(values.values)
+            return codes.encode(labelled(ds).values)
 
     found = refine_field(shape, lambda rows, cols: keys(run(rows, cols)), step)
     # the coordinates' attributes as the label passes them on (xr.where drops them)
     coords = {d: xr.Variable(d, grid.axes[d], attrs=(template.coords[d] if d in
                                                       template.coords else probe[d]).attrs)
               for d in dims}
+    attrs = dict(template.attrs)  # the label's, with a basins catalogue of the whole map
     if forced:
         values, catalogue = attractors.labels(found.labels.reshape(grid.shape))
-        out = xr.DataArray(values, coords=coords, dims=dims, name="basins")
-        out.attrs = dict(template.attrs)
-        out.attrs.update({f"attractor_{k}": catalogue[k] for k in
-                          ("theta", "omega", "period", "turns_per_period", "size")})
+        attrs.update({f"attractor_{k}": catalogue[k] for k in
+                      ("theta", "omega", "period", "turns_per_period", "size")})
     elif func is basins:
         index = codes.decode(found.labels, np.float64).reshape(grid.shape)
-        wells = np.unique(index[np.isfinite(index)])
-        values = np.full(index.shape, UNRESOLVED, dtype=np.int32)
         finite = np.isfinite(index)
+        wells = np.unique(index[finite])
+        values = np.full(index.shape, UNRESOLVED, dtype=np.int32)
         values[finite] = np.searchsorted(wells, index[finite])
-        out = xr.DataArray(values, coords=coords, dims=dims, name="basins")
-        out.attrs = dict(template.attrs)
-        out.attrs["attractor_theta"] = (2 * np.pi * wells).astype(np.float64)
+        attrs["attractor_theta"] = (2 * np.pi * wells).astype(np.float64)
     else:
         values = codes.decode(found.labels, template.dtype).reshape(grid.shape)
-        out = xr.DataArray(values, coords=coords, dims=dims, name=template.name)
-        out.attrs = dict(template.attrs)
+    out = xr.DataArray(values, coords=coords, dims=dims, name=template.name, attrs=attrs)
     out = out.assign_coords(computed=(dims, found.computed.reshape(grid.shape)))
     out["computed"].attrs = {"long_name": "trajectory run (True) or label filled in from "
                                           "its block's perimeter (False)"}
