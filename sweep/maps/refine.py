@@ -62,7 +62,7 @@ class _Codes:
         found, inverse = np.unique(values[present], return_inverse=True)
         lookup = np.array([self.codes.setdefault(v.item(), len(self.codes)) for v in found],
                           dtype=np.int64)
-        out[present] = lookup[inverse.ravel()] if found.size else 0
+        out[present] = lookup[inverse.ravel()]
         return out
 
     def decode(self, codes: np.ndarray, dtype) -> np.ndarray:
