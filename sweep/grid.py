@@ -119,7 +119,8 @@ class ParameterRows:
             if name not in declared:
                 raise ValueError(f"unknown {self._what} {name!r}; accepted axis names: "
                                  f"{', '.join(declared)}")
-            array = checked[name] = column(name, values)
+            # a copy: the axes are read-only, and the caller's array stays as it was
+            array = checked[name] = np.array(column(name, values), dtype=np.float64)
             bad = declared[name].is_outside(array)
             if bad.any():
                 raise ValueError(

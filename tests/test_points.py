@@ -351,3 +351,17 @@ def test_the_example_points_run_file_runs_with_its_pilot(tmp_path):
     labels = maps.basins(ds)
     assert labels.dims == ("point",) and "attractor" in ds and (labels >= 0).all()
     assert len(np.unique(labels)) == 3  # the three attractors of the Wada map
+
+
+@pytest.mark.parametrize("make", [lambda a: sweep.Grid(theta0=a),
+                                  lambda a: sweep.Points(theta0=a, omega0=0.0)],
+                         ids=["grid", "points"])
+def test_axes_are_copies_of_the_callers_arrays(make):
+    """The axes are read-only and the caller's array is not theirs: it stays writeable
+    (a Grid used to lock it) and changing it changes no axis (Points kept a view)."""
+    values = np.linspace(-1.0, 1.0, 5)
+    rows = make(values)
+    assert values.flags.writeable
+    values[0] = 9.0
+    assert rows.axes["theta0"][0] == -1.0
+    assert not rows.axes["theta0"].flags.writeable
