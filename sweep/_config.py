@@ -92,6 +92,38 @@ def jit_options() -> dict:
     return {"fastmath": fastmath, "boundscheck": BOUNDSCHECK}
 
 
+#: SIMD vector width of the CPU kernels (`sweep.kernels.vectors`): ``"auto"`` (512 bits
+#: where the CPU has AVX-512, else LLVM's choice), ``"llvm"`` (LLVM's tuning for the CPU:
+#: 256 bits on Intel's AVX-512 cores), or 128, 256, 512. ``$SWEEP_VECTOR_WIDTH``
+#: overrides it. Results do not depend on it.
+VECTOR_WIDTH: str | int = "auto"
+
+VECTOR_WIDTHS = ("auto", "llvm", 128, 256, 512)
+
+
+def vector_width() -> str | int:
+    """The kernels' vector width setting: ``$SWEEP_VECTOR_WIDTH`` if set, else
+    `VECTOR_WIDTH`.
+
+    Returns
+    -------
+    {"auto", "llvm", 128, 256, 512}
+
+    Raises
+    ------
+    ValueError
+        For any other value, naming where it came from.
+    """
+    explicit = os.environ.get("SWEEP_VECTOR_WIDTH")
+    where = "SWEEP_VECTOR_WIDTH" if explicit else "sweep._config.VECTOR_WIDTH"
+    value = explicit.strip().lower() if explicit else VECTOR_WIDTH
+    for accepted in VECTOR_WIDTHS:
+        if str(value) == str(accepted):
+            return accepted
+    raise ValueError(f"{where}={value!r} is not a vector width; accepted: "
+                     + ", ".join(str(w) for w in VECTOR_WIDTHS) + " (bits)")
+
+
 def cache_dir() -> Path:
     """Folder for generated kernel sources and numba's on-disk cache.
 

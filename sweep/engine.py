@@ -419,6 +419,8 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
 
     integrator = settings.integrator
     _check_device(device, integrator)
+    if device == "cpu":
+        _config.vector_width()  # a bad SWEEP_VECTOR_WIDTH is refused before any compute
     check_dtype(dtype, integrator)
     effects = declarations(grid.effects(scene))
     check_method_fits(integrator, effects)

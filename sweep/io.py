@@ -15,9 +15,10 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from . import _config
 from ._version import __version__
 from .grid import Grid, Points
-from .kernels import Status
+from .kernels import Status, vectors
 from .observables import OBSERVABLES
 from .physics import EFFECTS, Scene, parameter_info
 
@@ -151,6 +152,8 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
         attrs["strobe_samples"] = spec.strobe_samples
     if spec.device != "cpu":  # where it ran, when not the default
         attrs["device"] = spec.device
+    else:  # the SIMD width the CPU kernels were compiled for (sweep.kernels.vectors)
+        attrs["vector_width"] = vectors.describe(_config.vector_width())
     if spec.dtype != "float64":  # its working precision, when not the default
         attrs["dtype"] = spec.dtype
     return xr.Dataset(data_vars, coords, attrs)

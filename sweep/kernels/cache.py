@@ -217,7 +217,6 @@ def _module_dir() -> Path:
     return private
 
 
-@functools.cache
 def build(spec: KernelSpec):
     """Return the compiled kernel for ``spec`` (memoised; disk-cached by numba).
 
@@ -238,6 +237,12 @@ def build(spec: KernelSpec):
         Once per process, when the cache folder could be changed by another user (see
         the module's docstring); kernels are then built in a private folder.
     """
+    return _build(spec, _config.vector_width())
+
+
+@functools.cache
+def _build(spec: KernelSpec, vector_width):
+    """`build` for one vector width setting (part of the source, so of the memo key)."""
     _serialise_numba_index()
     text = source(spec)
     digest = hashlib.sha1(text.encode()).hexdigest()[:16]
@@ -249,3 +254,7 @@ def build(spec: KernelSpec):
     sys.modules[name] = module
     module_spec.loader.exec_module(module)
     return module.kernel
+
+
+build.cache_info = _build.cache_info  # the memo's statistics and reset, as on a
+build.cache_clear = _build.cache_clear  # functools.cache'd build (tests, benchmarks)

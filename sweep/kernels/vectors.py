@@ -1,0 +1,137 @@
+"""The SIMD vector width of the CPU kernels, chosen for sweep's kernels alone.
+
+LLVM vectorises a kernel's lane loop with the registers its tuning for the CPU prefers.
+On Intel cores with AVX-512 (Ice Lake, Rocket Lake, Sapphire Rapids...) that tuning
+carries ``prefer-256-bit``, so the kernels ran on 256-bit ``ymm`` registers although the
+CPU has 512-bit ``zmm`` ones: on a 2-core Rocket Lake Xeon the full benchmark scene ran
+at 432-454 M trajectory-steps/s, and 597-610 M/s with that feature removed (issue 29,
+measured with ``NUMBA_CPU_FEATURES``; bit-identical results). AMD's Zen 4 and Zen 5
+are tuned for 512 bits already.
+
+Removing the feature for the whole process (``NUMBA_CPU_FEATURES``) would change how
+the user's *other* numba code is compiled too. Instead every function compiled for a
+sweep kernel (the kernel, the parallel loop numba outlines from its ``prange``, the
+physics helpers compiled with it) gets LLVM's function attribute
+``"prefer-vector-width"="<bits>"``, which the x86 backend reads per function: it sets
+the register width the loop vectoriser plans for and whether 512-bit registers are
+used, for that function only. The attribute is added when numba lowers those functions
+(`numba.core.cpu.CPUContext.post_lowering`, wrapped once), while a sweep kernel's
+dispatcher compiles; no other compilation sees it.
+
+The width chosen (`sweep._config.vector_width`): ``auto`` asks for 512 bits where the
+CPU the kernels are compiled for has AVX-512 (``avx512f``) and leaves LLVM's choice
+elsewhere; ``SWEEP_VECTOR_WIDTH=256`` (or 128, 512, ``llvm``) overrides it. It is
+written into the kernel's generated source (so numba's disk cache keeps one kernel
+per width) and into every dataset's ``vector_width`` attribute. Results do not depend
+on it: the kernels have no fast-math reassociation and write their fused
+multiply-adds explicitly, so each lane does the same operations in any width
+(``tests/test_vector_width.py`` checks bits).
+"""
+
+from __future__ import annotations
+
+import functools
+import threading
+
+__all__ = ["compile_with", "describe", "install", "resolved"]
+
+_state = threading.local()  # .width while a sweep kernel's dispatcher compiles
+
+
+def resolved(setting: str | int) -> int | None:
+    """The width in bits that ``setting`` asks for here, or None for LLVM's choice.
+
+    Parameters
+    ----------
+    setting : {"auto", "llvm", 128, 256, 512}
+        As `sweep._config.vector_width` returns it (already checked).
+
+    Returns
+    -------
+    int or None
+        ``auto``: 512 where the kernels' target CPU has ``avx512f``, else None.
+    """
+    if setting == "llvm":
+        return None
+    if setting == "auto":
+        return 512 if "avx512f" in target_features() else None
+    return int(setting)
+
+
+@functools.cache
+def target_features() -> frozenset[str]:
+    """The CPU features numba compiles for: ``NUMBA_CPU_FEATURES`` if set, else the
+    host's (as LLVM detects them), as a set of names without the ``+``."""
+    from numba.core import config
+
+    if config.CPU_FEATURES:
+        text = config.CPU_FEATURES
+        return frozenset(part[1:] for part in text.split(",") if part.startswith("+"))
+    import llvmlite.binding as llvm
+
+    return frozenset(name for name, on in llvm.get_host_cpu_features().items() if on)
+
+
+def describe(setting: str | int) -> str:
+    """The choice as a dataset records it: ``"512"`` or ``"llvm"`` (LLVM's tuning for
+    the CPU), and in parentheses the setting that chose it when it was ``auto``."""
+    width = resolved(setting)
+    text = "llvm" if width is None else str(width)
+    return f"{text} (auto)" if setting == "auto" else text
+
+
+def compile_with(namespace: dict, width: int | None) -> None:
+    """Make every numba dispatcher defined in a generated kernel module (``namespace``,
+    its globals) compile with ``"prefer-vector-width"="<width>"`` on its functions.
+
+    Called by the generated module itself, last; ``width=None`` changes nothing.
+    """
+    if width is None:
+        return
+    install()
+    from numba.core.dispatcher import Dispatcher
+
+    module = namespace["__name__"]
+    for value in list(namespace.values()):
+        if isinstance(value, Dispatcher) and value.py_func.__module__ == module:
+            _compile_wide(value, width)
+
+
+def _compile_wide(dispatcher, width: int) -> None:
+    compile_ = dispatcher.compile
+
+    @functools.wraps(compile_)
+    def compile(sig):
+        previous = getattr(_state, "width", None)
+        _state.width = width
+        try:
+            return compile_(sig)
+        finally:
+            _state.width = previous
+
+    dispatcher.compile = compile  # numba calls self.compile(sig) for a new signature
+
+
+def install() -> None:
+    """Wrap `numba.core.cpu.CPUContext.post_lowering` (once) to add the attribute to
+    the functions of the module being lowered while a sweep kernel compiles."""
+    from numba.core.cpu import CPUContext
+
+    original = CPUContext.post_lowering
+    if getattr(original, "_sweep_vector_width", False):
+        return
+
+    @functools.wraps(original)
+    def post_lowering(self, mod, library):
+        width = getattr(_state, "width", None)
+        if width is not None:
+            attribute = f'"prefer-vector-width"="{width}"'
+            for function in mod.functions:
+                if not function.is_declaration:
+                    # llvmlite's FunctionAttributes.add accepts only its known keyword
+                    # attributes; a string attribute is written out as it is
+                    set.add(function.attributes, attribute)
+        return original(self, mod, library)
+
+    post_lowering._sweep_vector_width = True
+    CPUContext.post_lowering = post_lowering

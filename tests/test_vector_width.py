@@ -1,0 +1,144 @@
+"""The CPU kernels' SIMD vector width (`sweep.kernels.vectors`): chosen for sweep's
+kernels alone, it reaches their machine code, is recorded in the dataset, and does not
+change a single bit of the results."""
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+import sweep
+from sweep import _config
+from sweep.kernels import KernelSpec, vectors
+
+SCENE = sweep.Scene(gravity=1.0, length=1.0, model="nonlinear",
+                    effects=(sweep.Damping(0.5), sweep.Forcing(1.2, 2 / 3, 0.0)))
+PERIOD = 2 * np.pi / (2 / 3)  # of the forcing; the strobe needs whole steps in it
+AVX512 = "avx512f" in vectors.target_features()
+
+
+@pytest.mark.parametrize("text, want", [("256", 256), (" 512 ", 512), ("128", 128),
+                                        ("LLVM", "llvm"), ("auto", "auto")])
+def test_the_environment_variable_sets_the_width(monkeypatch, text, want):
+    monkeypatch.setenv("SWEEP_VECTOR_WIDTH", text)
+    assert _config.vector_width() == want
+
+
+@pytest.mark.parametrize("text", ["300", "wide", "512 bits", "0"])
+def test_a_bad_width_is_refused_by_name_before_any_compute(monkeypatch, text):
+    monkeypatch.setenv("SWEEP_VECTOR_WIDTH", text)
+    grid = sweep.Grid(theta0=[0.1, 0.2], omega0=0.0)
+    with pytest.raises(ValueError, match=r"SWEEP_VECTOR_WIDTH=.* is not a vector width; "
+                                         r"accepted: auto, llvm, 128, 256, 512"):
+        sweep.engine.prepare(SCENE, grid, t_end=1.0, dt=0.01)
+
+
+def test_auto_asks_for_512_bits_exactly_where_the_target_has_avx512(monkeypatch):
+    from numba.core import config
+
+    features = vectors.target_features.__wrapped__  # the memoised function, uncached
+    monkeypatch.setattr(config, "CPU_FEATURES", "+avx2,+fma,-avx512f,+avx512vl")
+    assert features() == {"avx2", "fma", "avx512vl"}
+    monkeypatch.setattr(vectors, "target_features", features)
+    assert vectors.resolved("auto") is None  # LLVM's choice: nothing to ask for
+    assert vectors.describe("auto") == "llvm (auto)"
+    monkeypatch.setattr(config, "CPU_FEATURES", "+avx2,+avx512f")
+    assert vectors.resolved("auto") == 512
+    assert vectors.describe("auto") == "512 (auto)"
+    assert vectors.resolved("llvm") is None and vectors.resolved(256) == 256
+
+
+# (observe, run options): the fixed-step kernel with its tangent dynamics, the early-
+# stopped kernel with lane refill, the adaptive kernel, float32
+CASES = {
+    "rk4 final+lyapunov": (("final", "lyapunov"), {}),
+    "refill strobe": (("strobe",), {"stop_early": True}),
+    "dopri5": (("final",), {"method": "dopri5", "rtol": 1e-8, "atol": 1e-10}),
+    "float32": (("final", "winding"), {"dtype": "float32"}),
+}
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_results_are_bit_identical_in_every_width(monkeypatch, case):
+    """256- and 512-bit lanes (and LLVM's own choice) give the same bits: the kernels
+    have no reassociation and explicit FMAs, so a lane's operations do not depend on
+    how many lanes a register holds. 300 starts: not a multiple of any block, so the
+    last block has idle lanes."""
+    observe, options = CASES[case]
+    grid = sweep.Grid(theta0=np.linspace(-3.0, 3.0, 20), omega0=np.linspace(-2.0, 2.0, 15))
+    runs = {}
+    for width in ("256", "512", "llvm"):
+        monkeypatch.setenv("SWEEP_VECTOR_WIDTH", width)
+        runs[width] = sweep.run(SCENE, grid, t_end=20 * PERIOD, dt=PERIOD / 120,
+                                observe=observe, progress=False, **options)
+        assert runs[width].attrs["vector_width"] == width
+    for width in ("512", "llvm"):
+        for name, variable in runs["256"].data_vars.items():
+            assert variable.values.tobytes() == runs[width][name].values.tobytes(), name
+
+
+def test_a_kernel_source_names_its_width(monkeypatch):
+    """The width is in the generated text, so numba's disk cache keeps a kernel per
+    width (a kernel compiled for 256 bits is never loaded for 512)."""
+    spec = KernelSpec("nonlinear", ("damping",), ("final",))
+    texts = {}
+    for width in ("256", "512", "llvm"):
+        monkeypatch.setenv("SWEEP_VECTOR_WIDTH", width)
+        texts[width] = sweep.kernels.source(spec)
+    assert texts["256"].endswith("compile_with(globals(), 256)\n")
+    assert texts["512"].endswith("compile_with(globals(), 512)\n")
+    assert texts["llvm"].endswith("compile_with(globals(), None)\n")
+
+
+_ASM = textwrap.dedent("""
+    import json, re, sys
+    import numpy as np, sweep
+    from sweep import kernels
+    scene = sweep.Scene(gravity=1.0, length=1.0, model="nonlinear",
+                        effects=(sweep.Damping(0.5), sweep.Forcing(1.2, 2 / 3, 0.0)))
+    grid = sweep.Grid(theta0=np.linspace(-3, 3, 64), omega0=np.linspace(-2, 2, 32))
+    counts = {}
+    for width in ("llvm", 256, 512):
+        sweep._config.VECTOR_WIDTH = width
+        spec = sweep.engine.warm_up(scene, grid, t_end=1.0, dt=0.01)  # runs nothing
+        asm = "".join(kernels.build(spec).inspect_asm().values())
+        counts[str(width)] = {r: len(re.findall(r"\\bv\\w+pd\\s+%" + r, asm))
+                              for r in ("zmm", "ymm")}
+    # plain numba code of the user's, compiled in the same process after the kernels
+    from numba import njit
+    @njit
+    def user_loop(x, out):
+        for i in range(x.size):
+            out[i] = x[i] * 1.5 + 2.0
+    x = np.ones(1000)
+    user_loop.compile("(float64[::1], float64[::1])")
+    asm = "".join(user_loop.inspect_asm().values())
+    counts["user"] = {r: len(re.findall(r"\\bv\\w+pd\\s+%" + r, asm)) for r in ("zmm", "ymm")}
+    print(json.dumps(counts))
+""")
+
+
+@pytest.mark.skipif(not AVX512, reason="the host has no AVX-512: the tuning cannot be "
+                                       "emulated without running code it lacks")
+def test_intel_tuning_gets_512_bit_kernels_and_leaves_other_code_alone(tmp_path):
+    """Under LLVM's tuning for Intel's Rocket Lake (``prefer-256-bit``, the issue's
+    Xeon), emulated with ``NUMBA_CPU_NAME``: LLVM's own choice vectorises the kernel
+    with 256-bit ymm registers, the 512 setting with zmm ones, 256 with ymm; the
+    user's own numba loop compiled afterwards stays on LLVM's ymm. Kernels are only
+    compiled (`sweep.engine.warm_up` integrates no trajectory) and inspected, in a
+    fresh cache, so nothing is loaded from a cache that inspection cannot read."""
+    env = dict(os.environ, NUMBA_CPU_NAME="rocketlake", SWEEP_CACHE_DIR=str(tmp_path),
+               NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    env.pop("SWEEP_VECTOR_WIDTH", None)
+    done = subprocess.run([sys.executable, "-c", _ASM], env=env, capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    counts = json.loads(done.stdout.splitlines()[-1])
+    assert counts["llvm"]["zmm"] == 0 and counts["llvm"]["ymm"] > 20
+    assert counts["512"]["zmm"] > 20 and counts["512"]["ymm"] == 0
+    assert counts["256"]["zmm"] == 0 and counts["256"]["ymm"] > 20
+    assert counts["user"]["zmm"] == 0 and counts["user"]["ymm"] > 0
