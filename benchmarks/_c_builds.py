@@ -7,6 +7,7 @@ their maps against (`c_limit`). Shared by run_all.py, forced_basins.py and refin
 from __future__ import annotations
 
 import ctypes
+import functools
 import itertools
 import json
 import math
@@ -82,6 +83,39 @@ def c_limit_candidates(avx512: bool, blocks=C_BLOCKS) -> dict[str, list[str]]:
              f"-DBLOCK={b}"] for b in blocks}
 
 
+#: The one-reduction-by-pi sines (pendulum.c's SIN_VARIANT 5): -DSIN_POLY, evaluation
+#: scheme -> the row's words. Their polynomials come from fit_sine.py.
+PI_SINES = {
+    ("0", "Horner"): "Taylor degree 19",
+    ("1", "Horner"): "Taylor degree 21",
+    ("2", "Horner"): "minimax degree 17",
+    ("3", "Horner"): "minimax degree 15",
+    ("0", "Estrin"): "Taylor degree 19",
+    ("1", "Estrin"): "Taylor degree 21",
+    ("2", "Estrin"): "minimax degree 17",
+}
+
+
+def c_limit_sine_designs(best_flags: list[str], avx512: bool,
+                         blocks=None) -> dict[str, list[str]]:
+    """Third phase (issue 29): the sine's design, at the best block (or at each of
+    ``blocks``): one reduction by pi and one odd polynomial, Taylor or minimax, by
+    Horner or Estrin; each must also pass the sine contract (`sine_accuracy`)."""
+    width = [WIDE] if avx512 else []
+    label = "512-bit" if avx512 else "-march=native"
+    if blocks is None:
+        blocks = [next(f for f in best_flags if f.startswith("-DBLOCK="))[8:]]
+    out = {}
+    for n in blocks:
+        for (poly, scheme), words in PI_SINES.items():
+            out[f"C limit search: {label}, sin by one reduction by pi, {words} odd "
+                f"polynomial, {scheme}, FMA, forcing table, block {n}"] = [
+                *width, "-DSIN_VARIANT=5", f"-DSIN_POLY={poly}",
+                *(["-DESTRIN"] if scheme == "Estrin" else []), "-ffp-contract=fast",
+                "-DFORCING_TABLE", f"-DBLOCK={n}"]
+    return out
+
+
 def c_limit_variations(best_flags: list[str], avx512: bool) -> dict[str, list[str]]:
     """Second phase, at the best block: one option changed at a time."""
     block = next(f for f in best_flags if f.startswith("-DBLOCK="))
@@ -117,10 +151,14 @@ def build_c_one(build_dir: Path, key: str, flags: list[str]):
     proc = subprocess.run(cmd, check=False, capture_output=True, text=True)
     if proc.returncode != 0:
         return "build failed: " + (proc.stderr.strip().splitlines() or ["?"])[-1]
-    fn = ctypes.CDLL(str(lib)).pendulum_rk4
+    loaded = ctypes.CDLL(str(lib))
+    fn = loaded.pendulum_rk4
     fn.restype = None
     p = ctypes.POINTER(ctypes.c_double)
     fn.argtypes = [ctypes.c_int64, p, p, *[ctypes.c_double] * 7, ctypes.c_int64, p, p]
+    fn.sine = loaded.pendulum_sin  # the build's sine on an array (`sine_accuracy`)
+    fn.sine.restype = None
+    fn.sine.argtypes = [ctypes.c_int64, p, p]
     return fn
 
 
@@ -139,6 +177,74 @@ def call_c(fn, th0, om0, steps):
     fn(n, th0.ctypes.data_as(p), om0.ctypes.data_as(p), G_OVER_L, DAMPING, AMPLITUDE,
        FREQUENCY, PHASE, 0.0, DT, steps, th.ctypes.data_as(p), om.ctypes.data_as(p))
     return th, om
+
+
+# ------------------------------------------------------------------ the sine contract
+#: sweep's sine contract (`sweep.kernels.vecmath.sin`, tests/test_vecmath.py): within
+#: 2**-52 = 2.2e-16 absolute of np.sin (glibc's, within half an ulp of sin) for
+#: |x| <= 1e4, and the same up to |x| = 1e12 (`vecmath.SIN_RANGE`). 2**-52 is two ulps of
+#: values in [0.5, 1); sweep's sine itself measures 1.1e-16 (one ulp). A C limit
+#: candidate whose sine misses it is printed but is not eligible to be the limit.
+SINE_CONTRACT = 2.0**-52
+SINE_RANGES = ("|x| <= 1e4", "1e4 < |x| <= 1e12")
+
+
+#: Arguments where a candidate sine was found 3 ulps (3.3e-16) from np.sin in a search
+#: of ~1.5e8 random arguments of |x| <= 1e4 (the minimax degree-17 polynomial by
+#: Estrin: about one argument in 1e8; Horner's evaluation of it: none found).
+HARD_SINE_ARGUMENTS = np.array([-2766.1844312596486])
+
+
+def _neighbours(x, n):
+    """x and its n floating-point neighbours on each side."""
+    parts, up, down = [x], x, x
+    for _ in range(n):
+        up, down = np.nextafter(up, np.inf), np.nextafter(down, -np.inf)
+        parts += [up, down]
+    return np.concatenate(parts)
+
+
+@functools.cache
+def sine_points() -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+    """(x, np.sin(x)) for each of SINE_RANGES: the arguments of tests/test_vecmath.py
+    (uniform, every magnitude down to 1e-300, multiples of pi/2 and pi/4 and their 4
+    neighbours each side, dyadic steps; beyond 1e4: uniform to 1e6 and 1e8,
+    log-uniform to 1e12, multiples of pi/2 up to 1e6 and 2 neighbours each side), and
+    for the one-reduction-by-pi sines, whose rounding errors are largest where
+    |sin x| ~ 1 (|r| near pi/2, where the polynomial's r**3 P is ~ -0.57): 4e6 arguments
+    k pi + r with 0.9 <= |r| <= pi/2, and HARD_SINE_ARGUMENTS. A maximum over a sample:
+    an error that one argument in 1e8 reaches may be missed."""
+    rng = np.random.default_rng(29)
+    sign = rng.choice([-1.0, 1.0], 4_000_000)
+    small = np.concatenate([
+        rng.uniform(-1e4, 1e4, 4_000_000),
+        10.0 ** rng.uniform(-300, 4, 2_000_000) * sign[:2_000_000],
+        rng.integers(-3183, 3184, 4_000_000) * np.pi + sign * rng.uniform(0.9, np.pi / 2,
+                                                                           4_000_000),
+        HARD_SINE_ARGUMENTS,
+        _neighbours(np.arange(-6367, 6368) * (np.pi / 2), 4),
+        _neighbours(np.arange(-12733, 12734) * (np.pi / 4), 4),
+        np.arange(-2**20, 2**20) / 2.0**10])
+    small = small[np.abs(small) <= 1e4]
+    large = np.concatenate([
+        rng.uniform(-1e6, 1e6, 2_000_000), rng.uniform(-1e8, 1e8, 1_000_000),
+        10.0 ** rng.uniform(8, 12, 1_000_000) * sign[:1_000_000],
+        _neighbours(np.arange(6367, 636620, 7) * (np.pi / 2), 2)])
+    large = large[np.abs(large) > 1e4]
+    return (small, np.sin(small)), (large, np.sin(large))
+
+
+def sine_accuracy(fn) -> dict:
+    """A C build's sine (its ``pendulum_sin``) against np.sin on `sine_points`: max
+    abs error per range, and whether it meets SINE_CONTRACT on both."""
+    p = ctypes.POINTER(ctypes.c_double)
+    errors = []
+    for x, want in sine_points():
+        got = np.empty_like(x)
+        fn.sine(x.size, x.ctypes.data_as(p), got.ctypes.data_as(p))
+        errors.append(float(np.max(np.abs(got - want))))
+    return {"max_abs_error": dict(zip(SINE_RANGES, errors)), "contract": SINE_CONTRACT,
+            "eligible": all(e <= SINE_CONTRACT for e in errors)}
 
 
 def c_limit(repeats: int = 3) -> dict | None:

@@ -37,11 +37,24 @@
  *                  chosen by selects), evaluated by Estrin's scheme; every
  *                  multiply-add that sweep fuses written as C's fma(), so the same
  *                  operations in the same order whatever -ffp-contract says
+ *   SIN_VARIANT 5  one reduction by pi (issue 29): k = round(x / pi) by the magic
+ *                  number, r = x - k pi in two fused multiply-adds (pi = PI_HI + PI_LO
+ *                  - 3.0e-33: the first FMA is exact, the second rounds once), one odd
+ *                  polynomial sin r ~ r + r^3 P(r^2) on [-pi/2, pi/2] and the sign from
+ *                  the parity of k (k's low bit is the magic sum's). The polynomial,
+ *                  -DSIN_POLY=n, coefficients from benchmarks/fit_sine.py (its error
+ *                  with float64 coefficients, in mpmath, on [0, pi/2 + 1e-4]):
+ *                    0  Taylor, degree 19 (the issue's kernel)   2.2e-16
+ *                    1  Taylor, degree 21                         3.6e-17
+ *                    2  minimax, degree 17 (relative error)       2.9e-19
+ *                    3  minimax, degree 15                        1.5e-16
+ *                  evaluated by Horner's scheme, or by Estrin's with -DESTRIN; every
+ *                  multiply-add written as fma()
  *
  * Build (benchmarks/run_all.py does this and sweeps the options):
  *   gcc -O3 -march=native -fopenmp -shared -fPIC [-mprefer-vector-width=512]
  *       [-ffp-contract=fast|off] [-DSIN_VARIANT=n] [-DBLOCK=n] [-DFORCING_TABLE]
- *       [-DLINEAR] pendulum.c -o lib.so -lm
+ *       [-DSIN_POLY=n] [-DESTRIN] [-DLINEAR] pendulum.c -o lib.so -lm
  * Never -ffast-math: reassociation would break the magic-number rounding and the
  * exact Cody-Waite reduction, and change RK4's sums. -ffp-contract=fast (gcc's
  * default for GNU C) fuses any a*b + c into an FMA, where sweep's kernels fuse only
@@ -117,9 +130,102 @@ static inline double vsin(double x) {
 }
 #endif
 #define SIN(x) vsin(x)
+#elif SIN_VARIANT == 5
+#ifndef SIN_POLY
+#define SIN_POLY 2
+#endif
+static const double INV_PI = 0.3183098861837907, MAGIC = 6755399441055744.0;
+static const double PI_HI = 3.141592653589793, PI_LO = 1.2246467991473532e-16;
+/* P's coefficients c[0] + c[1] z + ...: sin r ~ r + r^3 P(r^2) (benchmarks/fit_sine.py) */
+#if SIN_POLY == 0
+#define N_POLY 9
+static const double CP[N_POLY] = {
+    -0.16666666666666666, 0.008333333333333333, -0.0001984126984126984,
+    2.7557319223985893e-06, -2.505210838544172e-08, 1.6059043836821613e-10,
+    -7.647163731819816e-13, 2.8114572543455206e-15, -8.22063524662433e-18};
+#elif SIN_POLY == 1
+#define N_POLY 10
+static const double CP[N_POLY] = {
+    -0.16666666666666666, 0.008333333333333333, -0.0001984126984126984,
+    2.7557319223985893e-06, -2.505210838544172e-08, 1.6059043836821613e-10,
+    -7.647163731819816e-13, 2.8114572543455206e-15, -8.22063524662433e-18,
+    1.9572941063391263e-20};
+#elif SIN_POLY == 2
+#define N_POLY 8
+static const double CP[N_POLY] = {
+    -0.16666666666666666, 0.008333333333333207, -0.0001984126984121248,
+    2.7557319211569482e-06, -2.505210690442292e-08, 1.6058941002310493e-10,
+    -7.643019371886964e-13, 2.7214195512770984e-15};
+#elif SIN_POLY == 3
+#define N_POLY 7
+static const double CP[N_POLY] = {
+    -0.16666666666666186, 0.008333333333285474, -0.00019841269825037164,
+    2.755731659808175e-06, -2.5051880112963566e-08, 1.6048090271699e-10,
+    -7.373280725330603e-13};
+#else
+#error "SIN_POLY must be 0 .. 3"
+#endif
+static inline double poly_pi(double z) {
+#ifdef ESTRIN
+    /* pairs e_i = c[2i] + c[2i+1] z, then z^2, z^4, z^8: depth ~4 instead of N - 1 */
+    const double z2 = z * z, z4 = z2 * z2;
+    const double e0 = fma(z, CP[1], CP[0]), e1 = fma(z, CP[3], CP[2]),
+                 e2 = fma(z, CP[5], CP[4]);
+    const double lo = fma(z2, e1, e0);
+#if N_POLY == 7
+    return fma(z4, fma(z2, CP[6], e2), lo);
+#else
+    const double e3 = fma(z, CP[7], CP[6]);
+    const double p8 = fma(z4, fma(z2, e3, e2), lo);
+#if N_POLY == 8
+    return p8;
+#elif N_POLY == 9
+    return fma(z4 * z4, CP[8], p8);
+#else
+    return fma(z4 * z4, fma(z, CP[9], CP[8]), p8);
+#endif
+#endif
+#else
+    double p = CP[N_POLY - 1];
+#if N_POLY >= 10
+    p = fma(p, z, CP[8]);
+#endif
+#if N_POLY >= 9
+    p = fma(p, z, CP[7]);
+#endif
+#if N_POLY >= 8
+    p = fma(p, z, CP[6]);
+#endif
+    p = fma(p, z, CP[5]);
+    p = fma(p, z, CP[4]);
+    p = fma(p, z, CP[3]);
+    p = fma(p, z, CP[2]);
+    p = fma(p, z, CP[1]);
+    return fma(p, z, CP[0]);
+#endif
+}
+static inline double vsin(double x) {
+    const double y = fma(x, INV_PI, MAGIC);
+    const double kf = y - MAGIC;
+    const double r = fma(-kf, PI_LO, fma(-kf, PI_HI, x));
+    int64_t q;
+    memcpy(&q, &y, sizeof q); /* y = 1.5 * 2**52 + k: k's parity is y's low bit */
+    const double z = r * r;
+    const double v = fma(r * z, poly_pi(z), r);
+    return (q & 1) ? -v : v;
+}
+#define SIN(x) vsin(x)
 #else
 #define SIN(x) sin(x)
 #endif
+
+/* The build's sine on an array (its accuracy is measured by run_all.py): the same
+ * inlined code as in the kernel's lanes. */
+void pendulum_sin(int64_t n, const double *x, double *out) {
+#pragma omp simd
+    for (int64_t i = 0; i < n; i++)
+        out[i] = SIN(x[i]);
+}
 
 #ifdef LINEAR
 #define RESTORING(th) (th)

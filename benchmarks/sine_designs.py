@@ -1,0 +1,593 @@
+"""sweep's sine against a one-reduction-by-pi sine in numba (issue 29, item 3's measurement).
+
+Two designs, written with the conventions of `sweep.kernels.vecmath.sin` (explicit
+`vecmath.fma`, the kernels' JIT flags, i.e. no fast-math, branch-free selects):
+
+* **sweep** (`vecmath.sin` today): ``k = round(x 2/pi)`` by the magic number, ``r = x -
+  k pi/2`` in two FMAs (|r| <= pi/4), one of two fdlibm polynomials (sine or cosine)
+  chosen by the quadrant through selects, Estrin's scheme, the sign by quadrant;
+* **pi** (the candidate, `sin_pi`): ``k = round(x/pi)`` by the magic number, ``r = x - k
+  pi`` in two FMAs (|r| <= pi/2), ONE odd polynomial ``r + r^3 P(r^2)`` (the minimax fit
+  of degree 17 from ``fit_sine.py``, 8 coefficients in P, Horner's scheme: the fastest
+  one-reduction design whose sine meets the contract in ``run_all.py``'s C search), the
+  sign from k's parity. ``cos_pi`` reduces by the odd multiples of pi/2 instead
+  (``x = (2k + 1) pi/2 + r``, ``cos x = (-1)**(k+1) sin r``, the same polynomial), and
+  ``sincos_pi`` is the pair: two reductions, two polynomials, the bits of each.
+  ``pi_estrin`` is the same polynomial by Estrin's scheme, shown for its latency (its
+  sine misses the contract: 3 ulps at about one argument in 1e8).
+
+Measured, side by side in one process, each timing the best of ``--repeats`` rounds in
+which the designs alternate (the machine is shared, so single timings are noisy):
+
+* **throughput**: a numba loop ``out[i] = sin(x[i])`` over 2**22 arguments in [-50, 50]
+  (vectorised by LLVM: checked in the machine code), sines per second;
+* **latency**: one dependent chain ``x = sin(x) * 3 + 0.5`` (chaotic, all quadrants;
+  10**7 calls), ns per call, and in cycles by the latency of a chain of dependent FMAs
+  timed in the same process (4 cycles an FMA on Zen 4/5 and on Intel's AVX-512 cores);
+* **in an RK4 kernel**: run_all's full scene (2**17 trajectories x 2000 steps of the
+  forced damped pendulum) in blocks of lanes with each sine (M trajectory-steps/s), and
+  one trajectory alone (the narrow path: its steps wait on each other's sines);
+* **accuracy**: the inputs and bounds of ``tests/test_vecmath.py`` (2**-52 absolute up
+  to 1e12, 2.3e-16 |x| for small x, 4.5e-16 relative next to multiples of pi, the
+  cosine equal to np.cos for tiny x, the same bits under a caller's FMA contraction,
+  sincos = (sin, cos), NaN and inf), each design checked, plus the error past 1e12.
+
+``--patch PATH`` writes the drop-in replacement of vecmath's sin/cos/sincos as a diff
+(not applied). Writes ``results/sine_designs.json`` and ``.md``.
+
+Usage::
+
+    python benchmarks/sine_designs.py            # ~1 min
+    python benchmarks/sine_designs.py --quick    # small sizes: a smoke test
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from numba import njit, prange
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+from sweep import _config  # noqa: E402
+from sweep.kernels import vecmath  # noqa: E402
+from sweep.kernels.vecmath import fma  # noqa: E402
+
+_JIT = _config.jit_options()
+_bits_of = vecmath._bits_of  # the IEEE bits of a float64 (a bitcast)
+
+# ------------------------------------------------------------------- the candidate
+INV_PI = 0.3183098861837907
+#: pi = PI_HI + PI_LO - 3.0e-33: the reduction's two parts (``k PI_HI`` is subtracted
+#: exactly by the first FMA, ``k PI_LO`` with one rounding by the second)
+PI_HI = 3.141592653589793         # 0x1.921fb54442d18p+1
+PI_LO = 1.2246467991473532e-16    # 0x1.1a62633145c07p-53
+PIO2_HI, PIO2_LO = vecmath.PIO2_HI, vecmath.PIO2_LO
+_MAGIC = 6755399441055744.0       # 1.5 * 2**52
+#: sin r ~ r + r^3 P(r^2) on |r| <= pi/2 + 1e-4: the minimax fit of the relative error,
+#: degree 17 (``benchmarks/fit_sine.py``; its error with these float64 coefficients,
+#: in mpmath: 2.9e-19)
+M1 = -0.16666666666666666
+M2 = 0.008333333333333207
+M3 = -0.0001984126984121248
+M4 = 2.7557319211569482e-06
+M5 = -2.505210690442292e-08
+M6 = 1.6058941002310493e-10
+M7 = -7.643019371886964e-13
+M8 = 2.7214195512770984e-15
+
+
+@njit(cache=True, **_JIT)
+def _odd_poly(r):
+    """sin r for |r| <= pi/2 (+1e-4): r + r^3 P(r^2), P by Horner, every multiply-add
+    fused (`fma`)."""
+    z = r * r
+    p = fma(fma(fma(fma(fma(fma(fma(M8, z, M7), z, M6), z, M5), z, M4), z, M3), z, M2),
+            z, M1)
+    return fma(r * z, p, r)
+
+
+@njit(cache=True, **_JIT)
+def _odd_poly_estrin(r):
+    """The same polynomial by Estrin's scheme (pairs, then z^2, z^4): depth 4 instead of
+    8, one more rounding path (misses the contract: 3 ulps, rarely)."""
+    z = r * r
+    z2 = z * z
+    z4 = z2 * z2
+    p = fma(z4, fma(z2, fma(z, M8, M7), fma(z, M6, M5)),
+            fma(z2, fma(z, M4, M3), fma(z, M2, M1)))
+    return fma(r * z, p, r)
+
+
+@njit(cache=True, **_JIT)
+def sin_pi(x):
+    """sin(x) by one reduction by pi: ``k = round(x/pi)`` (the magic number: valid for
+    |x/pi| < 2**51), ``r = x - k pi`` (two FMAs), ``sin x = (-1)**k sin r``; k's parity
+    is the low bit of the magic sum."""
+    y = fma(x, INV_PI, _MAGIC)
+    kf = y - _MAGIC
+    r = fma(-kf, PI_LO, fma(-kf, PI_HI, x))
+    v = _odd_poly(r)
+    return -v if (_bits_of(y) & 1) else v
+
+
+@njit(cache=True, **_JIT)
+def cos_pi(x):
+    """cos(x) = (-1)**(k+1) sin(r) with ``x = (2k + 1) pi/2 + r``, ``k = round(x/pi -
+    1/2)``: the reduction by the odd multiples of pi/2 (|r| <= pi/2), the sine's
+    polynomial. (cos(x) as sin(x + pi/2) would round x + pi/2 first.)"""
+    y = fma(x, INV_PI, -0.5) + _MAGIC
+    kf = y - _MAGIC
+    mf = 2.0 * kf + 1.0
+    r = fma(-mf, PIO2_LO, fma(-mf, PIO2_HI, x))
+    v = _odd_poly(r)
+    return v if (_bits_of(y) & 1) else -v
+
+
+@njit(cache=True, **_JIT)
+def sincos_pi(x):
+    """(sin_pi(x), cos_pi(x)): two reductions and two polynomials, the bits of each."""
+    return sin_pi(x), cos_pi(x)
+
+
+@njit(cache=True, **_JIT)
+def sin_pi_estrin(x):
+    y = fma(x, INV_PI, _MAGIC)
+    kf = y - _MAGIC
+    r = fma(-kf, PI_LO, fma(-kf, PI_HI, x))
+    v = _odd_poly_estrin(r)
+    return -v if (_bits_of(y) & 1) else v
+
+
+DESIGNS = {"sweep": vecmath.sin, "pi": sin_pi, "pi_estrin": sin_pi_estrin}
+DESCRIPTION = {
+    "sweep": "sweep's vecmath.sin: reduction by pi/2, sine or cosine polynomial by "
+             "quadrant (selects), Estrin",
+    "pi": "candidate: one reduction by pi, minimax degree-17 odd polynomial, Horner",
+    "pi_estrin": "one reduction by pi, the same polynomial by Estrin (misses the contract)",
+}
+
+
+# ------------------------------------------------------------------ timing harnesses
+def _loop(sine):
+    @njit(cache=False, **_JIT)
+    def loop(x, out):
+        for i in range(x.size):
+            out[i] = sine(x[i])
+    return loop
+
+
+def _chain(sine):
+    @njit(cache=False, **_JIT)
+    def chain(x, n):
+        for _ in range(n):
+            x = fma(sine(x), 3.0, 0.5)
+        return x
+    return chain
+
+
+@njit(cache=False, **_JIT)
+def fma_chain(x, n):
+    """n dependent FMAs (4 cycles each on Zen 4/5 and Intel's AVX-512 cores): the clock."""
+    for _ in range(n):
+        x = fma(x, 0.9999999, 1e-7)
+    return x
+
+
+def _rk4(sine):
+    """run_all's full scene in numba, as the C limit lays it out: blocks of lanes
+    (prange over blocks, time loop, lane loop innermost), a forcing table per call."""
+    block = 512
+
+    @njit(parallel=True, cache=False, **_JIT)
+    def rk4(th0, om0, fnode, fhalf, steps, w0sq, c, dt):
+        n = th0.size
+        th_out, om_out = np.empty(n), np.empty(n)
+        dt_2, dt_6 = dt / 2.0, dt / 6.0
+        for b in prange((n + block - 1) // block):
+            start = b * block
+            m = min(block, n - start)
+            th, om = np.zeros(block), np.zeros(block)
+            th[:m], om[:m] = th0[start:start + m], om0[start:start + m]
+            for step in range(steps):
+                f0, f1, f2 = fnode[step], fhalf[step], fnode[step + 1]
+                for j in range(block):
+                    x, v = th[j], om[j]
+                    k1t = v
+                    k1o = -w0sq * sine(x) - c * k1t + f0
+                    k2t = v + dt_2 * k1o
+                    k2o = -w0sq * sine(x + dt_2 * k1t) - c * k2t + f1
+                    k3t = v + dt_2 * k2o
+                    k3o = -w0sq * sine(x + dt_2 * k2t) - c * k3t + f1
+                    k4t = v + dt * k3o
+                    k4o = -w0sq * sine(x + dt * k3t) - c * k4t + f2
+                    th[j] = x + dt_6 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t)
+                    om[j] = v + dt_6 * (k1o + 2.0 * k2o + 2.0 * k3o + k4o)
+            th_out[start:start + m], om_out[start:start + m] = th[:m], om[:m]
+        return th_out, om_out
+    return rk4
+
+
+def _one(sine):
+    """One trajectory alone: every step waits on the previous step's sines."""
+    @njit(cache=False, **_JIT)
+    def one(th, om, fnode, fhalf, steps, w0sq, c, dt):
+        dt_2, dt_6 = dt / 2.0, dt / 6.0
+        for step in range(steps):
+            f0, f1, f2 = fnode[step], fhalf[step], fnode[step + 1]
+            k1t = om
+            k1o = -w0sq * sine(th) - c * k1t + f0
+            k2t = om + dt_2 * k1o
+            k2o = -w0sq * sine(th + dt_2 * k1t) - c * k2t + f1
+            k3t = om + dt_2 * k2o
+            k3o = -w0sq * sine(th + dt_2 * k2t) - c * k3t + f1
+            k4t = om + dt * k3o
+            k4o = -w0sq * sine(th + dt * k3t) - c * k4t + f2
+            th = th + dt_6 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t)
+            om = om + dt_6 * (k1o + 2.0 * k2o + 2.0 * k3o + k4o)
+        return th, om
+    return one
+
+
+def forcing(steps, amplitude=1.2, frequency=2.0 / 3.0, dt=0.01):
+    """f(t_n) for n = 0..steps and f(t_n + dt/2): sweep's forcing times."""
+    n = np.arange(steps + 1)
+    fnode = amplitude * np.sin(frequency * (n * dt))
+    fhalf = amplitude * np.sin(frequency * (n[:-1] * dt + dt * 0.5))
+    return fnode, fhalf
+
+
+def vectorised(fn) -> bool:
+    asm = "".join(fn.inspect_asm().values())
+    return re.search(r"\bv(?:mul|add|sub|fmadd\w*)pd\s+%?[yz]mm", asm) is not None
+
+
+def best_alternating(calls: dict, rounds: int) -> dict:
+    """{name: best seconds}, the calls alternating in each round."""
+    best = dict.fromkeys(calls, math.inf)
+    for _ in range(rounds):
+        for name, call in calls.items():
+            start = time.perf_counter()
+            call()
+            best[name] = min(best[name], time.perf_counter() - start)
+    return best
+
+
+# ------------------------------------------------------------------------- accuracy
+def _vector(sine):
+    @njit(parallel=True, cache=False, **_JIT)
+    def apply(x):
+        out = np.empty_like(x)
+        for i in prange(x.size):
+            out[i] = sine(x[i])
+        return out
+    return apply
+
+
+def _vector_contract(sine):
+    @njit(parallel=True, cache=False, fastmath={"contract"})
+    def apply(x):
+        out = np.empty_like(x)
+        for i in prange(x.size):
+            out[i] = sine(x[i])
+        return out
+    return apply
+
+
+def _vector_sincos(sincos):
+    @njit(parallel=True, cache=False, **_JIT)
+    def apply(x):
+        s, c = np.empty_like(x), np.empty_like(x)
+        for i in prange(x.size):
+            s[i], c[i] = sincos(x[i])
+        return s, c
+    return apply
+
+
+def _neighbours(x, n=4):
+    parts, up, down = [x], x.copy(), x.copy()
+    for _ in range(n):
+        up, down = np.nextafter(up, np.inf), np.nextafter(down, -np.inf)
+        parts += [up, down]
+    return np.concatenate(parts)
+
+
+def accuracy(sin, cos, sincos, scale=1.0) -> dict:
+    """tests/test_vecmath.py's checks for one design: {check: (measured, bound, ok)}.
+    ``scale`` shrinks the random samples (--quick)."""
+    rng = np.random.default_rng(2029)
+    vs, vc, vsc, vcon = _vector(sin), _vector(cos), _vector_sincos(sincos), \
+        _vector_contract(sin)
+    tol = 2.0**-52
+    n = lambda k: max(1000, int(k * scale))  # noqa: E731
+    out = {}
+
+    def err(f, ref, x):
+        return float(np.max(np.abs(f(x) - ref(x))))
+
+    def check(name, measured, bound):
+        out[name] = (measured, bound, bool(measured <= bound))
+
+    x = rng.uniform(-1e4, 1e4, n(4_000_000))
+    check("uniform |x| <= 1e4: sin", err(vs, np.sin, x), tol)
+    check("uniform |x| <= 1e4: cos", err(vc, np.cos, x), tol)
+    x = 10.0 ** rng.uniform(-300, 4, n(2_000_000)) * rng.choice([-1.0, 1.0], n(2_000_000))
+    check("all magnitudes to 1e4: sin", err(vs, np.sin, x), tol)
+    small = x[np.abs(x) < 1e-3]
+    check("|x| < 1e-3: |err| / |x| (sin)",
+          float(np.max(np.abs(vs(small) - np.sin(small)) / np.abs(small))), 2.3e-16)
+    for fraction in (2, 4):
+        k = np.arange(-int(1e4 * fraction / np.pi) - 1, int(1e4 * fraction / np.pi) + 2)
+        x = _neighbours(k * (np.pi / fraction))
+        x = x[np.abs(x) <= 1e4]
+        check(f"k pi/{fraction} and 4 neighbours: sin", err(vs, np.sin, x), tol)
+        check(f"k pi/{fraction} and 4 neighbours: cos", err(vc, np.cos, x), tol)
+    x = _neighbours(np.array([np.pi, -np.pi, 2 * np.pi, 1e4 * np.pi / 2]), 64)
+    want = np.sin(x)
+    check("next to k pi: |err| / |sin|", float(np.max(np.abs(vs(x) - want) / np.abs(want))),
+          4.5e-16)
+    x = np.concatenate([np.arange(-10_000, 10_001, dtype=float),
+                        np.arange(-20_000, 20_001) / 2.0, np.arange(-40_000, 40_001) / 4.0,
+                        np.arange(-2**20, 2**20) / 2.0**10, 2.0 ** np.arange(-1074, 14)])
+    check("dyadic multiples: sin", err(vs, np.sin, x), tol)
+    check("dyadic multiples: cos", err(vc, np.cos, x), tol)
+    x = np.concatenate([[5e-324, 1e-320, 2.2250738585072014e-308, 1e-200, 1e-20, 1e-8],
+                        10.0 ** np.linspace(-300, -3, 10_000)])
+    x = np.concatenate([x, -x])
+    check("tiny x: |err| / |x| (sin)", float(np.max(np.abs(vs(x) - np.sin(x)) / np.abs(x))),
+          2.3e-16)
+    check("tiny x: cos != np.cos (count)", float(np.sum(vc(x) != np.cos(x))), 0.0)
+    x = np.concatenate([rng.uniform(-1e6, 1e6, n(2_000_000)),
+                        rng.uniform(-1e8, 1e8, n(1_000_000)),
+                        10.0 ** rng.uniform(8, 12, n(1_000_000))
+                        * rng.choice([-1.0, 1.0], n(1_000_000))])
+    check("1e4 < |x| <= 1e12: sin", err(vs, np.sin, x), tol)
+    check("1e4 < |x| <= 1e12: cos", err(vc, np.cos, x), tol)
+    k = np.arange(int(1e4 * 2 / np.pi), int(1e6 * 2 / np.pi), 7)
+    check("k pi/2 to 1e6 and 2 neighbours: sin", err(vs, np.sin, _neighbours(k * np.pi / 2, 2)),
+          tol)
+    x = 10.0 ** rng.uniform(12, np.log10(3e15), n(1_000_000))
+    check("1e12 < |x| <= 3e15: sin (documented bound)", err(vs, np.sin, x), 1e-13)
+    x = np.array([np.nan, np.inf, -np.inf, -np.nan])
+    check("NaN and inf give NaN (count not NaN)",
+          float(np.sum(~np.isnan(vs(x))) + np.sum(~np.isnan(vc(x)))), 0.0)
+    check("sin(+-0) != +0 (count)", float(np.sum(vs(np.array([0.0, -0.0])) != 0.0)), 0.0)
+    x = np.concatenate([rng.uniform(-1e4, 1e4, n(1_000_000)),
+                        _neighbours(np.arange(-6366, 6367) * (np.pi / 2))])
+    check("caller's FMA contraction changes bits (count)", float(np.sum(vcon(x) != vs(x))), 0.0)
+    x = np.concatenate([rng.uniform(-1e4, 1e4, n(200_000)), np.arange(-64, 65) * np.pi / 4,
+                        rng.uniform(-1e8, 1e8, 1000), [0.0, -0.0]])
+    s, c = vsc(x)
+    check("sincos != (sin, cos) bits (count)",
+          float(np.sum(s != vs(x)) + np.sum(c != vc(x))), 0.0)
+    return out
+
+
+# --------------------------------------------------------------------------- the patch
+def patch_text() -> str:
+    """A unified diff of sweep/kernels/vecmath.py with sin, cos and sincos replaced by
+    this file's candidate (the module docstring's algorithm notes left to whoever
+    applies it); not applied."""
+    path = HERE.parent / "sweep" / "kernels" / "vecmath.py"
+    src = path.read_text()
+    start = src.index("@njit(cache=True, **_JIT)\ndef _reduce(x):")
+    end = src.index("#: ``x ** -0.2`` read off the bits")
+    new = '''#: One reduction by pi (issue 29; benchmarks/sine_designs.py measured it against the
+#: reduction by pi/2 with two polynomials): pi = PI_HI + PI_LO - 3.0e-33.
+INV_PI = 0.3183098861837907
+PI_HI = 3.141592653589793         # 0x1.921fb54442d18p+1
+PI_LO = 1.2246467991473532e-16    # 0x1.1a62633145c07p-53
+#: sin r ~ r + r^3 P(r^2) on |r| <= pi/2 + 1e-4, P's coefficients: the minimax fit of the
+#: relative error, degree 17, rounded one at a time (benchmarks/fit_sine.py; error with
+#: these float64 coefficients 2.9e-19). The sine: within 2**-52 of np.sin (two ulps of
+#: values near 1, where r**3 P ~ -0.57 carries the roundings) for |x| <= 1e12.
+M1 = -0.16666666666666666
+M2 = 0.008333333333333207
+M3 = -0.0001984126984121248
+M4 = 2.7557319211569482e-06
+M5 = -2.505210690442292e-08
+M6 = 1.6058941002310493e-10
+M7 = -7.643019371886964e-13
+M8 = 2.7214195512770984e-15
+
+
+@njit(cache=True, **_JIT)
+def _odd_poly(r):
+    """sin r for |r| <= pi/2 (+1e-4): r + r^3 P(r^2), P by Horner (Estrin's scheme
+    reached 3 ulps), every multiply-add fused (`fma`)."""
+    z = r * r
+    p = fma(fma(fma(fma(fma(fma(fma(M8, z, M7), z, M6), z, M5), z, M4), z, M3), z, M2),
+            z, M1)
+    return fma(r * z, p, r)
+
+
+@njit(cache=True, **_JIT)
+def sin(x):
+    """sin(x) in float64, branch-free (vectorisable); accurate for |x| <~ 1e12:
+    ``k = round(x/pi)`` (magic number), ``r = x - k pi`` (two FMAs, the first exact),
+    ``sin x = (-1)**k sin r`` (k's parity: the magic sum's low bit)."""
+    y = fma(x, INV_PI, _MAGIC)
+    kf = y - _MAGIC
+    r = fma(-kf, PI_LO, fma(-kf, PI_HI, x))
+    v = _odd_poly(r)
+    return -v if (_bits_of(y) & 1) else v
+
+
+@njit(cache=True, **_JIT)
+def cos(x):
+    """cos(x) = (-1)**(k+1) sin r with ``x = (2k + 1) pi/2 + r``, ``k = round(x/pi -
+    1/2)``: a reduction by the odd multiples of pi/2, the sine's polynomial."""
+    y = fma(x, INV_PI, -0.5) + _MAGIC
+    kf = y - _MAGIC
+    mf = 2.0 * kf + 1.0
+    r = fma(-mf, PIO2_LO, fma(-mf, PIO2_HI, x))
+    v = _odd_poly(r)
+    return v if (_bits_of(y) & 1) else -v
+
+
+@njit(cache=True, **_JIT)
+def sincos(x):
+    """(sin(x), cos(x)): the bits of `sin` and `cos` (two reductions)."""
+    return sin(x), cos(x)
+
+
+'''
+    new_src = src[:start] + new + src[end:]
+    with tempfile.TemporaryDirectory() as tmp:
+        a, b = Path(tmp) / "a.py", Path(tmp) / "b.py"
+        a.write_text(src)
+        b.write_text(new_src)
+        proc = subprocess.run(["diff", "-u", "--label", "a/sweep/kernels/vecmath.py",
+                               "--label", "b/sweep/kernels/vecmath.py", str(a), str(b)],
+                              capture_output=True, text=True, check=False)
+    return proc.stdout
+
+
+# ------------------------------------------------------------------------------ main
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="small sizes: a smoke test")
+    parser.add_argument("--repeats", type=int, default=5, help="alternating rounds")
+    parser.add_argument("--out", type=Path, default=HERE / "results")
+    parser.add_argument("--patch", type=Path, help="write the drop-in diff of vecmath here")
+    args = parser.parse_args(argv)
+    sys.path.insert(0, str(HERE))
+    from _machine import machine
+
+    quick = args.quick
+    n_vec, n_chain = (2**16, 10**5) if quick else (2**22, 10**7)
+    n_traj, steps, one_steps = (2**10, 100, 10**4) if quick else (2**17, 2000, 10**6)
+    rounds = 1 if quick else max(1, args.repeats)
+    result = {"machine": machine(), "quick": quick, "rounds": rounds,
+              "designs": DESCRIPTION, "throughput": {}, "latency": {}, "rk4": {},
+              "one_trajectory": {}, "accuracy": {}}
+    print(result["machine"], flush=True)
+
+    x = np.random.default_rng(0).uniform(-50.0, 50.0, n_vec)
+    out = np.empty_like(x)
+    loops = {name: _loop(f) for name, f in DESIGNS.items()}
+    chains = {name: _chain(f) for name, f in DESIGNS.items()}
+    rk4s = {name: _rk4(f) for name, f in DESIGNS.items()}
+    ones = {name: _one(f) for name, f in DESIGNS.items()}
+    for name in DESIGNS:  # compile: not timed
+        loops[name](x[:8], out[:8])
+        chains[name](0.1, 10)
+    fma_chain(0.1, 10)
+
+    # throughput and latency, alternating
+    calls = {name: (lambda f=f: f(x, out)) for name, f in loops.items()}
+    best = best_alternating(calls, rounds)
+    calls = {name: (lambda f=f: f(0.1, n_chain)) for name, f in chains.items()}
+    calls["fma"] = lambda: fma_chain(0.1, n_chain)
+    lat = best_alternating(calls, rounds)
+    ns_fma = lat.pop("fma") / n_chain * 1e9
+    print(f"clock: a dependent FMA takes {ns_fma:.3f} ns (4 cycles: "
+          f"{4 / ns_fma:.2f} GHz)", flush=True)
+    for name in DESIGNS:
+        loops[name](x, out)
+        ns = lat[name] / n_chain * 1e9
+        result["throughput"][name] = {"sines_per_s": x.size / best[name],
+                                      "vectorised": vectorised(loops[name]),
+                                      "max_abs_error_vs_np_sin":
+                                          float(np.max(np.abs(out - np.sin(x))))}
+        # the chain's own FMA (x = sin(x) * 3 + 0.5) is one of those 4-cycle steps
+        result["latency"][name] = {"ns_per_call": ns,
+                                   "cycles_per_call": 4 * ns / ns_fma - 4}
+        print(f"  {name:10s} {x.size / best[name] / 1e6:9.1f} M sin/s (vectorised: "
+              f"{result['throughput'][name]['vectorised']})   latency {ns:6.2f} ns = "
+              f"{result['latency'][name]['cycles_per_call']:5.1f} cycles", flush=True)
+
+    # in the RK4 kernel
+    fnode, fhalf = forcing(max(steps, one_steps))
+    th_axis = np.linspace(-np.pi, np.pi, max(1, round(math.sqrt(2 * n_traj))))
+    om_axis = np.linspace(-2.0, 2.0, max(1, n_traj // th_axis.size))
+    th0, om0 = (a.ravel().copy() for a in np.meshgrid(th_axis, om_axis, indexing="ij"))
+    args_rk4 = (fnode, fhalf, steps, 1.0, 0.5, 0.01)
+    args_one = (fnode, fhalf, one_steps, 1.0, 0.5, 0.01)
+    for name in DESIGNS:
+        rk4s[name](th0[:8], om0[:8], fnode, fhalf, 2, 1.0, 0.5, 0.01)
+        ones[name](0.1, 0.0, fnode, fhalf, 2, 1.0, 0.5, 0.01)
+    calls = {name: (lambda f=f: f(th0, om0, *args_rk4)) for name, f in rk4s.items()}
+    calls.update({f"one:{name}": (lambda f=f: f(0.1, 0.0, *args_one))
+                  for name, f in ones.items()})
+    best = best_alternating(calls, rounds)
+    ref = rk4s["sweep"](th0, om0, *args_rk4)
+    for name in DESIGNS:
+        got = rk4s[name](th0, om0, *args_rk4)
+        result["rk4"][name] = {
+            "traj_steps_per_s": th0.size * steps / best[name],
+            "max_abs_diff_from_sweep_sine": float(max(np.max(np.abs(got[0] - ref[0])),
+                                                      np.max(np.abs(got[1] - ref[1]))))}
+        result["one_trajectory"][name] = {"steps_per_s": one_steps / best[f"one:{name}"]}
+        print(f"  {name:10s} RK4 in lanes {th0.size * steps / best[name] / 1e6:8.1f} M "
+              f"traj-steps/s; one trajectory "
+              f"{one_steps / best[f'one:{name}'] / 1e6:6.2f} M steps/s", flush=True)
+    result["workload"] = {"trajectories": int(th0.size), "steps": steps,
+                          "one_trajectory_steps": one_steps, "sin_loop_points": n_vec,
+                          "chain_calls": n_chain}
+
+    # accuracy: tests/test_vecmath.py's checks
+    scale = 0.05 if quick else 1.0
+    pairs = {"sweep": (vecmath.sin, vecmath.cos, vecmath.sincos),
+             "pi": (sin_pi, cos_pi, sincos_pi)}
+    for name, fns in pairs.items():
+        result["accuracy"][name] = acc = accuracy(*fns, scale=scale)
+        failed = [k for k, v in acc.items() if not v[2]]
+        print(f"  {name:10s} accuracy: {len(acc) - len(failed)}/{len(acc)} test_vecmath "
+              f"checks pass{'; FAILS ' + ', '.join(failed) if failed else ''}", flush=True)
+
+    if args.patch:
+        args.patch.write_text(patch_text())
+        print(f"wrote {args.patch}")
+    args.out.mkdir(parents=True, exist_ok=True)
+    stem = "sine_designs_quick" if quick else "sine_designs"
+    (args.out / f"{stem}.json").write_text(json.dumps(result, indent=2))
+    md = markdown(result)
+    (args.out / f"{stem}.md").write_text(md)
+    print(md)
+    return 0
+
+
+def markdown(r) -> str:
+    w = r["workload"]
+    lines = [f"# sine designs in numba ({'quick' if r['quick'] else 'full'}, best of "
+             f"{r['rounds']} alternating rounds)", "", f"Machine: {r['machine']}", ""]
+    lines += [f"- **{k}**: {v}" for k, v in r["designs"].items()]
+    lines += ["", f"| design | M sin/s (loop of {w['sin_loop_points']}) | vectorised | "
+              f"latency ns/call | cycles/call | RK4 in lanes, M traj-steps/s "
+              f"({w['trajectories']} x {w['steps']}) | one trajectory, M steps/s |",
+              "|---|---|---|---|---|---|---|"]
+    for name in r["designs"]:
+        t, lat = r["throughput"][name], r["latency"][name]
+        lines.append(f"| {name} | {t['sines_per_s'] / 1e6:.0f} | {t['vectorised']} | "
+                     f"{lat['ns_per_call']:.2f} | {lat['cycles_per_call']:.0f} | "
+                     f"{r['rk4'][name]['traj_steps_per_s'] / 1e6:.0f} | "
+                     f"{r['one_trajectory'][name]['steps_per_s'] / 1e6:.2f} |")
+    lines += ["", "Cycles: the chain's ns per call over a dependent FMA's ns, times 4 (an "
+              "FMA's latency on Zen 4/5 and Intel's AVX-512 cores), less the chain's own FMA.",
+              "", "## Accuracy: tests/test_vecmath.py's checks", "",
+              "| check | bound | " + " | ".join(r["accuracy"]) + " |",
+              "|---|---|" + "---|" * len(r["accuracy"])]
+    names = list(r["accuracy"])
+    for check in r["accuracy"][names[0]]:
+        bound = r["accuracy"][names[0]][check][1]
+        cells = []
+        for name in names:
+            value, _, ok = r["accuracy"][name][check]
+            cells.append(f"{value:.3g}{'' if ok else ' **FAILS**'}")
+        lines.append(f"| {check} | {bound:.3g} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
