@@ -100,6 +100,11 @@ VECTOR_WIDTH: str | int = "auto"
 
 VECTOR_WIDTHS = ("auto", "llvm", 128, 256, 512)
 
+#: Byte alignment of the arrays a CPU kernel allocates (its lanes; numba's default is
+#: 32, `sweep.kernels.vectors`): 64, a 512-bit register, so that no vector load or store
+#: of a lane array straddles two cache lines.
+LANE_ALIGNMENT = 64
+
 
 def vector_width() -> str | int:
     """The kernels' vector width setting: ``$SWEEP_VECTOR_WIDTH`` if set, else

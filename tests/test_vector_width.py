@@ -89,9 +89,9 @@ def test_a_kernel_source_names_its_width(monkeypatch):
     for width in ("256", "512", "llvm"):
         monkeypatch.setenv("SWEEP_VECTOR_WIDTH", width)
         texts[width] = sweep.kernels.source(spec)
-    assert texts["256"].endswith("compile_with(globals(), 256)\n")
-    assert texts["512"].endswith("compile_with(globals(), 512)\n")
-    assert texts["llvm"].endswith("compile_with(globals(), None)\n")
+    assert texts["256"].endswith("compile_with(globals(), 256, 64)\n")
+    assert texts["512"].endswith("compile_with(globals(), 512, 64)\n")
+    assert texts["llvm"].endswith("compile_with(globals(), None, 64)\n")
 
 
 _ASM = textwrap.dedent("""
@@ -108,23 +108,30 @@ _ASM = textwrap.dedent("""
         asm = "".join(kernels.build(spec).inspect_asm().values())
         counts[str(width)] = {r: len(re.findall(r"\\bv\\w+pd\\s+%" + r, asm))
                               for r in ("zmm", "ymm")}
+        llvm_ir = "".join(kernels.build(spec).inspect_llvm().values())
+        counts[str(width)]["alignments"] = sorted(set(re.findall(
+            r"NRT_MemInfo_alloc_aligned\\(i64 [^,]+, i32 (\\d+)\\)", llvm_ir)))
     # plain numba code of the user's, compiled in the same process after the kernels
     from numba import njit
     @njit
-    def user_loop(x, out):
+    def user_loop(x):
+        out = np.empty(x.size)
         for i in range(x.size):
             out[i] = x[i] * 1.5 + 2.0
-    x = np.ones(1000)
-    user_loop.compile("(float64[::1], float64[::1])")
+        return out
+    user_loop.compile("(float64[::1],)")
     asm = "".join(user_loop.inspect_asm().values())
     counts["user"] = {r: len(re.findall(r"\\bv\\w+pd\\s+%" + r, asm)) for r in ("zmm", "ymm")}
+    counts["user"]["alignments"] = sorted(set(re.findall(
+        r"NRT_MemInfo_alloc_aligned\\(i64 [^,]+, i32 (\\d+)\\)",
+        "".join(user_loop.inspect_llvm().values()))))
     print(json.dumps(counts))
 """)
 
 
 @pytest.mark.skipif(not AVX512, reason="the host has no AVX-512: the tuning cannot be "
                                        "emulated without running code it lacks")
-def test_intel_tuning_gets_512_bit_kernels_and_leaves_other_code_alone(tmp_path):
+def test_intel_tuning_gets_512_bit_aligned_kernels_and_leaves_other_code_alone(tmp_path):
     """Under LLVM's tuning for Intel's Rocket Lake (``prefer-256-bit``, the issue's
     Xeon), emulated with ``NUMBA_CPU_NAME``: LLVM's own choice vectorises the kernel
     with 256-bit ymm registers, the 512 setting with zmm ones, 256 with ymm; the
@@ -142,3 +149,7 @@ def test_intel_tuning_gets_512_bit_kernels_and_leaves_other_code_alone(tmp_path)
     assert counts["512"]["zmm"] > 20 and counts["512"]["ymm"] == 0
     assert counts["256"]["zmm"] == 0 and counts["256"]["ymm"] > 20
     assert counts["user"]["zmm"] == 0 and counts["user"]["ymm"] > 0
+    # the kernels' arrays (their lanes) start on 64-byte boundaries, the user's on
+    # numba's 32 (sweep._config.LANE_ALIGNMENT)
+    assert all(counts[w]["alignments"] == ["64"] for w in ("llvm", "256", "512"))
+    assert counts["user"]["alignments"] == ["32"]

@@ -142,7 +142,8 @@ JIT = {jit}
 {physics}
 '''
     # last: every dispatcher above compiles with this SIMD width (sweep.kernels.vectors)
-    return _precision(spec, header + body) + f"compile_with(globals(), {width})\n"
+    return _precision(spec, header + body) + \
+        f"compile_with(globals(), {width}, {_config.LANE_ALIGNMENT})\n"
 
 
 def _precision(spec: KernelSpec, text: str) -> str:

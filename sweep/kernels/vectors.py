@@ -35,7 +35,7 @@ import threading
 
 __all__ = ["compile_with", "describe", "install", "resolved"]
 
-_state = threading.local()  # .width while a sweep kernel's dispatcher compiles
+_state = threading.local()  # .options = (width, alignment) while a kernel compiles
 
 
 def resolved(setting: str | int) -> int | None:
@@ -80,50 +80,58 @@ def describe(setting: str | int) -> str:
     return f"{text} (auto)" if setting == "auto" else text
 
 
-def compile_with(namespace: dict, width: int | None) -> None:
+def compile_with(namespace: dict, width: int | None, alignment: int = 32) -> None:
     """Make every numba dispatcher defined in a generated kernel module (``namespace``,
-    its globals) compile with ``"prefer-vector-width"="<width>"`` on its functions.
+    its globals) compile with ``"prefer-vector-width"="<width>"`` on its functions
+    (none for ``width=None``) and its arrays (``np.empty`` in the kernel: the lanes)
+    aligned to ``alignment`` bytes (numba's default: 32).
 
-    Called by the generated module itself, last; ``width=None`` changes nothing.
+    Called by the generated module itself, last.
     """
-    if width is None:
-        return
     install()
     from numba.core.dispatcher import Dispatcher
 
     module = namespace["__name__"]
     for value in list(namespace.values()):
         if isinstance(value, Dispatcher) and value.py_func.__module__ == module:
-            _compile_wide(value, width)
+            _compile_with(value, (width, alignment))
 
 
-def _compile_wide(dispatcher, width: int) -> None:
+def _compile_with(dispatcher, options: tuple[int | None, int]) -> None:
     compile_ = dispatcher.compile
 
     @functools.wraps(compile_)
     def compile(sig):
-        previous = getattr(_state, "width", None)
-        _state.width = width
+        previous = getattr(_state, "options", None)
+        _state.options = options
         try:
             return compile_(sig)
         finally:
-            _state.width = previous
+            _state.options = previous
 
     dispatcher.compile = compile  # numba calls self.compile(sig) for a new signature
 
 
 def install() -> None:
     """Wrap `numba.core.cpu.CPUContext.post_lowering` (once) to add the attribute to
-    the functions of the module being lowered while a sweep kernel compiles."""
+    the functions of the module being lowered while a sweep kernel compiles, and
+    ``get_preferred_array_alignment`` to align its arrays."""
     from numba.core.cpu import CPUContext
 
     original = CPUContext.post_lowering
     if getattr(original, "_sweep_vector_width", False):
         return
+    preferred = CPUContext.get_preferred_array_alignment
+
+    @functools.wraps(preferred)
+    def get_preferred_array_alignment(context, ty):
+        options = getattr(_state, "options", None)
+        default = preferred(context, ty)
+        return default if options is None else max(default, options[1])
 
     @functools.wraps(original)
     def post_lowering(self, mod, library):
-        width = getattr(_state, "width", None)
+        width = (getattr(_state, "options", None) or (None,))[0]
         if width is not None:
             attribute = f'"prefer-vector-width"="{width}"'
             for function in mod.functions:
@@ -135,3 +143,4 @@ def install() -> None:
 
     post_lowering._sweep_vector_width = True
     CPUContext.post_lowering = post_lowering
+    CPUContext.get_preferred_array_alignment = get_preferred_array_alignment
