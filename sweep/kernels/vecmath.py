@@ -251,8 +251,8 @@ def inverse_fifth_root(x):
 #    resolution), then ``r`` is rounded once to float32.
 # 3. Cephes' sinf/cosf polynomials on [-pi/4, pi/4] in float32 (relative error ~ 1 ulp
 #    of float32), Horner with the multiply-adds fused explicitly (`fma`: the kernels
-#    let LLVM fuse nothing; unfused, the float32 kernel ran 16 % slower), both
-#    evaluated, then chosen and signed by quadrant (`_quadrant`).
+#    let LLVM fuse nothing; unfused, the float32 kernel ran 16 % slower), one of the
+#    two per call, chosen and signed by quadrant with selects (`_sine_of_reduced32`).
 # Four float64 operations and two conversions per call; the rest of the sine, and of
 # the kernel around it, is float32. Measured (``tests/test_vecmath.py``): max abs error
 # against float64 ``np.sin`` 9.3e-8 (about 1.5 float32 ulps below 1; NumPy's own
@@ -272,36 +272,28 @@ _ONE32 = _F32(1.0)
 
 @njit(cache=True, **_JIT)
 def _reduce32(x):
-    """(r, q): x = q pi/2 + r with |r| <~ pi/4 in float32, q the quadrant (int64); the
+    """(r, q): x = k pi/2 + r with |r| <~ pi/4 in float32, ``q`` an int64 whose two low
+    bits are ``k mod 4`` (the bits of the magic-number sum, as in `_reduce`); the
     reduction in float64 (a float32 ``x`` is widened exactly)."""
     x = np.float64(x)
-    kf = (x * TWO_OVER_PI + _MAGIC) - _MAGIC
+    y = x * TWO_OVER_PI + _MAGIC
+    kf = y - _MAGIC
     r = (x - kf * P1) - kf * P2
-    q = int(kf) if abs(kf) < 4.0e15 else 0
-    return _F32(r), q
+    return _F32(r), _bits_of(y)
 
 
 @njit(cache=True, **_JIT)
-def _sin_poly32(r):
+def _sine_of_reduced32(r, q):
+    """sin(k pi/2 + r) in float32: Cephes' sinf polynomial on even quadrants, cosf's
+    on odd ones, negated on quadrants 2 and 3. One polynomial per call, its
+    coefficients chosen by selects (as `_sine_of_reduced`; the previous version
+    evaluated both and chose after), with the same operations as each polynomial
+    alone, so the bits are those of the two-polynomial version."""
+    odd = (q & 1) != 0
     z = r * r
-    return fma(r * z, fma(z, fma(z, SF3, SF2), SF1), r)
-
-
-@njit(cache=True, **_JIT)
-def _cos_poly32(r):
-    z = r * r
-    return fma(z * z, fma(z, fma(z, CF3, CF2), CF1), fma(-_HALF32, z, _ONE32))
-
-
-@njit(cache=True, **_JIT)
-def _quadrant(s, c, q):
-    """(sin x, cos x) from ``s = sin r``, ``c = cos r`` of the reduced argument and the
-    quadrant ``q`` (x = q pi/2 + r), by selects: sin x is +-s or +-c by ``q mod 4``, and
-    cos(x) = sin(x + pi/2), i.e. quadrant q + 1 (the polynomials swapped, the sign
-    flipped on quadrants 1 and 2)."""
-    v = c if (q & 1) else s
-    w = s if (q & 1) else c
-    return (-v if (q & 2) else v), (-w if ((q + 1) & 2) else w)
+    p = fma(z, fma(z, CF3 if odd else SF3, CF2 if odd else SF2), CF1 if odd else SF1)
+    y = fma(z * z if odd else r * z, p, fma(-_HALF32, z, _ONE32) if odd else r)
+    return -y if (q & 2) else y
 
 
 @njit(cache=True, **_JIT)
@@ -309,14 +301,14 @@ def sin32(x):
     """sin(x) in float32 (x float32 or float64), branch-free; see the single-precision
     notes."""
     r, q = _reduce32(x)
-    return _quadrant(_sin_poly32(r), _cos_poly32(r), q)[0]
+    return _sine_of_reduced32(r, q)
 
 
 @njit(cache=True, **_JIT)
 def cos32(x):
     """cos(x) in float32 through the same reduction (quadrant shifted by one)."""
     r, q = _reduce32(x)
-    return _quadrant(_sin_poly32(r), _cos_poly32(r), q)[1]
+    return _sine_of_reduced32(r, q + 1)
 
 
 @njit(cache=True, **_JIT)
@@ -324,4 +316,4 @@ def sincos32(x):
     """(sin(x), cos(x)) in float32 from one reduction (the same bits as `sin32`,
     `cos32`)."""
     r, q = _reduce32(x)
-    return _quadrant(_sin_poly32(r), _cos_poly32(r), q)
+    return _sine_of_reduced32(r, q), _sine_of_reduced32(r, q + 1)
