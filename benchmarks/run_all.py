@@ -93,6 +93,7 @@ from _c_builds import (  # noqa: F401
     G_OVER_L,
     NARROW,
     PHASE,
+    PI_SINES,
     SINE_CONTRACT,
     SINE_RANGES,
     WIDE,

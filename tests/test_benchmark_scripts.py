@@ -90,6 +90,13 @@ def test_limit_search_options(run_all):
         variations = run_all.c_limit_variations(next(iter(candidates.values())), avx512)
         assert all("-DBLOCK=64" in flags for flags in variations.values())
         assert len(variations) == (3 if avx512 else 2)
+        designs = run_all.c_limit_sine_designs(next(iter(candidates.values())), avx512)
+        assert len(designs) == len(run_all.PI_SINES)
+        for flags in designs.values():
+            assert "-DSIN_VARIANT=5" in flags and "-DBLOCK=64" in flags
+            assert (run_all.WIDE in flags) == avx512 and "-ffast-math" not in flags
+        at = run_all.c_limit_sine_designs([], avx512, blocks=["8", "4096"])
+        assert len(at) == 2 * len(run_all.PI_SINES)
 
 
 @needs_gcc
@@ -102,6 +109,7 @@ def test_every_c_build_agrees_with_sweep(run_all, states, tmp_path):
     candidates = run_all.c_limit_candidates(avx512, blocks=(8, 64))
     variants.update(candidates)
     variants.update(run_all.c_limit_variations(next(iter(candidates.values())), avx512))
+    variants.update(run_all.c_limit_sine_designs(next(iter(candidates.values())), avx512))
     built = run_all.build_c(tmp_path, variants)
     linear = run_all.run_sweep(run_all.scene_of("linear"), theta0, omega0, STEPS)
     linear = linear.theta_final.values.ravel(), linear.omega_final.values.ravel()
@@ -110,6 +118,37 @@ def test_every_c_build_agrees_with_sweep(run_all, states, tmp_path):
         expected = linear if "-DLINEAR" in variants[name] else ref
         diff = max_diff(run_all.call_c(fn, th0, om0, STEPS), expected)
         assert diff <= run_all.C_CHECK_TOL, f"{name}: {diff:.1e}"
+
+
+@needs_gcc
+def test_sine_contract_of_the_c_builds(run_all, tmp_path):
+    """Each C build's sine is measured against np.sin (run_all's eligibility for the C
+    limit): sweep's design and the minimax one-reduction-by-pi sine meet the contract
+    (2**-52 up to 1e12), the degree-19 Taylor polynomial misses it (its truncation alone
+    is 2.2e-16 at pi/2)."""
+    built = run_all.build_c(tmp_path, {
+        "sweep": ["-DSIN_VARIANT=4", "-DBLOCK=8"],
+        "minimax17": ["-DSIN_VARIANT=5", "-DSIN_POLY=2", "-DBLOCK=8"],
+        "taylor19": ["-DSIN_VARIANT=5", "-DSIN_POLY=0", "-DBLOCK=8"]})
+    got = {name: run_all.sine_accuracy(fn) for name, fn in built.items()}
+    assert got["sweep"]["eligible"] and got["minimax17"]["eligible"]
+    assert not got["taylor19"]["eligible"]
+    assert set(got["sweep"]["max_abs_error"]) == set(run_all.SINE_RANGES)
+    assert max(got["sweep"]["max_abs_error"].values()) <= 1.2e-16
+
+
+def test_sine_designs_script(tmp_path):
+    """benchmarks/sine_designs.py --quick: both designs timed, test_vecmath's checks run
+    for each, the drop-in diff written (not applied)."""
+    sine_designs = importlib.import_module("sine_designs")
+    patch = tmp_path / "sine.diff"
+    assert sine_designs.main(["--quick", "--out", str(tmp_path), "--patch", str(patch)]) == 0
+    result = json.loads((tmp_path / "sine_designs_quick.json").read_text())
+    assert set(result["throughput"]) == set(sine_designs.DESIGNS)
+    assert all(v["vectorised"] for v in result["throughput"].values())
+    assert all(v[2] for v in result["accuracy"]["sweep"].values())
+    assert result["rk4"]["pi"]["max_abs_diff_from_sweep_sine"] < 1e-12
+    assert "+def _odd_poly(r):" in patch.read_text()
 
 
 @needs_gcc
