@@ -27,6 +27,9 @@ which the designs alternate (the machine is shared, so single timings are noisy)
 * **in an RK4 kernel**: run_all's full scene (2**17 trajectories x 2000 steps of the
   forced damped pendulum) in blocks of lanes with each sine (M trajectory-steps/s), and
   one trajectory alone (the narrow path: its steps wait on each other's sines);
+* **sweep.run itself** on that scene, its kernels built on each sine (fresh processes,
+  vecmath's sin/cos/sincos replaced before a kernel is generated, a cache folder each;
+  the designs alternate, 3 rounds);
 * **accuracy**: the inputs and bounds of ``tests/test_vecmath.py`` (2**-52 absolute up
   to 1e12, 2.3e-16 |x| for small x, 4.5e-16 relative next to multiples of pi, the
   cosine equal to np.cos for tiny x, the same bits under a caller's FMA contraction,
@@ -46,6 +49,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import re
 import subprocess
 import sys
@@ -261,6 +265,62 @@ def best_alternating(calls: dict, rounds: int) -> dict:
             call()
             best[name] = min(best[name], time.perf_counter() - start)
     return best
+
+
+# ------------------------------------------------------------- sweep.run with each sine
+#: One process: sweep.run on run_all's full scene with sweep's kernels built on the
+#: given sine (vecmath's sin/cos/sincos replaced before any kernel is generated: the
+#: kernel modules import them when built; a cache folder of its own per design, so no
+#: kernel of the other design is loaded from disk). Prints best seconds and the state.
+SWEEP_RUN = """
+import json, sys, time
+import numpy as np
+sys.path.insert(0, {bench!r})
+import sweep
+from sweep.kernels import vecmath
+if {design!r} == "pi":
+    import sine_designs as sd
+    vecmath.sin, vecmath.cos, vecmath.sincos = sd.sin_pi, sd.cos_pi, sd.sincos_pi
+from _c_builds import AMPLITUDE, DAMPING, DT, FREQUENCY, G_OVER_L, PHASE, grid_axes
+theta0, omega0 = grid_axes({n})
+scene = sweep.Scene(gravity=G_OVER_L, length=1.0, effects=(sweep.Damping(DAMPING),
+                    sweep.Forcing(AMPLITUDE, FREQUENCY, PHASE)))
+grid = sweep.Grid(theta0=theta0, omega0=omega0)
+kw = dict(t_end={steps} * DT, dt=DT, observe=("final",), progress=False)
+sweep.run(scene, grid, **kw)
+best = float("inf")
+for _ in range({repeats}):
+    start = time.perf_counter()
+    ds = sweep.run(scene, grid, **kw)
+    best = min(best, time.perf_counter() - start)
+np.save({state!r}, np.stack([ds.theta_final.values.ravel(), ds.omega_final.values.ravel()]))
+print(json.dumps({{"seconds": best, "trajectories": int(theta0.size * omega0.size)}}))
+"""
+
+
+def sweep_run_with_each_sine(n, steps, rounds, repeats=2) -> dict:
+    """sweep.run on the full scene with sweep's sine and with the candidate: fresh
+    processes, the designs alternating for ``rounds`` rounds, each process the best of
+    ``repeats`` runs after a warm-up; the first round compiles (its own cache folder)."""
+    out = {name: {"seconds": math.inf} for name in ("sweep", "pi")}
+    with tempfile.TemporaryDirectory() as tmp:
+        for _ in range(rounds):
+            for name, v in out.items():
+                state = str(Path(tmp) / f"{name}.npy")
+                code = SWEEP_RUN.format(bench=str(HERE), design=name, n=n, steps=steps,
+                                        repeats=repeats, state=state)
+                env = dict(os.environ, SWEEP_CACHE_DIR=str(Path(tmp) / f"cache_{name}"),
+                           PYTHONPATH=str(HERE.parent))
+                proc = subprocess.run([sys.executable, "-c", code], capture_output=True,
+                                      text=True, env=env, check=False)
+                if proc.returncode != 0:
+                    raise RuntimeError(proc.stderr)
+                got = json.loads(proc.stdout.strip().splitlines()[-1])
+                v["seconds"] = min(v["seconds"], got["seconds"])
+                v["traj_steps_per_s"] = got["trajectories"] * steps / v["seconds"]
+        a, b = np.load(Path(tmp) / "sweep.npy"), np.load(Path(tmp) / "pi.npy")
+    out["pi"]["max_abs_diff_from_sweep_sine"] = float(np.max(np.abs(a - b)))
+    return out
 
 
 # ------------------------------------------------------------------------- accuracy
@@ -557,6 +617,11 @@ def main(argv=None) -> int:
         print(f"  {name:10s} RK4 in lanes {th0.size * steps / best[name] / 1e6:8.1f} M "
               f"traj-steps/s; one trajectory "
               f"{one_steps / best[f'one:{name}'] / 1e6:6.2f} M steps/s", flush=True)
+    # sweep.run itself, its kernels built on each sine (fresh processes, alternating)
+    result["sweep_run"] = sweep_run_with_each_sine(n_traj, steps, 1 if quick else 3)
+    for name, v in result["sweep_run"].items():
+        print(f"  {name:10s} sweep.run, full scene, its kernels on this sine: "
+              f"{v['traj_steps_per_s'] / 1e6:8.1f} M traj-steps/s", flush=True)
     result["workload"] = {"trajectories": int(th0.size), "steps": steps,
                           "one_trajectory_steps": one_steps, "sin_loop_points": n_vec,
                           "chain_calls": n_chain}
@@ -598,6 +663,15 @@ def markdown(r) -> str:
                      f"{lat['ns_per_call']:.2f} | {lat['cycles_per_call']:.0f} | "
                      f"{r['rk4'][name]['traj_steps_per_s'] / 1e6:.0f} | "
                      f"{r['one_trajectory'][name]['steps_per_s'] / 1e6:.2f} |")
+    if "sweep_run" in r:
+        lines += ["", "`sweep.run` itself on the full scene, its kernels built on each sine "
+                  "(fresh processes alternating, best of each; the same workload as the "
+                  "lanes column):", "", "| design | M traj-steps/s | max abs diff from "
+                  "sweep's sine |", "|---|---|---|"]
+        for name, v in r["sweep_run"].items():
+            diff = v.get("max_abs_diff_from_sweep_sine")
+            lines.append(f"| {name} | {v['traj_steps_per_s'] / 1e6:.0f} | "
+                         f"{'' if diff is None else f'{diff:.1e}'} |")
     lines += ["", "Cycles: the chain's ns per call over a dependent FMA's ns, times 4 (an "
               "FMA's latency on Zen 4/5 and Intel's AVX-512 cores), less the chain's own FMA.",
               "", "## Accuracy: tests/test_vecmath.py's checks", "",
