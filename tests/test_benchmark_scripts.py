@@ -252,6 +252,20 @@ def test_period_map_script(tmp_path):
     assert (tmp_path / "period_map.md").read_text().startswith("# Periodicity map")
 
 
+def test_vector_width_script(tmp_path):
+    """benchmarks/vector_width.py --quick: the three widths timed in their processes,
+    the dataset's attribute as asked, the same bits."""
+    vector_width = importlib.import_module("vector_width")
+    assert vector_width.main(["--quick", "--out", str(tmp_path)]) == 0  # 1: bits differ
+    result = json.loads((tmp_path / "vector_width_quick.json").read_text())
+    (block,) = result["runs"].values()
+    assert block["bit_identical"]
+    assert {w: row["vector_width"] for w, row in block["rows"].items()} == \
+        {"256": "256", "512": "512", "llvm": "llvm"}
+    assert all(row["rate"] > 0 for row in block["rows"].values())
+    assert block["rows"]["256"]["registers"]["zmm"] == 0
+
+
 def test_float32_benchmark_runs_and_writes_its_tables(tmp_path):
     """``benchmarks/float32.py --quick``: every part runs at tiny size, writes its JSON
     and Markdown, and its numbers are sane (rates positive, errors finite, the basin
