@@ -266,6 +266,18 @@ def test_vector_width_script(tmp_path):
     assert block["rows"]["256"]["registers"]["zmm"] == 0
 
 
+def test_blocks_script(tmp_path):
+    """benchmarks/blocks.py --quick: every block size it times is the block sweep.run
+    used (asserted inside), and the tables are written."""
+    blocks = importlib.import_module("blocks")
+    assert blocks.main(["--quick", "--out", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "blocks_quick.json").read_text())
+    assert set(result["fixed"]) == {"1", "8"}
+    assert all(rate > 0 for row in result["fixed"].values() for rate in row.values())
+    assert set(result["adaptive_large"]) == {str(b) for b in blocks.ADAPTIVE_BLOCKS}
+    assert "NARROW_BELOW" in (tmp_path / "blocks_quick.md").read_text()
+
+
 def test_float32_benchmark_runs_and_writes_its_tables(tmp_path):
     """``benchmarks/float32.py --quick``: every part runs at tiny size, writes its JSON
     and Markdown, and its numbers are sane (rates positive, errors finite, the basin
