@@ -41,6 +41,31 @@ def pytest_runtest_setup(item):
     compile_log.pytest_runtest_setup(item)
 
 
+#: The forced Wada map (c = 0.2, A = 1.66, W = 1, cos forcing, g/L = 1; three attractors),
+#: its 21 x 21 pilot and the strict early stop: tests/test_attractor_catalogue.py's SCENE,
+#: _grid(21) and EARLY (its test_pilot_catalogue_thins_the_map_and_finds_its_attractors
+#: checks that its own pilot gives these bits).
+WADA_SCENE = sweep.Scene(gravity=1.0, length=1.0, effects=(
+    sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, np.pi / 2)))
+WADA_PILOT = dict(t_end=320 * 2 * np.pi, dt=2 * np.pi / 100, t_transient=20 * 2 * np.pi,
+                  observe=("strobe",), stop_early=True, progress=False)
+
+
+@pytest.fixture(scope="session")
+def wada_catalogue():
+    """The forced Wada map's attractor catalogue, from its 21 x 21 pilot.
+
+    A catalogue is pasted into the kernel as constants, so each different catalogue is a
+    kernel of its own (seconds of compiling): the tests that need *a* catalogue of this
+    scene, not one from their own pilot, share this one (and so its kernels, in memory
+    and in numba's disk cache, whichever worker compiled them)."""
+    from sweep import maps
+
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, 21),
+                      omega0=np.linspace(-4, 4, 21))
+    return maps.attractor_catalogue(sweep.run(WADA_SCENE, grid, **WADA_PILOT))
+
+
 @pytest.fixture
 def rng():
     """A seeded generator, so failures reproduce."""

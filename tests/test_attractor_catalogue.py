@@ -31,9 +31,12 @@ def _grid(n):
 
 
 @pytest.fixture(scope="module")
-def catalogue():
-    """From a coarse pilot with the strict early stop, as a user would make it."""
-    return maps.attractor_catalogue(sweep.run(SCENE, _grid(21), **EARLY))
+def catalogue(wada_catalogue):
+    """From a coarse pilot with the strict early stop, as a user would make it: SCENE
+    on _grid(21) with EARLY (conftest's session fixture, shared with other files;
+    test_pilot_catalogue_thins_the_map_and_finds_its_attractors checks that this file's
+    SCENE and EARLY give the same bits)."""
+    return wada_catalogue
 
 
 @pytest.fixture(scope="module")
@@ -216,7 +219,7 @@ def test_a_bad_pilot_is_refused_before_compute(grid, points, words, no_compute):
         maps.pilot_catalogue(SCENE, grid, points, **EARLY)
 
 
-def test_command_line_and_run_file_pilot(tmp_path):
+def test_command_line_and_run_file_pilot(catalogue, tmp_path):
     """``[run] pilot`` and ``--pilot`` run the pilot first: the file records the
     catalogue and its labels are the Python API's; a bad value is one line."""
     from sweep import cli
@@ -226,20 +229,24 @@ def test_command_line_and_run_file_pilot(tmp_path):
         "[scene]\ngravity = 1.0\nlength = 1.0\n"
         "[scene.damping]\ncoefficient = 0.2\n"
         "[scene.forcing]\namplitude = 1.66\nfrequency = 1.0\nphase = 1.5707963267948966\n"
-        "[grid]\ntheta0 = {start = -3.14159, stop = 3.14159, num = 9}\n"
-        "omega0 = {start = -4.0, stop = 4.0, num = 9}\n"
+        # the fixture's pilot: _grid(21) and EARLY (so its catalogue, and the kernel
+        # with it, is the fixture's); --pilot 7 below makes another
+        f"[grid]\ntheta0 = {{start = {-np.pi!r}, stop = {np.pi!r}, num = 21}}\n"
+        "omega0 = {start = -4.0, stop = 4.0, num = 21}\n"
         f"[run]\nt_end = {320 * PERIOD!r}\ndt = {PERIOD / 100!r}\n"
         f"t_transient = {20 * PERIOD!r}\nobserve = [\"strobe\"]\nstop_early = true\n"
-        "pilot = 5\n")
+        "pilot = 21\n")
     assert cli.main(["run", str(run_file), "-o", str(tmp_path / "a.nc"),
                      "--no-progress"]) == 0
     ds = sweep.load(tmp_path / "a.nc")
     assert "attractors_theta" in ds.attrs and (ds.attractor >= 0).all()
+    np.testing.assert_array_equal(sweep.io.run_arguments(ds)["attractors"]["theta"],
+                                  catalogue["theta"])  # the Python API's pilot
     assert cli.main(["run", str(run_file), "-o", str(tmp_path / "b.nc"), "--pilot", "7",
                      "--no-progress"]) == 0
     np.testing.assert_array_equal(maps.basins(sweep.load(tmp_path / "b.nc")),
                                   maps.basins(ds))
-    run_file.write_text(run_file.read_text().replace("pilot = 5", "pilot = 1"))
+    run_file.write_text(run_file.read_text().replace("pilot = 21", "pilot = 1"))
     with pytest.raises(ValueError, match="pilot must be an int >= 2"):
         sweep.toml_spec.load_run(run_file)
 

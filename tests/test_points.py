@@ -144,9 +144,11 @@ def test_points_are_bit_identical_for_other_run_settings(case):
 
 
 @pytest.fixture(scope="module")
-def forced_pair():
-    """A forced run with strobe and its pilot catalogue, as grid and as points."""
-    catalogue = maps.pilot_catalogue(FORCED, FORCED_GRID, 9, **FORCED_RUN)
+def forced_pair(wada_catalogue):
+    """A forced run with strobe and a catalogue of its scene, as grid and as points (the
+    catalogue is conftest's, from a finer pilot: any catalogue of the scene will do, and
+    this one's kernel is shared with other files instead of compiled for this file's)."""
+    catalogue = wada_catalogue
     points, index = subset(FORCED_GRID, 40)
     run = dict(FORCED_RUN, attractors=catalogue)
     return (sweep.run(FORCED, points, **run), sweep.run(FORCED, FORCED_GRID, **run), index,

@@ -338,11 +338,13 @@ def test_forced_wada_map_with_the_coarse_catalogue():
     assert refined.attrs["pilot_cells"] == 41 * 41
 
 
-def test_an_attractor_missing_from_the_catalogue_gets_one_label():
+def test_an_attractor_missing_from_the_catalogue_gets_one_label(wada_catalogue):
     """A catalogue without the libration attractor (so its starts are found by the
-    strobe test, level by level): its basin still has one label, the full run's."""
+    strobe test, level by level): its basin still has one label, the full run's. The
+    catalogue is conftest's (FORCED's 21 x 21 pilot), less the same attractor as in
+    test_attractor_catalogue.py, so the partial catalogue's kernel is shared."""
     grid = forced_grid(65)
-    catalogue = maps.pilot_catalogue(FORCED, grid, 41, **FORCED_RUN)
+    catalogue = wada_catalogue
     keep = np.flatnonzero(np.asarray(catalogue["period"]) != 1)  # the two rotations
     assert keep.size == len(catalogue["period"]) - 1
     partial = {k: np.asarray(v)[keep] for k, v in catalogue.items()}
