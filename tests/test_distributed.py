@@ -25,6 +25,10 @@ distributed = pytest.importorskip("distributed")
 TIMEOUT = 60  # s: bound on every wait below (runs here take well under 5 s)
 
 FORCED = sweep.Scene(effects=(sweep.Damping(0.3), sweep.Forcing(1.2, 2 / 3, 0.0)))
+#: The observables of the forced runs below: one set, so that they share a kernel (each
+#: observe set is a kernel of its own, compiled for seconds); which are observed is not
+#: what these tests are about.
+FORCED_OBSERVE = ("final", "winding", "amplitude", "omega_mean", "tension", "energy")
 
 
 @pytest.fixture(scope="module")
@@ -53,9 +57,7 @@ def test_forced_scene_with_several_observables_is_identical(client):
     grid = sweep.Grid(theta0=np.linspace(-3.0, 3.0, 23), omega0=np.linspace(-2, 2, 17),
                       forcing_amplitude=[1.2, 1.5])
     local, remote = _both(client, FORCED, grid, t_end=3 * np.pi, dt=np.pi / 300,
-                          t_transient=np.pi,
-                          observe=("final", "winding", "amplitude", "omega_mean",
-                                   "tension", "energy"),
+                          t_transient=np.pi, observe=FORCED_OBSERVE,
                           chunk_size=97)  # a ragged last chunk
     _same(local, remote)
     assert (remote.status == Status.OK).all()
@@ -145,7 +147,7 @@ def test_kernel_is_not_recompiled_per_task(client):
 
 def test_checkpoint_with_a_client_resumes_identically(client, tmp_path):
     grid = sweep.Grid(theta0=np.linspace(-3.0, 3.0, 12), omega0=[0.0, 1.0])
-    kw = dict(t_end=4.0, dt=0.01, observe=("final", "winding"), chunk_size=5)
+    kw = dict(t_end=4.0, dt=0.01, observe=FORCED_OBSERVE, chunk_size=5)
     local = sweep.run(FORCED, grid, **kw)
     folder = tmp_path / "ckpt"
     first = sweep.run(FORCED, grid, client=client, checkpoint=folder, keep_checkpoint=True,
@@ -187,7 +189,8 @@ def test_streamed_to_netcdf_on_the_cluster_is_identical(client, tmp_path):
 def test_streamed_locally_flags_nonfinite_and_validates_first(tmp_path):
     scene = sweep.Scene(effects=(sweep.Damping(0.1),))
     grid = sweep.Grid(damping=[0.1, 1e4, 0.2], theta0=np.linspace(-1.0, 1.0, 4))
-    kw = dict(t_end=2.0, dt=0.01, observe=("final", "amplitude"), check_stability=False)
+    kw = dict(t_end=2.0, dt=0.01, observe=("final", "winding", "amplitude"),
+              check_stability=False)  # test_nonfinite_trajectories_...'s kernel
     with pytest.warns(RuntimeWarning, match=r"^4 of 12 trajectories became non-finite"):
         local = sweep.run(scene, grid, **kw)
     with pytest.warns(RuntimeWarning, match=r"^4 of 12 trajectories became non-finite"):
@@ -209,7 +212,7 @@ async def _die():
 def test_a_worker_killed_mid_run_still_gives_the_full_identical_result(client):
     # last in the file: it kills a worker (the nanny restarts it; waited for below)
     grid = sweep.Grid(theta0=np.linspace(-3.0, 3.0, 60), omega0=np.linspace(-2, 2, 20))
-    kw = dict(t_end=2000.0, dt=0.01, observe=("final", "winding", "amplitude"),
+    kw = dict(t_end=2000.0, dt=0.01, observe=FORCED_OBSERVE,
               chunk_size=30)  # 40 chunks of ~50 ms each
     local = sweep.run(FORCED, grid, **kw)
     pids = client.run(os.getpid)
