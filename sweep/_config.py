@@ -105,6 +105,12 @@ VECTOR_WIDTHS = ("auto", "llvm", 128, 256, 512)
 #: of a lane array straddles two cache lines.
 LANE_ALIGNMENT = 64
 
+#: float32 CPU kernels are vectorised with as many lanes as a register holds float32s
+#: (LLVM's ``-vectorizer-maximize-bandwidth``, set only while they compile:
+#: `sweep.kernels.vectors`); False: as many as it holds float64s, the kernel's widest
+#: type (the angle of the nonlinear pendulum stays float64). Results do not depend on it.
+SINGLE_BY_NARROWEST = True
+
 
 def vector_width() -> str | int:
     """The kernels' vector width setting: ``$SWEEP_VECTOR_WIDTH`` if set, else

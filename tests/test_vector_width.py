@@ -91,9 +91,9 @@ def test_a_kernel_source_names_its_width(monkeypatch):
     for width in ("256", "512", "llvm"):
         monkeypatch.setenv("SWEEP_VECTOR_WIDTH", width)
         texts[width] = sweep.kernels.source(spec)
-    assert texts["256"].endswith("compile_with(globals(), 256, 64)\n")
-    assert texts["512"].endswith("compile_with(globals(), 512, 64)\n")
-    assert texts["llvm"].endswith("compile_with(globals(), None, 64)\n")
+    assert texts["256"].endswith("compile_with(globals(), 256, 64, False)\n")
+    assert texts["512"].endswith("compile_with(globals(), 512, 64, False)\n")
+    assert texts["llvm"].endswith("compile_with(globals(), None, 64, False)\n")
 
 
 _ASM = textwrap.dedent("""
@@ -155,3 +155,53 @@ def test_intel_tuning_gets_512_bit_aligned_kernels_and_leaves_other_code_alone(t
     # numba's 32 (sweep._config.LANE_ALIGNMENT)
     assert all(counts[w]["alignments"] == ["64"] for w in ("llvm", "256", "512"))
     assert counts["user"]["alignments"] == ["32"]
+
+
+_USER_LOOP = '''
+def user_loop(x, y, out):
+    for i in range(x.size):
+        out[i] = np.float32(np.sin(np.float64(x[i]) * y[i])) * x[i]
+'''
+
+
+def _user_loop_registers():
+    """The instructions of a fresh numba loop mixing float32 and float64 (the user's
+    own code)."""
+    from numba import njit
+
+    namespace = {"np": np}
+    exec(_USER_LOOP, namespace)
+    loop = njit(namespace["user_loop"])
+    loop.compile("(float32[::1], float64[::1], float32[::1])")
+    asm = "".join(loop.inspect_asm().values())
+    # its instructions, without the names (each compile has its own)
+    return [line.split()[0] for line in asm.splitlines()
+            if line.startswith("\t") and not line.startswith("\t.")]
+
+
+def test_float32_kernels_fill_the_register_and_give_the_same_bits(monkeypatch, tmp_path):
+    """A float32 kernel of the nonlinear pendulum (float64 angle, float32 rest) compiled
+    with lanes counted by float32 (`_config.SINGLE_BY_NARROWEST`) has more packed float32
+    instructions on full-width registers than without, gives the same bits, and leaves
+    LLVM's option as it found it for the user's code compiled afterwards. Fresh cache
+    folder: machine code is inspected only where it was compiled."""
+    import re
+
+    monkeypatch.setenv("SWEEP_CACHE_DIR", str(tmp_path))
+    grid = sweep.Grid(theta0=np.linspace(-3.0, 3.0, 20), omega0=np.linspace(-2.0, 2.0, 15))
+    before = _user_loop_registers()
+    runs, packed = {}, {}
+    for narrowest in (False, True):
+        monkeypatch.setattr(_config, "SINGLE_BY_NARROWEST", narrowest)
+        kw = dict(t_end=20 * PERIOD, dt=PERIOD / 120, observe=("final", "winding"),
+                  dtype="float32")
+        runs[narrowest] = sweep.run(SCENE, grid, progress=False, **kw)
+        spec = sweep.engine.prepare(SCENE, grid, **kw)[1]
+        module = sys.modules[sweep.kernels.build(spec).__module__]  # float32: a wrapper
+        asm = "".join(module.kernel_single.inspect_asm().values())
+        register = "zmm" if AVX512 else "ymm"
+        packed[narrowest] = len(re.findall(r"\bv\w+ps\s+%" + register, asm))
+    assert packed[True] > 2 * packed[False], packed
+    for name, variable in runs[False].data_vars.items():
+        assert variable.values.tobytes() == runs[True][name].values.tobytes(), name
+    assert _user_loop_registers() == before  # the option was reset

@@ -237,12 +237,14 @@ def build(spec: KernelSpec):
         Once per process, when the cache folder could be changed by another user (see
         the module's docstring); kernels are then built in a private folder.
     """
-    return _build(spec, _config.vector_width())
+    return _build(spec, _config.vector_width(), _config.LANE_ALIGNMENT,
+                  _config.SINGLE_BY_NARROWEST)
 
 
 @functools.cache
-def _build(spec: KernelSpec, vector_width):
-    """`build` for one vector width setting (part of the source, so of the memo key)."""
+def _build(spec: KernelSpec, *settings):
+    """`build` for one set of the `sweep._config` settings written into the source
+    (`sweep.kernels.vectors`), which are so part of the memo key."""
     _serialise_numba_index()
     text = source(spec)
     digest = hashlib.sha1(text.encode()).hexdigest()[:16]

@@ -143,7 +143,8 @@ JIT = {jit}
 '''
     # last: every dispatcher above compiles with this SIMD width (sweep.kernels.vectors)
     return _precision(spec, header + body) + \
-        f"compile_with(globals(), {width}, {_config.LANE_ALIGNMENT})\n"
+        f"compile_with(globals(), {width}, {_config.LANE_ALIGNMENT}, " \
+        f"{spec.dtype == 'float32' and _config.SINGLE_BY_NARROWEST})\n"
 
 
 def _precision(spec: KernelSpec, text: str) -> str:
