@@ -319,9 +319,11 @@ def test_float32_kernel_computes_in_float32_vectors(tmp_path):
     result = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
                             text=True, check=True)
     single, double = map(int, result.stdout.split())
-    # measured: 57 float32 (16 multiplies, 41 FMAs) and 17 float64 (12 and 5), each
-    # FMA declaration counted once too
-    assert single > 0 and single > 3 * double
+    # measured: 49 float32 and 17 float64 since the lanes are counted by float32
+    # (`_config.SINGLE_BY_NARROWEST`; 57 and 17 before), each FMA declaration counted
+    # once too; a float64 literal in a stage line would turn most of the step's 49 to
+    # double, so a float32 majority of 2x is the line
+    assert single > 0 and single > 2 * double
 
 
 @pytest.mark.parametrize("model", ["nonlinear", "linear"])
