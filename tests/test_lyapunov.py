@@ -333,7 +333,9 @@ def test_an_effect_without_a_jacobian_is_refused(no_compute):
 # ------------------------------------------------------------------ the TOML route
 def test_sweep_run_observes_lyapunov_from_a_run_file(tmp_path):
     """`sweep run` with ``observe = ["lyapunov"]`` writes both exponents to the file,
-    with units; their sum is -c (O(dt^4) at w0 dt = 0.05: 1e-6)."""
+    with units; their sum is -c (O(dt^4) at w0 dt = 0.05: 1e-6). Eight starts, so the
+    run takes a block of 64 lanes: test_float32.py's float64 kernel of this observable
+    (a narrow kernel of its own for fewer than 8)."""
     from sweep import cli
 
     run_file = tmp_path / "chaos.toml"
@@ -341,7 +343,7 @@ def test_sweep_run_observes_lyapunov_from_a_run_file(tmp_path):
         "[scene]\ngravity = 1.0\nlength = 1.0\n"
         "[scene.damping]\ncoefficient = 0.5\n"
         "[scene.forcing]\namplitude = 1.5\nfrequency = 0.6666666666666666\n"
-        "[grid]\ntheta0 = [0.1, 1.0]\nomega0 = [0.0]\n"
+        "[grid]\ntheta0 = {start = 0.1, stop = 1.5, num = 8}\nomega0 = [0.0]\n"
         '[run]\nt_end = 100.0\ndt = 0.05\nobserve = ["lyapunov"]\n')
     output = tmp_path / "chaos.nc"
     assert cli.main(["run", str(run_file), "-o", str(output), "--no-progress"]) == 0
