@@ -188,6 +188,9 @@ def test_float32_kernels_fill_the_register_and_give_the_same_bits(monkeypatch, t
     import re
 
     monkeypatch.setenv("SWEEP_CACHE_DIR", str(tmp_path))
+    # and not the process's memo, which may hold this kernel loaded from the disk cache
+    # by another test (numba cannot inspect loaded code)
+    sweep.kernels.build.cache_clear()
     grid = sweep.Grid(theta0=np.linspace(-3.0, 3.0, 20), omega0=np.linspace(-2.0, 2.0, 15))
     before = _user_loop_registers()
     runs, packed = {}, {}
