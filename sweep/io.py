@@ -159,6 +159,12 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     return xr.Dataset(data_vars, coords, attrs)
 
 
+def warm_up() -> None:
+    """Pay xarray's one-time costs of a process now: its first Dataset imports Dask
+    where Dask is installed (0.29 s on a 2-core AMD EPYC), whatever the data."""
+    xr.Dataset({"warm_up": ((), 0.0)})
+
+
 def equation() -> str:
     """The equation of motion with the term of every registered effect, as text."""
     terms = " ".join(cls.declaration.equation for cls in EFFECTS.values())

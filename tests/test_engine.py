@@ -298,6 +298,26 @@ def test_warm_up_compiles_the_kernel_the_run_then_uses():
         sweep.engine.warm_up(scene, grid, t_end=-1.0, dt=0.01)  # validated like run
 
 
+def test_after_warm_up_the_first_run_imports_nothing():
+    """warm_up pays the process's one-time costs too: xarray imports Dask (where it is
+    installed) on its first Dataset, 0.29 s, which a benchmark timing the first run of
+    a process counted as integration (issue 29's "bimodal" rate). In a fresh process:
+    after warm_up, the run imports no module."""
+    script = textwrap.dedent("""
+        import sys, numpy as np, sweep
+        scene = sweep.Scene(effects=(sweep.Damping(0.3),))
+        grid = sweep.Grid(theta0=np.linspace(-1.0, 1.0, 3000))
+        kwargs = dict(t_end=1.0, dt=0.01, observe=("final", "theta_max"))
+        sweep.engine.warm_up(scene, grid, **kwargs)
+        before = set(sys.modules)
+        sweep.run(scene, grid, progress=False, **kwargs)
+        print(sorted(set(sys.modules) - before))
+    """)
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          check=True)
+    assert done.stdout.strip() == "[]", done.stdout
+
+
 def test_grid_table_and_its_description_against_meshgrid():
     """`Grid.table` (any slice) is the C-order meshgrid of the axes over the scene's
     row, and `Grid.rows` / `GridRows.from_table` describe the same rows: rebuilding
