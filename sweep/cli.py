@@ -109,10 +109,11 @@ def build_parser() -> argparse.ArgumentParser:
                      "theta0 and omega0); overrides [run] pilot")
     run.add_argument("--dtype", choices=DTYPES,
                      help="working precision of the state and the step (float32: "
-                     "float32 rounding, and on a 2-core AMD EPYC 1.05-1.13x float64's "
-                     "trajectories per second with the nonlinear pendulum, 1.8x with the "
-                     "linear model; no faster on an H100; fixed-step methods); overrides "
-                     "[run] dtype")
+                     "float32 rounding, and 1.28-1.33x float64's trajectories per second "
+                     "with the nonlinear pendulum, 1.69x with the linear model, on a "
+                     "2-core AMD EPYC Zen 5 (2026-11-25); not measured on Intel since "
+                     "0.3; no faster on an H100; fixed-step methods); overrides [run] "
+                     "dtype")
     _progress_option(run)
     run.set_defaults(handler=_command_run)
 
