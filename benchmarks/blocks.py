@@ -5,10 +5,12 @@ block (the narrow path) stops paying, and the adaptive method's lanes per block.
    nonlinear): for n = 1 .. 128 trajectories, ``sweep.run`` with every trajectory in its
    own block of one lane (the narrow path, taken below ``NARROW_BELOW``) against blocks
    of 8, 16 and 64 lanes (padding filling the last one). The crossover is the smallest n
-   at which a block beats the narrow path: ``NARROW_BELOW``.
+   at which a block beats the narrow path: ``NARROW_BELOW``; the fastest block below
+   128 trajectories: ``TINY_BLOCK`` and ``TINY_BELOW``.
 2. **dopri5** (rtol 1e-8, atol 1e-10, the same scene over 20 s): blocks of 8 .. 128
    lanes (``ADAPTIVE_BLOCK``) on a grid of 8192 starts, and one lane per block against
-   blocks of 64 for n = 1 .. 64 (over 20 s x 256 / n, at least 20 s).
+   blocks of 64 for n = 1 .. 64 (over 20 s x 256 / n, at least 20 s):
+   ``ADAPTIVE_NARROW_BELOW``.
 
 Every configuration is timed as ``sweep.run`` (best of ``--repeats``; its kernel compiled
 beforehand), the configurations of one n in alternation; rates are useful
@@ -55,16 +57,17 @@ def grid_of(n: int) -> sweep.Grid:
 def configured(block: int, adaptive: bool):
     """The `_config` settings that make `sweep.run` use ``block`` lanes per block."""
     if block == 1:
-        return {"NARROW_BELOW": 10**12}
+        return {"NARROW_BELOW": 10**12, "ADAPTIVE_NARROW_BELOW": 10**12}
     if adaptive:
-        return {"NARROW_BELOW": 0, "ADAPTIVE_BLOCK": block}
-    return {"NARROW_BELOW": 0, "SMALL_BLOCK": block, "BLOCK": block}
+        return {"ADAPTIVE_NARROW_BELOW": 0, "ADAPTIVE_BLOCK": block}
+    return {"NARROW_BELOW": 0, "TINY_BELOW": 0, "SMALL_BLOCK": block, "BLOCK": block}
 
 
 def timed_run(grid, block, adaptive, t_end, repeats):
     """Best seconds of `sweep.run` with ``block`` lanes per block (compiled first)."""
-    saved = {name: getattr(_config, name) for name in ("NARROW_BELOW", "SMALL_BLOCK", "BLOCK",
-                                                        "ADAPTIVE_BLOCK")}
+    saved = {name: getattr(_config, name) for name in (
+        "NARROW_BELOW", "TINY_BELOW", "SMALL_BLOCK", "BLOCK", "ADAPTIVE_NARROW_BELOW",
+        "ADAPTIVE_BLOCK")}
     options = dict(t_end=t_end, dt=DT, observe=("final",), progress=False)
     if adaptive:
         options.update(method="dopri5", rtol=1e-8, atol=1e-10, dt=0.1)
@@ -129,12 +132,14 @@ def markdown(r) -> str:
         lines.append(f"| {n} | " + " | ".join(f"{row[b]:.1f}" for b in FIXED_BLOCKS) +
                      f" | {'narrow' if best == 1 else best} |")
     lines += ["", f"Smallest n where a block beats the narrow path: **{r['crossover']}** "
-              f"(`NARROW_BELOW` is {r['narrow_below']}).", "",
+              f"(`NARROW_BELOW` is {r['narrow_below']}; `TINY_BLOCK` {r['tiny_block']} below "
+              f"{r['tiny_below']} trajectories).", "",
               f"## dopri5 (rtol 1e-8), {r['n_large']} starts: seconds per run", "",
               "| " + " | ".join(f"block {b}" for b in ADAPTIVE_BLOCKS) + " |",
               "|---" * len(ADAPTIVE_BLOCKS) + "|",
               "| " + " | ".join(f"{r['adaptive_large'][b]:.3f}" for b in ADAPTIVE_BLOCKS) + " |",
-              "", f"`ADAPTIVE_BLOCK` is {r['adaptive_block']}.", "",
+              "", f"`ADAPTIVE_BLOCK` is {r['adaptive_block']}, the narrow path below "
+              f"{r['adaptive_narrow_below']} trajectories.", "",
               "| trajectories | t_end (s) | narrow (s) | block 64 (s) |", "|---|---|---|---|"]
     for n, row in r["adaptive_small"].items():
         lines.append(f"| {n} | {r['t_end'] * max(1, 256 // int(n)):g} | {row[1]:.4f} | "
@@ -161,9 +166,11 @@ def main(argv=None) -> int:
     result = {"date": time.strftime("%Y-%m-%d %H:%M"), "machine": machine(),
               "llvm_cpu": llvm.get_host_cpu_name(), "details": machine_details(),
               "repeats": repeats, "fixed": fixed, "crossover": crossover,
-              "narrow_below": _config.NARROW_BELOW, "n_large": n_large,
+              "narrow_below": _config.NARROW_BELOW, "tiny_block": _config.TINY_BLOCK,
+              "tiny_below": _config.TINY_BELOW, "n_large": n_large,
               "adaptive_large": large, "adaptive_small": small,
-              "adaptive_block": _config.ADAPTIVE_BLOCK, "t_end": t_end}
+              "adaptive_block": _config.ADAPTIVE_BLOCK,
+              "adaptive_narrow_below": _config.ADAPTIVE_NARROW_BELOW, "t_end": t_end}
     out = args.out / ("blocks_quick" if args.quick else "blocks")
     out.parent.mkdir(parents=True, exist_ok=True)
     out.with_suffix(".json").write_text(json.dumps(result, indent=1, default=str))

@@ -60,12 +60,24 @@ SINE_TABLE_STEPS = 1 << 21
 
 #: Grids of fewer trajectories than this run one trajectory per block (no padding
 #: lanes, the lanes plain variables: `sweep.kernels.lanes.scalar_lanes`): one trajectory
-#: x 10^6 RK4 steps of the full scene ran at 33 M useful steps/s alone, 2.1 M/s in a
-#: block of 64 (``benchmarks/run_all.py``, 2026-11-25; 21 M/s alone before the sine and
-#: the one-lane kernel changed), while 16 trajectories ran faster in blocks of 8-64
-#: (24-27 M/s against 19 M/s one per block, busy cores; measured before that change, so
-#: the crossover may now be higher).
-NARROW_BELOW = 8
+#: x 10^6 RK4 steps of the full scene runs at 35 M useful steps/s alone, 6.2 M/s in a
+#: block of 64 (``benchmarks/run_all.py``); from 4 trajectories on, blocks of
+#: `TINY_BLOCK` are faster (``benchmarks/blocks.py``, 2026-11-25, AMD EPYC Zen 5, 2 cores:
+#: 1, 2, 4 trajectories 35 / 69 / 68 M/s narrow against 22 / 42 / 84 in blocks of 16).
+NARROW_BELOW = 4
+
+#: Lanes per block for grids of `NARROW_BELOW` to `TINY_BELOW` trajectories (without
+#: early stop): blocks of 64 would leave a core idle there (one block for 64 starts), and
+#: blocks of 8 are not vectorised. Measured (``benchmarks/blocks.py``, the full scene,
+#: M useful trajectory-steps/s, 16 / 64 lanes): 8 starts 165 / 47, 32 starts 626 / 186,
+#: 64 starts 630 / 370, 128 starts 631 / 712.
+TINY_BLOCK = 16
+TINY_BELOW = 128
+
+#: dopri5's narrow path (one trajectory per block) below this many trajectories: it
+#: beat blocks of 64 up to 12 trajectories (4.5 against 4.9 ms) and lost from 16 on
+#: (4.4 against 4.0 ms; ``benchmarks/blocks.py``, same machine).
+ADAPTIVE_NARROW_BELOW = 16
 
 #: numba ``boundscheck``: off in production; tests index-check through the oracle.
 BOUNDSCHECK = False

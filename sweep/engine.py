@@ -368,10 +368,12 @@ def _check_device(device, integrator) -> None:
 
 def _block(n: int, stop_early: bool) -> int:
     """Trajectories per block of a fixed-step run of ``n`` (see `sweep._config`): one
-    each for a handful, small blocks for small grids and early stop, else
-    `_config.BLOCK`."""
+    each for a handful, 16 for a few dozen, small blocks for small grids and early
+    stop, else `_config.BLOCK`."""
     if n < _config.NARROW_BELOW:
         return 1
+    if n < _config.TINY_BELOW and not stop_early:
+        return _config.TINY_BLOCK
     if stop_early or n < 16 * _config.BLOCK:
         return _config.SMALL_BLOCK
     return _config.BLOCK
@@ -445,7 +447,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         save=save_every is not None,
         stop_early=bool(stop_early),
         method=integrator,
-        block=(1 if grid.size < _config.NARROW_BELOW else _config.ADAPTIVE_BLOCK)
+        block=(1 if grid.size < _config.ADAPTIVE_NARROW_BELOW else _config.ADAPTIVE_BLOCK)
         if integrator.adaptive else _block(grid.size, stop_early),
         # a settled trajectory's lane takes the next waiting one (no idle lanes)
         refill=refill,

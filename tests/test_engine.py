@@ -86,7 +86,7 @@ def test_compiled_kernels_have_the_scene_terms_only_and_vectorised_lanes(tmp_pat
         for model in ("linear", "nonlinear"):
             sweep.run(sweep.Scene(model=model), sweep.Grid(theta0=[0.1 * k for k in range(1, 11)]),
                       t_end=1.0, dt=0.1, observe=("final",))
-            # the spec sweep.run compiled (a ten-trajectory grid runs in a small block)
+            # the spec sweep.run compiled (a ten-trajectory grid runs in a block of 16)
             kernel = _kernels.build(_kernels.KernelSpec(model, (), ("final",),
                                                         block=sweep.engine._block(10, False)))
             ir = "".join(kernel.inspect_llvm().values())
