@@ -92,22 +92,22 @@ def _seconds(fn) -> float:
     return time.perf_counter() - start
 
 
-def fixed_crossover(sizes, work, repeats):
+def fixed_crossover(sizes, work, repeats, blocks=FIXED_BLOCKS):
     """Per n: M useful trajectory-steps/s for each block size."""
     rows = {}
     for n in sizes:
         steps = max(2000, int(work / n))
         grid = grid_of(n)
         rows[n] = {b: n * steps / timed_run(grid, b, False, steps * DT, repeats) / 1e6
-                   for b in FIXED_BLOCKS}
+                   for b in blocks}
         print(f"RK4 n = {n}: " + ", ".join(f"block {b}: {r:.1f}" for b, r in rows[n].items()),
               flush=True)
     return rows
 
 
-def adaptive_blocks(n_large, sizes, t_end, repeats):
+def adaptive_blocks(n_large, sizes, t_end, repeats, blocks=ADAPTIVE_BLOCKS):
     """dopri5: seconds per block size on a large grid, and narrow vs 64 for small n."""
-    large = {b: timed_run(grid_of(n_large), b, True, t_end, repeats) for b in ADAPTIVE_BLOCKS}
+    large = {b: timed_run(grid_of(n_large), b, True, t_end, repeats) for b in blocks}
     print("dopri5, " + str(n_large) + " starts: " +
           ", ".join(f"block {b}: {s:.3f} s" for b, s in large.items()), flush=True)
     small = {}
@@ -120,24 +120,25 @@ def adaptive_blocks(n_large, sizes, t_end, repeats):
 
 
 def markdown(r) -> str:
+    fixed_blocks, adaptive = r["fixed_blocks"], r["adaptive_blocks"]
     lines = [f"# Block sizes ({r['date']})", "",
              f"Machine: {r['machine']} (LLVM: {r['llvm_cpu']}); `sweep.run`, best of "
              f"{r['repeats']}, configurations of one size in alternation.", "",
              "## Fixed-step RK4, full scene: M useful trajectory-steps/s", "",
              "| trajectories | " + " | ".join("narrow (1 lane)" if b == 1 else f"block {b}"
-                                              for b in FIXED_BLOCKS) + " | fastest |",
-             "|---" * (len(FIXED_BLOCKS) + 2) + "|"]
+                                              for b in fixed_blocks) + " | fastest |",
+             "|---" * (len(fixed_blocks) + 2) + "|"]
     for n, row in r["fixed"].items():
         best = max(row, key=row.get)
-        lines.append(f"| {n} | " + " | ".join(f"{row[b]:.1f}" for b in FIXED_BLOCKS) +
+        lines.append(f"| {n} | " + " | ".join(f"{row[b]:.1f}" for b in fixed_blocks) +
                      f" | {'narrow' if best == 1 else best} |")
     lines += ["", f"Smallest n where a block beats the narrow path: **{r['crossover']}** "
               f"(`NARROW_BELOW` is {r['narrow_below']}; `TINY_BLOCK` {r['tiny_block']} below "
               f"{r['tiny_below']} trajectories).", "",
               f"## dopri5 (rtol 1e-8), {r['n_large']} starts: seconds per run", "",
-              "| " + " | ".join(f"block {b}" for b in ADAPTIVE_BLOCKS) + " |",
-              "|---" * len(ADAPTIVE_BLOCKS) + "|",
-              "| " + " | ".join(f"{r['adaptive_large'][b]:.3f}" for b in ADAPTIVE_BLOCKS) + " |",
+              "| " + " | ".join(f"block {b}" for b in adaptive) + " |",
+              "|---" * len(adaptive) + "|",
+              "| " + " | ".join(f"{r['adaptive_large'][b]:.3f}" for b in adaptive) + " |",
               "", f"`ADAPTIVE_BLOCK` is {r['adaptive_block']}, the narrow path below "
               f"{r['adaptive_narrow_below']} trajectories.", "",
               "| trajectories | t_end (s) | narrow (s) | block 64 (s) |", "|---|---|---|---|"]
@@ -153,19 +154,23 @@ def main(argv=None) -> int:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--out", type=Path, default=HERE / "results")
     args = parser.parse_args(argv)
-    if args.quick:
+    if args.quick:  # few kernels: each block is a kernel compiled for seconds
         sizes, work, n_large, t_end, repeats = (1, 8), 2e4, 256, 2.0, 1
+        fixed_blocks, adaptive = (1, 16), (64,)
     else:
         sizes, work, n_large, t_end, repeats = ((1, 2, 4, 6, 8, 12, 16, 24, 32, 48, 64, 128),
                                                 2e7, 8192, 20.0, args.repeats)
+        fixed_blocks, adaptive = FIXED_BLOCKS, ADAPTIVE_BLOCKS
     import llvmlite.binding as llvm
 
-    fixed = fixed_crossover(sizes, work, repeats)
+    fixed = fixed_crossover(sizes, work, repeats, fixed_blocks)
     crossover = next((n for n, row in fixed.items() if max(row, key=row.get) != 1), None)
-    large, small = adaptive_blocks(n_large, [n for n in sizes if n <= 64], t_end, repeats)
+    large, small = adaptive_blocks(n_large, [n for n in sizes if n <= 64], t_end, repeats,
+                                   adaptive)
     result = {"date": time.strftime("%Y-%m-%d %H:%M"), "machine": machine(),
               "llvm_cpu": llvm.get_host_cpu_name(), "details": machine_details(),
-              "repeats": repeats, "fixed": fixed, "crossover": crossover,
+              "repeats": repeats, "fixed_blocks": fixed_blocks, "adaptive_blocks": adaptive,
+              "fixed": fixed, "crossover": crossover,
               "narrow_below": _config.NARROW_BELOW, "tiny_block": _config.TINY_BLOCK,
               "tiny_below": _config.TINY_BELOW, "n_large": n_large,
               "adaptive_large": large, "adaptive_small": small,
