@@ -26,6 +26,12 @@ per width) and into every dataset's ``vector_width`` attribute. Results do not d
 on it: the kernels have no fast-math reassociation and write their fused
 multiply-adds explicitly, so each lane does the same operations in any width
 (``tests/test_vector_width.py`` checks bits).
+
+Two more settings of the kernels' machine code ride on the same hook, for the same
+functions only: the arrays a kernel allocates (its lanes) are aligned to
+`sweep._config.LANE_ALIGNMENT` bytes (numba's ``get_preferred_array_alignment``), and a
+float32 kernel is vectorised by its narrowest type (`_by_narrowest_type`,
+`sweep._config.SINGLE_BY_NARROWEST`).
 """
 
 from __future__ import annotations
