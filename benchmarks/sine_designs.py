@@ -47,6 +47,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import inspect
 import json
 import math
 import os
@@ -434,6 +435,21 @@ def accuracy(sin, cos, sincos, scale=1.0) -> dict:
 
 
 # --------------------------------------------------------------------------- the patch
+def _candidate_source() -> str:
+    """The candidate as vecmath would hold it, taken from this file, so that the patch is
+    the code measured: the constants and the Horner polynomial, then ``sin_pi``,
+    ``cos_pi`` and ``sincos_pi`` named ``sin``, ``cos`` and ``sincos`` (vecmath has
+    its own ``PIO2_HI``, ``PIO2_LO`` and ``_MAGIC``)."""
+    text = Path(__file__).read_text()
+    head = text[text.index("INV_PI = "):text.index("@njit(cache=True, **_JIT)\ndef "
+                                                   "_odd_poly_estrin")]
+    head = "".join(line for line in head.splitlines(keepends=True)
+                   if not line.startswith(("PIO2_HI, PIO2_LO = ", "_MAGIC = ")))
+    functions = "\n\n".join(inspect.getsource(f.py_func)
+                             for f in (sin_pi, cos_pi, sincos_pi))
+    return head + re.sub(r"\b(sin|cos|sincos)_pi\b", r"\1", functions)
+
+
 def patch_text() -> str:
     """A unified diff of sweep/kernels/vecmath.py with sin, cos and sincos replaced by
     this file's candidate (the module docstring's algorithm notes left to whoever
@@ -442,66 +458,9 @@ def patch_text() -> str:
     src = path.read_text()
     start = src.index("@njit(cache=True, **_JIT)\ndef _reduce(x):")
     end = src.index("#: ``x ** -0.2`` read off the bits")
-    new = '''#: One reduction by pi (issue 29; benchmarks/sine_designs.py measured it against the
-#: reduction by pi/2 with two polynomials): pi = PI_HI + PI_LO - 3.0e-33.
-INV_PI = 0.3183098861837907
-PI_HI = 3.141592653589793         # 0x1.921fb54442d18p+1
-PI_LO = 1.2246467991473532e-16    # 0x1.1a62633145c07p-53
-#: sin r ~ r + r^3 P(r^2) on |r| <= pi/2 + 1e-4, P's coefficients: the minimax fit of the
-#: relative error, degree 17, rounded one at a time (benchmarks/fit_sine.py; error with
-#: these float64 coefficients 2.9e-19). The sine: within 2**-52 of np.sin (two ulps of
-#: values near 1, where r**3 P ~ -0.57 carries the roundings) for |x| <= 1e12.
-M1 = -0.16666666666666666
-M2 = 0.008333333333333207
-M3 = -0.0001984126984121248
-M4 = 2.7557319211569482e-06
-M5 = -2.505210690442292e-08
-M6 = 1.6058941002310493e-10
-M7 = -7.643019371886964e-13
-M8 = 2.7214195512770984e-15
-
-
-@njit(cache=True, **_JIT)
-def _odd_poly(r):
-    """sin r for |r| <= pi/2 (+1e-4): r + r^3 P(r^2), P by Horner (Estrin's scheme
-    reached 3 ulps), every multiply-add fused (`fma`)."""
-    z = r * r
-    p = fma(fma(fma(fma(fma(fma(fma(M8, z, M7), z, M6), z, M5), z, M4), z, M3), z, M2),
-            z, M1)
-    return fma(r * z, p, r)
-
-
-@njit(cache=True, **_JIT)
-def sin(x):
-    """sin(x) in float64, branch-free (vectorisable); accurate for |x| <~ 1e12:
-    ``k = round(x/pi)`` (magic number), ``r = x - k pi`` (two FMAs, the first exact),
-    ``sin x = (-1)**k sin r`` (k's parity: the magic sum's low bit)."""
-    y = fma(x, INV_PI, _MAGIC)
-    kf = y - _MAGIC
-    r = fma(-kf, PI_LO, fma(-kf, PI_HI, x))
-    v = _odd_poly(r)
-    return -v if (_bits_of(y) & 1) else v
-
-
-@njit(cache=True, **_JIT)
-def cos(x):
-    """cos(x) = (-1)**(k+1) sin r with ``x = (2k + 1) pi/2 + r``, ``k = round(x/pi -
-    1/2)``: a reduction by the odd multiples of pi/2, the sine's polynomial."""
-    y = fma(x, INV_PI, -0.5) + _MAGIC
-    kf = y - _MAGIC
-    mf = 2.0 * kf + 1.0
-    r = fma(-mf, PIO2_LO, fma(-mf, PIO2_HI, x))
-    v = _odd_poly(r)
-    return v if (_bits_of(y) & 1) else -v
-
-
-@njit(cache=True, **_JIT)
-def sincos(x):
-    """(sin(x), cos(x)): the bits of `sin` and `cos` (two reductions)."""
-    return sin(x), cos(x)
-
-
-'''
+    new = ("#: One reduction by pi (issue 29; benchmarks/sine_designs.py measured it "
+           "against the\n#: reduction by pi/2 with two polynomials).\n"
+           + _candidate_source() + "\n\n")
     new_src = src[:start] + new + src[end:]
     with tempfile.TemporaryDirectory() as tmp:
         a, b = Path(tmp) / "a.py", Path(tmp) / "b.py"
