@@ -1,6 +1,7 @@
 """What the benchmarks say about the machine they ran on: one line for a report
-(`machine`), the CPU's feature flags (`cpu_flags`) and run_all.py's details (CPU,
-SIMD, gcc and what -march=native means to it, numba: `machine_details`)."""
+(`machine`), the CPU's feature flags (`cpu_flags`), run_all.py's details (CPU,
+SIMD, gcc and what -march=native means to it, numba, LLVM's CPU name:
+`machine_details`) and both with the date (`stamp`)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import re
 import shutil
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 
 import numba
@@ -98,6 +100,16 @@ def machine_details() -> dict:
                             if f in flags)
     info["avx512f"] = "avx512f" in flags
     import llvmlite
+    import llvmlite.binding
+
     info.update(gcc_info(), numba=numba.__version__, llvmlite=llvmlite.__version__,
-                numba_threads=numba.get_num_threads())
+                numba_threads=numba.get_num_threads(),
+                llvm_cpu=llvmlite.binding.get_host_cpu_name())  # what LLVM tunes for
     return info
+
+
+def stamp() -> dict:
+    """When and where a benchmark ran: ``date`` (local time), ``machine`` (one line)
+    and ``details`` (`machine_details`), to open a results dict with."""
+    return {"date": time.strftime("%Y-%m-%d %H:%M"), "machine": machine(),
+            "details": machine_details()}

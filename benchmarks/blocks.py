@@ -41,7 +41,7 @@ import sweep  # noqa: E402
 from sweep import _config  # noqa: E402
 
 from _c_builds import AMPLITUDE, DAMPING, DT, FREQUENCY, G_OVER_L, PHASE  # noqa: E402
-from _machine import machine, machine_details  # noqa: E402
+from _machine import stamp  # noqa: E402
 
 SCENE = sweep.Scene(gravity=G_OVER_L, length=1.0, model="nonlinear",
                     effects=(sweep.Damping(DAMPING), sweep.Forcing(AMPLITUDE, FREQUENCY, PHASE)))
@@ -122,7 +122,7 @@ def adaptive_blocks(n_large, sizes, t_end, repeats, blocks=ADAPTIVE_BLOCKS):
 def markdown(r) -> str:
     fixed_blocks, adaptive = r["fixed_blocks"], r["adaptive_blocks"]
     lines = [f"# Block sizes ({r['date']})", "",
-             f"Machine: {r['machine']} (LLVM: {r['llvm_cpu']}); `sweep.run`, best of "
+             f"Machine: {r['machine']} (LLVM: {r['details']['llvm_cpu']}); `sweep.run`, best of "
              f"{r['repeats']}, configurations of one size in alternation.", "",
              "## Fixed-step RK4, full scene: M useful trajectory-steps/s", "",
              "| trajectories | " + " | ".join("narrow (1 lane)" if b == 1 else f"block {b}"
@@ -161,15 +161,12 @@ def main(argv=None) -> int:
         sizes, work, n_large, t_end, repeats = ((1, 2, 4, 6, 8, 12, 16, 24, 32, 48, 64, 128),
                                                 2e7, 8192, 20.0, args.repeats)
         fixed_blocks, adaptive = FIXED_BLOCKS, ADAPTIVE_BLOCKS
-    import llvmlite.binding as llvm
-
     fixed = fixed_crossover(sizes, work, repeats, fixed_blocks)
     crossover = next((n for n, row in fixed.items() if max(row, key=row.get) != 1), None)
     large, small = adaptive_blocks(n_large, [n for n in sizes if n <= 64], t_end, repeats,
                                    adaptive)
-    result = {"date": time.strftime("%Y-%m-%d %H:%M"), "machine": machine(),
-              "llvm_cpu": llvm.get_host_cpu_name(), "details": machine_details(),
-              "repeats": repeats, "fixed_blocks": fixed_blocks, "adaptive_blocks": adaptive,
+    result = {**stamp(), "repeats": repeats, "fixed_blocks": fixed_blocks,
+              "adaptive_blocks": adaptive,
               "fixed": fixed, "crossover": crossover,
               "narrow_below": _config.NARROW_BELOW, "tiny_block": _config.TINY_BLOCK,
               "tiny_below": _config.TINY_BELOW, "n_large": n_large,

@@ -29,13 +29,12 @@ import subprocess
 import sys
 import tempfile
 import textwrap
-import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from _machine import machine, machine_details  # noqa: E402
+from _machine import cpu_flags, stamp  # noqa: E402
 
 WIDTHS = ("256", "512", "llvm")
 
@@ -106,7 +105,7 @@ def compare(n: int, steps: int, rounds: int, cpu_name: str | None) -> dict:
 
 def markdown(result: dict) -> str:
     lines = [f"# Kernel vector width ({result['date']})", "",
-             f"Machine: {result['machine']} (LLVM calls it {result['llvm_cpu']}, family "
+             f"Machine: {result['machine']} (LLVM calls it {result['details']['llvm_cpu']}, family "
              f"{result['details'].get('CPU family')} model {result['details'].get('Model')}); "
              f"{result['trajectories']} trajectories x "
              f"{result['steps']} RK4 steps of the full scene (final state), best of "
@@ -134,19 +133,12 @@ def main(argv=None) -> int:
                         help="folder of the results (default benchmarks/results)")
     args = parser.parse_args(argv)
     n, steps, rounds = (4096, 200, 2) if args.quick else (512 * 256, 2000, args.rounds)
-    from _machine import cpu_flags
-
     runs = {"this CPU, LLVM's tuning for it": compare(n, steps, rounds, None)}
     if "avx512f" in cpu_flags() and not args.quick:  # (tests/test_vector_width.py
         # checks the emulated tuning's machine code)
         runs["LLVM told the CPU is Intel Rocket Lake (NUMBA_CPU_NAME=rocketlake), run "
              "here"] = compare(n, steps, rounds, "rocketlake")
-    import llvmlite.binding as llvm
-
-    result = {"date": time.strftime("%Y-%m-%d %H:%M"), "machine": machine(),
-              "llvm_cpu": llvm.get_host_cpu_name(),
-              "details": machine_details(), "trajectories": n, "steps": steps,
-              "rounds": rounds, "runs": runs}
+    result = {**stamp(), "trajectories": n, "steps": steps, "rounds": rounds, "runs": runs}
     out = args.out / ("vector_width_quick" if args.quick else "vector_width")
     out.parent.mkdir(parents=True, exist_ok=True)
     out.with_suffix(".json").write_text(json.dumps(result, indent=1, default=str))
