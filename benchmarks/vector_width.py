@@ -53,7 +53,7 @@ WORKER = textwrap.dedent("""
     grid = sweep.Grid(theta0=theta0, omega0=omega0)
     kw = dict(t_end={steps} * DT, dt=DT, observe=("final",))
     spec = sweep.engine.warm_up(scene, grid, **kw)
-    asm = "".join(kernels.build(spec).inspect_asm().values())
+    asm = "".join(kernels.compiled(kernels.build(spec)).inspect_asm().values())
     registers = {{r: len(re.findall(r"\\bv\\w+pd\\s+%" + r, asm)) for r in ("zmm", "ymm")}}
     print(json.dumps({{"ready": True, "registers": registers}}), flush=True)
     for line in sys.stdin:

@@ -311,3 +311,17 @@ def test_dopri5_lanes_table_of_the_work_precision_script():
         assert min(row["one_at_a_time_s"], row["small_blocks_s"], row["lanes_s"]) > 0
         assert row["speedup"] == row["one_at_a_time_s"] / row["lanes_s"]
     assert len(table) == 6 + len(rows) + 1 and table[-2].startswith("| uneven")
+
+
+def test_compile_time_script(tmp_path):
+    """benchmarks/compile_time.py --quick: both designs compile two workloads' kernels
+    from empty caches and give the same bits (main returns 1 when they differ)."""
+    compile_time = importlib.import_module("compile_time")
+    assert compile_time.main(["--quick", "--out", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "compile_time_quick.json").read_text())
+    assert list(result["rows"]) == list(compile_time.QUICK)
+    for row in result["rows"].values():
+        assert row["same_bits"]
+        assert row["threads"]["compile_s"] > 0 and row["prange"]["compile_s"] > 0
+    assert "| RK4, one trajectory (one lane) |" in \
+        (tmp_path / "compile_time_quick.md").read_text()

@@ -33,9 +33,10 @@ SCRIPT = textwrap.dedent("""
     ds = sweep.run(sweep.Scene(model="linear"), sweep.Grid(theta0=[0.1]), t_end=1.0,
                    dt=0.01, observe=("final",))
     kernel = kernels.build(kernels.KernelSpec("linear", (), ("final",), block=1))
+    stats = kernels.compiled(kernel).stats
     print(json.dumps({"theta": float(ds.theta_final[0]),
-                      "hits": sum(kernel.stats.cache_hits.values()),
-                      "misses": sum(kernel.stats.cache_misses.values())}))
+                      "hits": sum(stats.cache_hits.values()),
+                      "misses": sum(stats.cache_misses.values())}))
 """)
 
 

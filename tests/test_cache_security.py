@@ -52,7 +52,7 @@ SCRIPT = textwrap.dedent(f"""
     print(json.dumps({{
         "theta": float(ds.theta_final[0]),
         "misses": kernels.build.cache_info().misses,
-        "hits": sum(kernel.stats.cache_hits.values()),
+        "hits": sum(kernels.compiled(kernel).stats.cache_hits.values()),
         "module": module,
         "mode": stat.S_IMODE(Path(module).parent.stat().st_mode),
         "warnings": [str(w.message) for w in caught

@@ -89,7 +89,7 @@ def test_compiled_kernels_have_the_scene_terms_only_and_vectorised_lanes(tmp_pat
             # the spec sweep.run compiled (a ten-trajectory grid runs in a block of 16)
             kernel = _kernels.build(_kernels.KernelSpec(model, (), ("final",),
                                                         block=sweep.engine._block(10, False)))
-            ir = "".join(kernel.inspect_llvm().values())
+            ir = "".join(_kernels.compiled(kernel).inspect_llvm().values())
             assert ir, "not compiled in this process"
             print(model, re.search(r"@(llvm\\.sin\\.[fv]|sin)\\(", ir) is not None,
                   two_over_pi in ir, re.search(r"<\\d+ x double>", ir) is not None)
@@ -273,7 +273,8 @@ def test_fresh_process_loads_the_kernel_from_the_disk_cache(tmp_path):
         # the spec sweep.run built: a one-trajectory grid runs one trajectory per block
         kernel = _kernels.build(_kernels.KernelSpec("nonlinear", ("damping",),
                                                     ("final", "energy"), block=1))
-        print(sum(kernel.stats.cache_hits.values()), sum(kernel.stats.cache_misses.values()))
+        stats = _kernels.compiled(kernel).stats
+        print(sum(stats.cache_hits.values()), sum(stats.cache_misses.values()))
     """)
     env = dict(os.environ, SWEEP_CACHE_DIR=str(tmp_path))
     runs = [subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
@@ -288,7 +289,7 @@ def test_warm_up_compiles_the_kernel_the_run_then_uses():
     kwargs = dict(t_end=1.0, dt=0.01, observe=("final", "theta_max"))
     spec = sweep.engine.warm_up(scene, grid, **kwargs)
     assert spec.block == sweep._config.BLOCK and spec.observe == ("final", "theta_max")
-    kernel = _kernels.build(spec)
+    kernel = _kernels.compiled(_kernels.build(spec))
     assert len(kernel.signatures) == 1  # compiled (or loaded) for the run's types
     misses = _kernels.build.cache_info().misses
     sweep.run(scene, grid, **kwargs)

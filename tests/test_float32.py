@@ -310,7 +310,7 @@ def test_float32_kernel_computes_in_float32_vectors(tmp_path):
         out = np.empty((64, kernels.n_columns(spec)))
         kernel(params, 0.0, 0.01, 10, 0, 1, out, np.empty(64, dtype=np.int8),
                np.empty((0, 2, 0)))
-        ir = "".join(kernel.__globals__["kernel_single"].inspect_llvm().values())
+        ir = "".join(kernels.compiled(kernel).inspect_llvm().values())
         # multiplies and fused multiply-adds (the kernels write theirs: llvm.fma)
         print(len(re.findall(r"(?:fmul[^\\n]*<\\d+ x float>|@llvm\\.fma\\.v\\d+f32\\()", ir)),
               len(re.findall(r"(?:fmul[^\\n]*<\\d+ x double>|@llvm\\.fma\\.v\\d+f64\\()", ir)))
@@ -342,7 +342,7 @@ def test_a_pivot_drive_keeps_the_step_in_float32(model, tmp_path):
         params = np.ones((64, len(sweep.physics.parameter_names())))
         kernel(params, 0.0, 0.01, 10, 0, 1, np.empty((64, kernels.n_columns(spec))),
                np.empty(64, dtype=np.int8), np.empty((0, 2, 0)))
-        for cres in kernel.__globals__["kernel_single"].overloads.values():
+        for cres in kernels.compiled(kernel).overloads.values():
             types = cres.type_annotation.typemap
             print(" ".join(sorted({{k.split(".")[0] for k, v in types.items()
                                    if str(v) == "float64" and not k.startswith(("$", "arg."))}})))

@@ -86,10 +86,11 @@ def test_refill_does_not_depend_on_the_number_of_groups(groups):
     waiting = _call(KernelSpec("nonlinear", ("damping", "forcing"), ("strobe",), **kwargs),
                     params)
     spec = KernelSpec("nonlinear", ("damping", "forcing"), ("strobe",), refill=True, **kwargs)
-    grouped = kernels.build(spec).__globals__["grouped"]  # the compiled kernel itself
+    grouped = kernels.compiled(kernels.build(spec))  # the compiled kernel itself
     out = np.full((params.shape[0], kernels.n_columns(spec)), -7.0)
     status = np.full(params.shape[0], 99, dtype=np.int8)
-    grouped(params, 0.0, DT, N_STEPS, 150 * 20, 1, out, status, np.empty((0, 2, 0)), groups)
+    grouped(params, 0.0, DT, N_STEPS, 150 * 20, 1, out, status, np.empty((0, 2, 0)), groups,
+            0, groups)  # every group, in this thread
     np.testing.assert_array_equal(status, waiting[1])
     assert out.tobytes() == waiting[0].tobytes()
 

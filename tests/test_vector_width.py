@@ -107,10 +107,10 @@ _ASM = textwrap.dedent("""
     for width in ("llvm", 256, 512):
         sweep._config.VECTOR_WIDTH = width
         spec = sweep.engine.warm_up(scene, grid, t_end=1.0, dt=0.01)  # runs nothing
-        asm = "".join(kernels.build(spec).inspect_asm().values())
+        asm = "".join(kernels.compiled(kernels.build(spec)).inspect_asm().values())
         counts[str(width)] = {r: len(re.findall(r"\\bv\\w+pd\\s+%" + r, asm))
                               for r in ("zmm", "ymm")}
-        llvm_ir = "".join(kernels.build(spec).inspect_llvm().values())
+        llvm_ir = "".join(kernels.compiled(kernels.build(spec)).inspect_llvm().values())
         counts[str(width)]["alignments"] = sorted(set(re.findall(
             r"NRT_MemInfo_alloc_aligned\\(i64 [^,]+, i32 (\\d+)\\)", llvm_ir)))
     # plain numba code of the user's, compiled in the same process after the kernels
@@ -200,8 +200,8 @@ def test_float32_kernels_fill_the_register_and_give_the_same_bits(monkeypatch, t
                   dtype="float32")
         runs[narrowest] = sweep.run(SCENE, grid, progress=False, **kw)
         spec = sweep.engine.prepare(SCENE, grid, **kw)[1]
-        module = sys.modules[sweep.kernels.build(spec).__module__]  # float32: a wrapper
-        asm = "".join(module.kernel_single.inspect_asm().values())
+        kernel = sweep.kernels.compiled(sweep.kernels.build(spec))
+        asm = "".join(kernel.inspect_asm().values())
         register = "zmm" if AVX512 else "ymm"
         packed[narrowest] = len(re.findall(r"\bv\w+ps\s+%" + register, asm))
     assert packed[True] > 2 * packed[False], packed

@@ -76,8 +76,9 @@ CACHE_SIZE = 3
 #: Samples of theta(t) kept for the trajectory panel (save_every is chosen to stay under).
 TRAJECTORY_SAMPLES = 4000
 
-#: One computation at a time in this process, whichever session asks: numba's parallel
-#: kernels must not be launched from two threads at once (its workqueue layer aborts).
+#: One computation at a time in this process, whichever session asks: the computations
+#: would share the cores anyway, and `sweep.maps`' period finder is a numba parallel
+#: loop, which numba's workqueue layer refuses to run from two threads at once.
 COMPUTE_LOCK = threading.RLock()
 
 #: `sweep.run` keywords the explorer takes from ``run_kwargs`` and passes on unchanged.

@@ -6,15 +6,15 @@ Modules, each one concern: `spec` (what a kernel is built for, status codes, fit
 checks), `terms` (the physics as source, from `sweep.physics`), `steppers` (one step of
 a method, from `sweep.methods`), `snippets` (observables), `lanes` (per-lane code of a
 block), `fixed` and `adaptive` (the two kernel bodies), `source` (the module text),
-`cache` (build, memo, disk cache), `vecmath` (vectorisable sin/cos, float64 and
-float32), `precision` (a module made float32), `cuda` (the same pieces as one CUDA
-thread per trajectory).
+`cache` (build, memo, disk cache), `threads` (a kernel's blocks on threads), `vecmath`
+(vectorisable sin/cos, float64 and float32), `precision` (a module made float32),
+`cuda` (the same pieces as one CUDA thread per trajectory).
 
 Reads `sweep.physics`, `sweep.methods` and `sweep.observables`; nothing here imports
 the engine, the execution back ends or the maps.
 """
 
-from .cache import build
+from .cache import build, compiled
 from .source import source
 from .spec import (
     DEVICES,
@@ -34,6 +34,7 @@ from .spec import (
 )
 
 __all__ = ["DEVICES", "DTYPES", "KernelSpec", "Status", "build", "check_device", "check_dtype",
+           "compiled",
            "check_method_fits",
            "check_observables_fit", "check_tangent_fits", "declarations", "failure_summary",
            "method_of", "n_columns", "source", "status_counts"]

@@ -162,13 +162,19 @@ from sweep.kernels.vecmath import inverse_fifth_root as vroot5
 BLOCK = {spec.block}
 
 
-@njit(parallel=True, **JIT)
 def kernel(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats):
+    run_blocks(blocks, (params.shape[0] + BLOCK - 1) // BLOCK,
+               params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats)
+
+
+@njit(nogil=True, **JIT)
+def blocks(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats,
+           b_first, b_stop):
     TWO_PI = 2.0 * math.pi
     t_obs = t0 + t_transient
     h_min = 16.0 * 2.220446049250313e-16 * max(abs(t0), abs(t_end))
     n = params.shape[0]
-    for b in prange((n + BLOCK - 1) // BLOCK):
+    for b in range(b_first, b_stop):
         base = b * BLOCK
         n_real = min(BLOCK, n - base)
 {indent(nl.join(allocate(lane)), 2)}

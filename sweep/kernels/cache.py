@@ -33,7 +33,7 @@ from .. import _config
 from .source import source
 from .spec import KernelSpec
 
-__all__ = ["UnsafeCacheWarning", "build"]
+__all__ = ["UnsafeCacheWarning", "build", "compiled"]
 
 
 class UnsafeCacheWarning(UserWarning):
@@ -227,9 +227,9 @@ def build(spec: KernelSpec):
     Returns
     -------
     callable
-        The ``kernel`` of the generated module, compiled on first call: a numba
-        dispatcher, or for a refill kernel (`sweep.kernels.refill`) a Python function
-        that reads the thread count and calls one.
+        The ``kernel`` of the generated module: a Python function that calls the
+        module's numba function (compiled on its first call; `compiled`) on threads
+        (`sweep.kernels.threads`), or on the GPU for ``device="cuda"``.
 
     Warns
     -----
@@ -256,6 +256,14 @@ def _build(spec: KernelSpec, *settings):
     sys.modules[name] = module
     module_spec.loader.exec_module(module)
     return module.kernel
+
+
+def compiled(kernel):
+    """The numba function that does the work of a CPU kernel from `build`: its
+    ``blocks`` (a refill kernel's ``grouped``), for its machine code, types and cache
+    statistics (``inspect_asm``, ``overloads``, ``stats``)."""
+    names = kernel.__globals__
+    return names["grouped"] if "grouped" in names else names["blocks"]
 
 
 build.cache_info = _build.cache_info  # the memo's statistics and reset, as on a

@@ -1,14 +1,16 @@
 """The fixed-step kernel: trajectories in blocks of SIMD lanes (time at step n is
 ``t0 + n dt``).
 
-Trajectories go in blocks of ``spec.block`` SIMD lanes (one ``prange`` iteration per
-block); the time loop is outside and the lane loop inside, so the lane loop is
-straight-line arithmetic that LLVM vectorises (``vsin`` is branch-free). A partial last
-block is padded with copies of the last trajectory, so every lane runs the same code
-whatever the number of trajectories, blocks, chunks or threads: the results do not
-depend on how the work is cut. Per-lane state lives in small arrays ``lane_<name>``
-(plain variables in a kernel of one lane per block, `sweep.kernels.lanes.scalar_lanes`);
-observables write a per-block row buffer ``obuf``.
+Trajectories go in blocks of ``spec.block`` SIMD lanes; the compiled function
+``blocks`` integrates a range of blocks, one after the other, and the module's ``kernel``
+spreads the blocks over threads (`sweep.kernels.threads`). The time loop is outside and
+the lane loop inside, so the lane loop is straight-line arithmetic that LLVM vectorises
+(``vsin`` is branch-free). A partial last block is padded with copies of the last
+trajectory, so every lane runs the same code whatever the number of trajectories,
+blocks, chunks or threads: the results do not depend on how the work is cut. Per-lane
+state lives in small arrays ``lane_<name>`` (plain variables in a kernel of one lane per
+block, `sweep.kernels.lanes.scalar_lanes`); observables write a per-block row buffer
+``obuf``.
 
 Non-finite states are detected once, at the end (or when a trajectory stops early): a
 NaN never becomes finite again in this arithmetic (an infinite angle or velocity turns
@@ -211,12 +213,18 @@ def fixed_kernel(spec: KernelSpec, method) -> str:
 BLOCK = {spec.block}
 
 
-@njit(parallel=True, **JIT)
 def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
+    run_blocks(blocks, (params.shape[0] + BLOCK - 1) // BLOCK,
+               params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
+
+
+@njit(nogil=True, **JIT)
+def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
+           b_first, b_stop):
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(parts["preamble"]), 1)}
-    for b in prange((n + BLOCK - 1) // BLOCK):
+    for b in range(b_first, b_stop):
         base = b * BLOCK
         n_real = min(BLOCK, n - base)
 {indent(NL.join(_load(spec, p, "base") for p in shared), 2)}

@@ -99,11 +99,11 @@ def scalar_lanes(kernel: str, dtypes: dict[str, str]) -> str:
     ``tests/test_float32.py``); but the state stays in registers from one step to the
     next instead of making a round trip through memory on every step's critical path
     (one trajectory alone is latency-bound). The loops go too because numba's
-    ``prange`` lowering mishandled variables that live from one inner loop to the next
-    (measured: other bits). Exact for the fixed-step kernel, whose every lane loop
-    loads what it reads at its start and stores what it changes at its end
-    (`lane_loop`); not for kernels that read a lane array after changing the variable
-    without storing it (a rejected adaptive step).
+    ``prange`` lowering (which compiled the kernels until 0.3) mishandled variables that
+    live from one inner loop to the next (measured: other bits). Exact for the fixed-step
+    kernel, whose every lane loop loads what it reads at its start and stores what it
+    changes at its end (`lane_loop`); not for kernels that read a lane array after
+    changing the variable without storing it (a rejected adaptive step).
 
     Raises
     ------

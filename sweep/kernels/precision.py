@@ -17,7 +17,8 @@ float32. So a float32 module is the float64 module's text with
 - the working-precision lanes (angular velocity, parameters, stage values, drive sines)
   allocated as float32 (`sweep.kernels.fixed`), the float32 sine
   (`sweep.kernels.vecmath.sin32`) imported as ``vsin``;
-- the kernel renamed and wrapped by `wrapper`, which hands it the step ``F(dt)``.
+- the compiled function's step taken as ``dt_clock`` and stepped by ``F(dt_clock)``
+  (`clock`); the module's ``kernel`` passes its float64 arguments on unchanged.
 
 What stays float64, on purpose:
 
@@ -52,8 +53,7 @@ import io
 import re
 import tokenize
 
-__all__ = ["HEADER", "clock", "float64_symbols", "single", "single_drive_values", "single_loads",
-           "wrapper"]
+__all__ = ["HEADER", "clock", "float64_symbols", "single", "single_drive_values", "single_loads"]
 
 #: The float32 CPU module's import of the float32 sine (``F = np.float32`` is set
 #: after NumPy's import).
@@ -144,16 +144,3 @@ def clock(text: str) -> str:
                      text)
     text = _OFFSET.sub(lambda m: f"{m.group('lead')} = dt_clock * {m.group('c')}", text)
     return _TIMES.sub(lambda m: f"{m.group(1)} * dt_clock", text)
-
-
-def wrapper(name: str) -> str:
-    """Source of ``kernel`` with the fixed-step contract over the float32 kernel
-    ``name`` (the parameter table and the step stay float64: each trajectory's loads
-    round the table, `single_loads`, and the kernel its step, `clock`); outputs stay
-    float64."""
-    return f'''
-
-def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
-    """The float32 kernel {name} under the fixed-step contract (float64 arguments)."""
-    {name}(params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
-'''

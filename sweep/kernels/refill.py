@@ -2,7 +2,7 @@
 ``t_end``) writes its outputs and takes the next waiting trajectory, so no SIMD lane
 idles while its block's slowest trajectory finishes.
 
-There is one group per thread (``prange`` iteration ``b`` of ``G``); group ``b`` takes
+There is one group per thread (group ``b`` of ``G``, `sweep.kernels.threads`); it takes
 the trajectories ``b, b + G, b + 2 G, ...`` in turn, so every group draws on the whole
 chunk and the threads finish together whatever the order of slow and fast starts. A
 group advances ``BLOCK`` lanes at a time; each lane keeps its own step index
@@ -120,24 +120,24 @@ BLOCK = {spec.block}
 
 def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
     """One group of lanes per thread, but no more groups than n // BLOCK (one group
-    when n < BLOCK); the thread count is read here, as a cached kernel cannot read it
-    (numba's get_num_threads is a dynamic global, which turns the disk cache off)."""
+    when n < BLOCK), each group on a thread of its own (`sweep.kernels.threads`)."""
     if n_steps < 1:  # every lane steps before its first stop test
         raise ValueError(f"n_steps must be >= 1 for a refill kernel, got {{n_steps!r}}")
     n = params.shape[0]
-    grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
-            min(max(n // BLOCK, 1), n, get_num_threads()))
+    n_groups = min(max(n // BLOCK, 1), n, get_num_threads())
+    run_blocks(grouped, n_groups, params, t0, dt, n_steps, n_transient, save_every, out,
+               status, saved, n_groups)
 
 
-@njit(parallel=True, **JIT)
+@njit(nogil=True, **JIT)
 def grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
-            n_groups):
+            n_groups, g_first, g_stop):
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(parts["preamble"]), 1)}
 {indent(table, 1)}
-    for b in prange(n_groups):
-        first = np.int64(b)  # group b's first trajectory (the prange index may be unsigned)
+    for b in range(g_first, g_stop):
+        first = b  # group b's first trajectory
 {indent(NL.join(_load(spec, p, "first") for p in shared), 2)}
 {indent(NL.join(allocate(lane)), 2)}
         obuf = np.empty((BLOCK, {n_columns(spec)}))

@@ -33,7 +33,6 @@ NaN outputs (its saved samples from the failure on are NaN).
 from __future__ import annotations
 
 import hashlib
-import re
 from pathlib import Path
 
 from .. import _config
@@ -49,7 +48,6 @@ from .precision import (
     single,
     single_drive_values,
     single_loads,
-    wrapper,
 )
 from .refill import refill_kernel
 from .spec import (
@@ -132,7 +130,8 @@ from sweep.grid import GridRows
 # sweep.kernels.vecmath {_VECMATH_DIGEST} (numba's cache does not track inlined imports)
 import math
 import numpy as np
-from numba import get_num_threads, njit, prange
+from numba import get_num_threads, njit
+from sweep.kernels.threads import run_blocks
 {_VECMATH_IMPORT}
 from sweep.kernels.vectors import compile_with
 
@@ -149,7 +148,7 @@ JIT = {jit}
 
 def _precision(spec: KernelSpec, text: str) -> str:
     """The module in the spec's working precision: float64 as generated; float32 with
-    its literals and sine in float32 and the kernel wrapped (`sweep.kernels.precision`)."""
+    its literals and sine in float32 (`sweep.kernels.precision`)."""
     if spec.dtype == "float64":
         return _tidy(text)
     text = text.replace(_VECMATH_IMPORT, HEADER, 1).replace(
@@ -158,8 +157,7 @@ def _precision(spec: KernelSpec, text: str) -> str:
         spec.model, spec.effects))))
     # 2 pi for the observables (turns of the float64 angle): kept float64
     text = text.replace("TWO_PI = F(2.0) * F(math.pi)", "TWO_PI = 2.0 * math.pi")
-    text = re.sub(r"^def kernel\(", "def kernel_single(", text, flags=re.MULTILINE)
-    return _tidy(text + wrapper("kernel_single"))
+    return _tidy(text)
 
 
 def _tidy(text: str) -> str:

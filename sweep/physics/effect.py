@@ -63,7 +63,8 @@ RESERVED_SYMBOLS = frozenset({
     "step", "base", "params", "out", "status", "saved", "stats", "math", "np", "vsin",
     "vcos", "accel", "energy", "kernel", "prange", "njit", "JIT", "BLOCK", "TWO_PI",
     "acc", "tension", "done", "FTH", "TIME", "omega_max", "k", "p0", "f0", "DFTH",
-    "vsincos", "accel_jac",
+    "vsincos", "accel_jac", "blocks", "grouped", "run_blocks", "b_first", "b_stop",
+    "g_first", "g_stop", "n_groups",
 })
 
 

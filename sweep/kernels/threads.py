@@ -1,0 +1,106 @@
+"""Spread a CPU kernel's blocks of trajectories over threads.
+
+A generated CPU kernel (`sweep.kernels.fixed`, `sweep.kernels.adaptive`,
+`sweep.kernels.refill`) compiles its work as one serial numba function,
+``blocks(..., b_first, b_stop)``, which integrates the blocks ``b_first`` to
+``b_stop - 1`` and releases the GIL (``nogil=True``); its ``kernel`` calls `run_blocks`,
+which runs those blocks on a pool of threads. The blocks are independent, each trajectory
+always runs in the same block and lane, so the results do not depend on the thread count
+or on which thread ran which block (``tests/test_blocks.py``).
+
+Why not numba's ``parallel=True`` and a ``prange`` over the blocks, as sweep did before:
+running is as fast either way, but compiling a ``prange`` costs numba an array analysis,
+a parfor pass and a second typing and lowering of the loop's body as a separate
+function. For the forced scene's RK4 kernel (Zen 5, numba 0.68) compiling took 2.0 s with
+the ``prange`` and 0.76 s serial, and each new scene, observable set or block size is a
+kernel of its own: a researcher's first run of a scene, the explorer's first view of a
+new effect and a cold test suite all wait for it. The thread count is numba's
+(`numba.get_num_threads`, so ``numba.set_num_threads`` and ``NUMBA_NUM_THREADS`` work as
+before); the pool is this module's, made on first use.
+
+The blocks go to the threads in pieces, taken in turn by whichever thread is free, so a
+thread whose blocks settle early (``stop_early``) takes more of them (numba's schedule
+cut the blocks into one equal range per thread). A Ctrl-C or SIGTERM arriving while the
+threads run does not leave them writing into the caller's arrays: no thread takes a new
+piece, the pieces running finish, and then the interrupt is raised in the caller.
+"""
+
+from __future__ import annotations
+
+import itertools
+import threading
+from concurrent.futures import ThreadPoolExecutor, wait
+
+__all__ = ["PIECES_PER_THREAD", "run_blocks"]
+
+#: Pieces of blocks per thread (fewer where there are fewer blocks): a thread that is
+#: done early takes another piece, and each piece costs one call (microseconds).
+PIECES_PER_THREAD = 4
+
+_pool: ThreadPoolExecutor | None = None
+_pool_lock = threading.Lock()
+
+
+def _executor() -> ThreadPoolExecutor:
+    """The shared pool: as many workers as numba may use (``NUMBA_NUM_THREADS``), made on
+    first use."""
+    global _pool
+    with _pool_lock:
+        if _pool is None:
+            import numba
+
+            _pool = ThreadPoolExecutor(numba.config.NUMBA_NUM_THREADS,
+                                       thread_name_prefix="sweep-blocks")
+        return _pool
+
+
+def run_blocks(blocks, n_blocks: int, *args) -> None:
+    """Call ``blocks(*args, b_first, b_stop)`` over the blocks ``0 .. n_blocks - 1``, on
+    numba's number of threads.
+
+    Parameters
+    ----------
+    blocks : numba dispatcher
+        A generated kernel's serial function, compiled with ``nogil=True``.
+    n_blocks : int
+        Number of blocks (of trajectories, or of refill groups).
+    *args
+        The kernel's arguments, before the block range.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        A Ctrl-C (or `sweep.cli.Terminated`) caught while the threads ran, raised once
+        they have stopped.
+    """
+    import numba
+
+    threads = min(numba.get_num_threads(), n_blocks)
+    if threads <= 1:  # one thread: no pool, no hand-over; no block: compiles, runs nothing
+        blocks(*args, 0, n_blocks)
+        return
+    n_pieces = min(n_blocks, PIECES_PER_THREAD * threads)
+    bounds = [n_blocks * k // n_pieces for k in range(n_pieces + 1)]
+    turn = itertools.count()  # next() on it is atomic under the GIL
+    stop = threading.Event()
+
+    def work() -> None:
+        for piece in turn:
+            if piece >= n_pieces or stop.is_set():
+                return
+            blocks(*args, bounds[piece], bounds[piece + 1])
+
+    futures = [_executor().submit(work) for _ in range(threads)]
+    interrupt = None
+    while True:
+        try:
+            wait(futures)
+            break
+        except BaseException as exc:  # noqa: BLE001 - Ctrl-C, SIGTERM: re-raised below
+            # the threads write into the caller's arrays: they stop first
+            interrupt = interrupt or exc
+            stop.set()
+    for future in futures:
+        future.result()  # a thread's own error, if any
+    if interrupt is not None:
+        raise interrupt
