@@ -408,7 +408,8 @@ def _command_refine(args, scene, grid, kwargs, options, output, folder, pilot) -
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM stopped ``sweep run`` (raised at the next chunk boundary: `_Sigterm`).
+    """SIGTERM stopped ``sweep run`` (raised once the running kernel's threads stop:
+    `_Sigterm`).
 
     A KeyboardInterrupt, so that everything that cleans up after Ctrl-C (the checkpoint,
     its lock, a half-written output file) does so after SIGTERM too.
@@ -419,12 +420,15 @@ class _Sigterm:
     """SIGTERM stops ``sweep run`` as Ctrl-C does, within `TERMINATE_WAIT_S` seconds:
     in effect in a ``with`` block (main thread, POSIX; elsewhere it does nothing).
 
-    Python runs a signal handler in the main thread between two bytecodes, so while a
-    chunk's compiled kernel runs, the handler waits for the kernel to return: a chunk
-    boundary. The handler raises `Terminated`, which unwinds the run exactly as Ctrl-C
-    does: the chunks already stored stay in the checkpoint (the one that was running is
-    dropped and recomputed on resume), the checkpoint's lock is released, a half-written
-    output file is deleted, and ``sweep run`` prints the resume command and exits with
+    Python runs a signal handler in the main thread between two bytecodes. While a
+    chunk's kernel runs, the main thread waits for the kernel's threads
+    (`sweep.kernels.threads.run_blocks`), so the handler runs at once; the raise is
+    held back until the threads have ended the pieces of blocks they were computing
+    (none starts another), as they write into the run's arrays. The handler raises
+    `Terminated`, which unwinds the run exactly as Ctrl-C does: the chunks already
+    stored stay in the checkpoint (the one that was running is dropped and recomputed
+    on resume), the checkpoint's lock is released, a half-written output file is
+    deleted, and ``sweep run`` prints the resume command and exits with
     `EXIT_TERMINATED`.
 
     A chunk lasts about a second by default (`sweep.engine.default_chunk_size`), but a
