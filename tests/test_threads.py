@@ -6,6 +6,7 @@ stand-ins for a kernel's ``blocks`` (``time.sleep`` releases the GIL as the comp
 function does).
 """
 
+import os
 import signal
 import threading
 import time
@@ -116,3 +117,26 @@ def test_ctrl_c_waits_for_the_running_pieces_and_starts_no_more(all_threads):
     n_pieces = min(40, threads.PIECES_PER_THREAD * all_threads)
     assert len(spans) < n_pieces
     assert all(start < spans[0][1] + 0.1 for _, start, _ in spans)  # all from the start
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="POSIX only")
+def test_a_forked_child_gets_its_own_pool(all_threads):
+    """After a fork the parent's pool threads do not exist in the child: the child's
+    first run must not wait on them forever (multiprocessing forks by default here)."""
+    if all_threads < 2:
+        pytest.skip("one thread: no pool")
+
+    def blocks(*args):
+        time.sleep(0.01)  # a piece takes time, as a kernel's does
+
+    threads.run_blocks(blocks, 8, "x")  # the parent's pool exists
+    pid = os.fork()
+    if pid == 0:  # the child: exit 0 if a run on threads completes, killed by SIGALRM if not
+        try:
+            signal.alarm(10)
+            threads.run_blocks(blocks, 8, "x")
+            os._exit(0)
+        finally:
+            os._exit(1)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0
