@@ -7,7 +7,9 @@ compiled on its first run: a researcher's first map of a scene, the explorer's f
 of a new effect and a cold test suite (about 350 kernels) wait for it. The baseline is
 built from sweep's own generated module (`sweep.kernels.source`), turned back into the
 parallel loop (`as_prange`): the same arithmetic, block by block, so the results must be
-the same bits, and this script checks them.
+the same bits, and this script checks them. Both designs carry the kernels' other code
+settings (`sweep.kernels.vectors`: vector width, lane alignment, the stack realigned),
+so the run times compare the threading alone.
 
 For each workload, one process per design compiles the kernels of the workloads from
 empty caches (sweep's and numba's; the vectorised sine and the other helpers compiled

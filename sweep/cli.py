@@ -424,7 +424,8 @@ class _Sigterm:
     chunk's kernel runs, the main thread waits for the kernel's threads
     (`sweep.kernels.threads.run_blocks`), so the handler runs at once; the raise is
     held back until the threads have ended the pieces of blocks they were computing
-    (none starts another), as they write into the run's arrays. The handler raises
+    (none starts another; a refill kernel's piece spans the chunk), as they write into
+    the run's arrays. The handler raises
     `Terminated`, which unwinds the run exactly as Ctrl-C does: the chunks already
     stored stay in the checkpoint (the one that was running is dropped and recomputed
     on resume), the checkpoint's lock is released, a half-written output file is

@@ -2,9 +2,9 @@
 
 ``SWEEP_COMPILE_LOG=compile.jsonl python -m pytest ...`` writes one JSON line per numba
 compile (a cache miss: loads from numba's disk cache are not compiles) with the test
-that triggered it, the function (``sweep_kernel_<hash>.kernel`` for a generated kernel,
-with its `KernelSpec`), and the seconds it took, nested compiles (the helpers a kernel
-calls) counted in the outermost one. Under pytest-xdist every worker writes
+that triggered it, the function (``sweep_kernel_<hash>.blocks`` or ``.grouped`` for a
+generated kernel, with its `KernelSpec`), and the seconds it took, nested compiles (the
+helpers a kernel calls) counted in the outermost one. Under pytest-xdist every worker writes
 ``compile.<worker>.jsonl``. ``python tests/compile_log.py compile*.jsonl`` sums them:
 per test, per spec, and the specs that several tests compiled.
 

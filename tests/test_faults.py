@@ -2,7 +2,7 @@
 disk (refused before compute by the size estimate; a write that fails anyway keeps the
 checkpoint), and a damaged checkpoint chunk (recomputed, with a warning).
 
-SIGTERM at a chunk boundary is tested with SIGINT and SIGKILL in test_resume.py
+SIGTERM between kernel pieces is tested with SIGINT and SIGKILL in test_resume.py
 (test_real_killed_run_resumes_to_a_bit_identical_file). Every wait on a subprocess is
 bounded. The tmpfs tests mount a 2 MiB file system (root only; skipped elsewhere, and
 the same paths are covered by simulated failures).
@@ -47,8 +47,9 @@ def _run_file(folder: Path, text: str = RUN_FILE) -> Path:
 
 
 # ------------------------------------------------------------------------- SIGTERM
-# One chunk of ~30 s or more (1500 trajectories x 5e6 steps), in a child whose wait
-# for a chunk boundary is cut to 1 s, with its kernel loaded beforehand (the first call
+# One chunk of ~30 s or more (1500 trajectories x 5e6 steps: pieces of ~7 s on 2
+# threads, sweep.kernels.threads), in a child whose wait for the running pieces is cut
+# to 1 s, with its kernel loaded beforehand (the first call
 # of a numba kernel loads it from the cache: interpreted code, where SIGTERM would be
 # handled at once), and which creates MARKER as it calls the kernel.
 _LONG_RUN_FILE = SLOW_RUN_FILE.replace("t_end = 500.0", "t_end = 50000.0") \
@@ -77,7 +78,7 @@ def test_sigterm_during_a_long_chunk_stops_within_the_bound(tmp_path):
             assert process.poll() is None, process.communicate()
             assert time.monotonic() < deadline, f"the kernel did not start in {WAIT_S} s"
             time.sleep(0.01)
-        time.sleep(0.2)  # inside the kernel, which runs ~30 s and never looks at signals
+        time.sleep(0.2)  # inside the kernel, whose pieces run ~7 s and never look at signals
         assert (folder / _lock.LOCK).exists()
         process.send_signal(signal.SIGTERM)
         sent = time.monotonic()

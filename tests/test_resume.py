@@ -433,7 +433,7 @@ def test_real_killed_run_resumes_to_a_bit_identical_file(sig, slow_run, tmp_path
                           f"'{folder}'; resume with: sweep run {run_file} -o {out} "
                           f"--checkpoint {folder} --resume\n")
         assert not (folder / "lock").exists()  # the next run need not take it over
-        if sig == signal.SIGTERM:  # at a chunk boundary, well within the watchdog's wait
+        if sig == signal.SIGTERM:  # after the running pieces, well within the watchdog's wait
             assert waited < cli.TERMINATE_WAIT_S
     code, _, stderr = _finish(_sweep("run", run_file, "-o", out, "--checkpoint", folder,
                                      "--resume"))

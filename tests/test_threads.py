@@ -48,20 +48,23 @@ def test_every_block_runs_once(n_blocks, n_threads, all_threads):
     blocks, calls = _recorder()
     threads.run_blocks(blocks, n_blocks, "params", 0.5)
     assert all(passed == ("params", 0.5) for passed, *_ in calls)
-    covered = sorted(b for _, first, stop, _ in calls for b in range(first, stop))
+    # first a call over no block, in the caller's thread (it compiles the kernel)
+    assert calls[0][1:] == (0, 0, threading.current_thread().name)
+    pieces = calls[1:]
+    covered = sorted(b for _, first, stop, _ in pieces for b in range(first, stop))
     assert covered == list(range(n_blocks))
-    assert all(stop > first for _, first, stop, _ in calls)
+    assert all(stop > first for _, first, stop, _ in pieces)
     # no more pieces than PIECES_PER_THREAD per thread, no more threads than numba's
-    assert len(calls) <= max(1, threads.PIECES_PER_THREAD * n_threads)
-    assert len({name for *_, name in calls}) <= n_threads
+    assert len(pieces) <= max(1, threads.PIECES_PER_THREAD * n_threads)
+    assert len({name for *_, name in pieces}) <= n_threads
 
 
 def test_one_thread_runs_in_the_callers_thread(all_threads):
     numba.set_num_threads(1)
     blocks, calls = _recorder()
     threads.run_blocks(blocks, 5, "x")
-    assert [(first, stop) for _, first, stop, _ in calls] == [(0, 5)]
-    assert calls[0][3] == threading.current_thread().name
+    assert [(first, stop) for _, first, stop, _ in calls] == [(0, 0), (0, 5)]
+    assert {name for *_, name in calls} == {threading.current_thread().name}
 
 
 def test_no_block_still_calls_once_so_the_kernel_compiles(all_threads):
@@ -71,16 +74,23 @@ def test_no_block_still_calls_once_so_the_kernel_compiles(all_threads):
     assert [(first, stop) for _, first, stop, _ in calls] == [(0, 0)]
 
 
-def test_an_error_in_a_thread_reaches_the_caller(all_threads):
+def test_an_error_in_a_thread_reaches_the_caller_and_stops_the_others(all_threads):
     if all_threads < 2:
         pytest.skip("one thread: no pool")
+    ran = []
 
     def blocks(first, stop):
-        if first > 0:
+        if first == stop:  # the compiling call
+            return
+        ran.append(first)
+        if first == 1:
             raise FloatingPointError(f"block {first}")
+        time.sleep(0.05)
 
-    with pytest.raises(FloatingPointError, match="block"):
-        threads.run_blocks(blocks, 8)
+    with pytest.raises(FloatingPointError, match="block 1"):
+        threads.run_blocks(blocks, 8)  # 8 pieces of one block
+    # the piece that failed and the one beside it, not the 6 pieces after them
+    assert 1 in ran and len(ran) < 8
 
 
 @pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="POSIX only")
@@ -92,6 +102,8 @@ def test_ctrl_c_waits_for_the_running_pieces_and_starts_no_more(all_threads):
     spans, lock = [], threading.Lock()
 
     def blocks(first, stop):
+        if first == stop:  # the compiling call
+            return
         start = time.perf_counter()
         time.sleep(0.2)  # releases the GIL, as the compiled blocks do
         with lock:

@@ -29,10 +29,10 @@ Failures
 - A trajectory that goes non-finite is not a failure: it is flagged in ``status`` inside
   its chunk exactly as locally.
 
-Threads: each chunk runs the numba kernel with numba's own threads (all the worker's
-cores by default), so start workers with one Dask thread each (``threads_per_worker=1``,
-``--nthreads 1``) and let numba use the cores. Several Dask threads in one worker are
-safe (a per-process lock runs their kernels one at a time) but bring nothing.
+Threads: each chunk runs the kernel on the worker's cores (`sweep.kernels.threads`,
+numba's thread count: all the cores by default), so start workers with one Dask thread
+each (``threads_per_worker=1``, ``--nthreads 1``). Several Dask threads in one worker
+are safe (a per-process lock runs their kernels one at a time) but bring nothing.
 """
 
 from __future__ import annotations
@@ -48,8 +48,8 @@ from .local import RunContext, allocate, integrate
 
 __all__ = ["RunContext", "check_client", "run_chunk_task", "run_chunks"]
 
-#: numba's default (workqueue) threading layer must not be entered by two threads of one
-#: process at once; a Dask worker with several threads would do that.
+#: One kernel at a time per process: each uses all the cores already, and two at once
+#: would only compete for them (a Dask worker may have several threads).
 _KERNEL_LOCK = threading.Lock()
 
 

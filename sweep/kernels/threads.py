@@ -11,8 +11,9 @@ or on which thread ran which block (``tests/test_blocks.py``).
 Why not numba's ``parallel=True`` and a ``prange`` over the blocks, as sweep did before:
 running is as fast either way, but compiling a ``prange`` costs numba an array analysis,
 a parfor pass and a second typing and lowering of the loop's body as a separate
-function. For the forced scene's RK4 kernel (Zen 5, numba 0.68) compiling took 2.0 s with
-the ``prange`` and 0.76 s serial, and each new scene, observable set or block size is a
+function. For the forced scene's RK4 kernel (Zen 5, numba 0.68,
+``benchmarks/compile_time.py``) compiling took 1.07 s with the ``prange`` and 0.40 s
+serial, and each new scene, observable set or block size is a
 kernel of its own: a researcher's first run of a scene, the explorer's first view of a
 new effect and a cold test suite all wait for it. The thread count is numba's
 (`numba.get_num_threads`, so ``numba.set_num_threads`` and ``NUMBA_NUM_THREADS`` work as
@@ -29,14 +30,17 @@ from __future__ import annotations
 
 import itertools
 import os
+import queue
 import threading
-from concurrent.futures import ThreadPoolExecutor, wait
+from concurrent.futures import ThreadPoolExecutor
 
 __all__ = ["PIECES_PER_THREAD", "run_blocks"]
 
 #: Pieces of blocks per thread (fewer where there are fewer blocks): a thread that is
 #: done early takes another piece, and each piece costs one call (microseconds).
 PIECES_PER_THREAD = 4
+
+_STARTED = object()  # a worker's first event
 
 _pool: ThreadPoolExecutor | None = None
 _pool_lock = threading.Lock()
@@ -70,6 +74,10 @@ def run_blocks(blocks, n_blocks: int, *args) -> None:
     """Call ``blocks(*args, b_first, b_stop)`` over the blocks ``0 .. n_blocks - 1``, on
     numba's number of threads.
 
+    ``blocks`` is first called over no block, in the caller's thread: that compiles it
+    on its first call (once, where an error is raised once, and a Ctrl-C during the
+    compile stops it before any thread starts), and is a dispatch of microseconds later.
+
     Parameters
     ----------
     blocks : numba dispatcher
@@ -83,36 +91,72 @@ def run_blocks(blocks, n_blocks: int, *args) -> None:
     ------
     KeyboardInterrupt
         A Ctrl-C (or `sweep.cli.Terminated`) caught while the threads ran, raised once
-        they have stopped.
+        no thread computes a piece any more.
+    Exception
+        The first error of a thread's piece (the other threads take no new piece).
     """
     import numba
 
+    blocks(*args, 0, 0)  # compiles (or loads) here; runs nothing
     threads = min(numba.get_num_threads(), n_blocks)
-    if threads <= 1:  # one thread: no pool, no hand-over; no block: compiles, runs nothing
-        blocks(*args, 0, n_blocks)
+    if threads <= 1:  # one thread: no pool, no hand-over
+        if n_blocks > 0:
+            blocks(*args, 0, n_blocks)
         return
     n_pieces = min(n_blocks, PIECES_PER_THREAD * threads)
     bounds = [n_blocks * k // n_pieces for k in range(n_pieces + 1)]
     turn = itertools.count()  # next() on it is atomic under the GIL
     stop = threading.Event()
+    # each worker says when it starts and when it ends (with its error, or None); the
+    # caller reads them from a SimpleQueue, whose get() is C code that an interrupt
+    # leaves consistent (concurrent.futures.wait takes locks in Python, where a signal
+    # between two of them can leave one held and the next wait deadlocked)
+    events = queue.SimpleQueue()
 
     def work() -> None:
-        for piece in turn:
-            if piece >= n_pieces or stop.is_set():
-                return
-            blocks(*args, bounds[piece], bounds[piece + 1])
-
-    futures = [_executor().submit(work) for _ in range(threads)]
-    interrupt = None
-    while True:
+        events.put(_STARTED)
+        error = None
         try:
-            wait(futures)
+            for piece in turn:
+                if piece >= n_pieces or stop.is_set():
+                    break
+                blocks(*args, bounds[piece], bounds[piece + 1])
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller
+            stop.set()
+            error = exc
+        events.put(error)
+
+    submitted = started = ended = 0
+    interrupt = error = None
+    try:
+        pool = _executor()
+        for _ in range(threads):
+            pool.submit(work)
+            submitted += 1
+    except BaseException as exc:  # noqa: BLE001 - Ctrl-C, SIGTERM: re-raised below
+        stop.set()
+        interrupt = exc
+    while True:
+        if interrupt is None:
+            if ended == submitted:
+                break
+        # interrupted: a worker that starts from now on sees ``stop`` and computes
+        # nothing, so the ones to wait for are those that said they started
+        elif ended == started and events.empty():
             break
+        try:
+            event = events.get()
         except BaseException as exc:  # noqa: BLE001 - Ctrl-C, SIGTERM: re-raised below
             # the threads write into the caller's arrays: they stop first
-            interrupt = interrupt or exc
             stop.set()
-    for future in futures:
-        future.result()  # a thread's own error, if any
+            interrupt = interrupt or exc
+            continue
+        if event is _STARTED:
+            started += 1
+        else:
+            ended += 1
+            error = error or event
     if interrupt is not None:
         raise interrupt
+    if error is not None:
+        raise error
