@@ -325,18 +325,10 @@ def sweep_run_with_each_sine(n, steps, rounds, repeats=2) -> dict:
 
 
 # ------------------------------------------------------------------------- accuracy
-def _vector(sine):
-    @njit(parallel=True, cache=False, **_JIT)
-    def apply(x):
-        out = np.empty_like(x)
-        for i in prange(x.size):
-            out[i] = sine(x[i])
-        return out
-    return apply
-
-
-def _vector_contract(sine):
-    @njit(parallel=True, cache=False, fastmath={"contract"})
+def _vector(sine, jit=None):
+    """``sine`` over an array, in parallel, compiled with ``jit`` (default: the kernels'
+    options)."""
+    @njit(parallel=True, cache=False, **(_JIT if jit is None else jit))
     def apply(x):
         out = np.empty_like(x)
         for i in prange(x.size):
@@ -368,7 +360,7 @@ def accuracy(sin, cos, sincos, scale=1.0) -> dict:
     ``scale`` shrinks the random samples (--quick)."""
     rng = np.random.default_rng(2029)
     vs, vc, vsc, vcon = _vector(sin), _vector(cos), _vector_sincos(sincos), \
-        _vector_contract(sin)
+        _vector(sin, {"fastmath": {"contract"}})
     tol = 2.0**-52
     n = lambda k: max(1000, int(k * scale))  # noqa: E731
     out = {}
