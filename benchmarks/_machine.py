@@ -1,10 +1,12 @@
 """What the benchmarks say about the machine they ran on: one line for a report
 (`machine`), the CPU's feature flags (`cpu_flags`), run_all.py's details (CPU,
 SIMD, gcc and what -march=native means to it, numba, LLVM's CPU name:
-`machine_details`) and both with the date (`stamp`)."""
+`machine_details`) and both with the date (`stamp`); where a script's results go
+(`write_results`)."""
 
 from __future__ import annotations
 
+import json
 import os
 import platform
 import re
@@ -113,3 +115,12 @@ def stamp() -> dict:
     and ``details`` (`machine_details`), to open a results dict with."""
     return {"date": time.strftime("%Y-%m-%d %H:%M"), "machine": machine(),
             "details": machine_details()}
+
+
+def write_results(out: Path, result: dict, text: str) -> None:
+    """Write a benchmark's ``result`` to ``<out>.json`` and its report ``text`` to
+    ``<out>.md`` (making the folder), and print the report."""
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.with_suffix(".json").write_text(json.dumps(result, indent=1, default=str))
+    out.with_suffix(".md").write_text(text)
+    print(text)

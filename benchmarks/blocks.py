@@ -26,7 +26,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from pathlib import Path
@@ -41,7 +40,7 @@ import sweep  # noqa: E402
 from sweep import _config  # noqa: E402
 
 from _c_builds import AMPLITUDE, DAMPING, DT, FREQUENCY, G_OVER_L, PHASE  # noqa: E402
-from _machine import stamp  # noqa: E402
+from _machine import stamp, write_results  # noqa: E402
 
 SCENE = sweep.Scene(gravity=G_OVER_L, length=1.0, model="nonlinear",
                     effects=(sweep.Damping(DAMPING), sweep.Forcing(AMPLITUDE, FREQUENCY, PHASE)))
@@ -173,12 +172,8 @@ def main(argv=None) -> int:
               "adaptive_large": large, "adaptive_small": small,
               "adaptive_block": _config.ADAPTIVE_BLOCK,
               "adaptive_narrow_below": _config.ADAPTIVE_NARROW_BELOW, "t_end": t_end}
-    out = args.out / ("blocks_quick" if args.quick else "blocks")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".json").write_text(json.dumps(result, indent=1, default=str))
-    text = markdown(result)
-    out.with_suffix(".md").write_text(text)
-    print(text)
+    write_results(args.out / ("blocks_quick" if args.quick else "blocks"), result,
+                  markdown(result))
     return 0
 
 

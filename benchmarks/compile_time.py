@@ -39,7 +39,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from _machine import stamp  # noqa: E402
+from _machine import stamp, write_results  # noqa: E402
 
 DESIGNS = ("threads", "prange")
 
@@ -178,12 +178,8 @@ def main(argv=None) -> int:
     rows = {name: {**designs, "same_bits": designs["threads"]["digest"] ==
                    designs["prange"]["digest"]} for name, designs in best.items()}
     result = {**stamp(), "rounds": rounds, "rows": rows}
-    out = args.out / ("compile_time_quick" if args.quick else "compile_time")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".json").write_text(json.dumps(result, indent=1))
-    text = markdown(result)
-    out.with_suffix(".md").write_text(text)
-    print(text)
+    write_results(args.out / ("compile_time_quick" if args.quick else "compile_time"), result,
+                  markdown(result))
     return 0 if all(row["same_bits"] for row in rows.values()) else 1
 
 

@@ -34,7 +34,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from _machine import cpu_flags, stamp  # noqa: E402
+from _machine import cpu_flags, stamp, write_results  # noqa: E402
 
 WIDTHS = ("256", "512", "llvm")
 
@@ -139,12 +139,8 @@ def main(argv=None) -> int:
         runs["LLVM told the CPU is Intel Rocket Lake (NUMBA_CPU_NAME=rocketlake), run "
              "here"] = compare(n, steps, rounds, "rocketlake")
     result = {**stamp(), "trajectories": n, "steps": steps, "rounds": rounds, "runs": runs}
-    out = args.out / ("vector_width_quick" if args.quick else "vector_width")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".json").write_text(json.dumps(result, indent=1, default=str))
-    text = markdown(result)
-    out.with_suffix(".md").write_text(text)
-    print(text)
+    write_results(args.out / ("vector_width_quick" if args.quick else "vector_width"), result,
+                  markdown(result))
     return 0 if all(block["bit_identical"] for block in runs.values()) else 1
 
 
