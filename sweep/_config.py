@@ -1,4 +1,4 @@
-"""The one place that sets JIT flags and execution defaults.
+"""The one place that sets JIT flags and execution defaults, and the cache folder.
 
 `sweep.kernels` reads these and nothing else; a test fails on a literal ``fastmath=`` in
 `sweep/kernels/`. The flags are part of every kernel's memo and disk-cache key.
@@ -7,6 +7,8 @@
 from __future__ import annotations
 
 import os
+import stat
+import tempfile
 from pathlib import Path
 
 #: numba ``fastmath`` flags of the kernels and `sweep.kernels.vecmath`: none. Never
@@ -157,3 +159,114 @@ def cache_dir() -> Path:
         return Path(explicit)
     base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
     return Path(base) / "sweep"
+
+
+# ---------------------------------------------------------------- the cache folder, checked
+# The kernel cache folder holds code that is executed (generated kernel modules, Python's
+# bytecode, numba's pickled machine code, derived systems' source), so it is used only if
+# nobody else can change it (`sweep.kernels.cache`'s docstring). These checks live here,
+# below both of their users (`sweep.kernels.cache` and `sweep.physics.derive`).
+
+def folder_problem(path: Path, own: bool) -> str | None:
+    """What lets another user change the folder ``path``, or None.
+
+    Parameters
+    ----------
+    path : Path
+        An existing folder, or a symlink to one (NotADirectoryError otherwise).
+    own : bool
+        True for a folder of the cache itself (it must be the user's and writable by
+        the user alone), False for a folder above it (the user's or root's, and not
+        writable by others unless sticky).
+
+    Returns
+    -------
+    str or None
+        The problem (``"is owned by uid 1001 ..."``, ``"has mode 0777 ..."``), or None.
+    """
+    uid = os.getuid()
+    info = os.lstat(path)
+    if stat.S_ISLNK(info.st_mode):
+        if info.st_uid not in (uid, 0):
+            return f"is a symlink owned by uid {info.st_uid}"
+        info = os.stat(path)
+    if not stat.S_ISDIR(info.st_mode):
+        raise NotADirectoryError(f"{path} is not a folder")
+    if info.st_uid != uid and (own or info.st_uid != 0):
+        return f"is owned by uid {info.st_uid} (you are uid {uid})"
+    mode = stat.S_IMODE(info.st_mode)
+    if mode & 0o022 and (own or not mode & stat.S_ISVTX):
+        return f"has mode {mode:04o} (writable by others{'' if own else ', not sticky'})"
+    return None
+
+
+def checked_folder(folder: Path, root: Path) -> str | None:
+    """Create ``folder`` (each missing component 0700, once the one above it passed)
+    and check it, its ancestors and, through symlinks, the real ones.
+
+    Parameters
+    ----------
+    folder : Path
+        The folder to use.
+    root : Path
+        ``folder`` or a folder above it: it and the folders below it must be the user's
+        alone (``own``); the folders above it are checked as ancestors.
+
+    Returns
+    -------
+    str or None
+        ``"<path> <problem>"`` for the first unsafe component, None if all are safe.
+
+    Raises
+    ------
+    OSError
+        When a folder cannot be made (not writable, a file in the way).
+    """
+    if not hasattr(os, "getuid"):  # Windows: no POSIX owners and modes to check
+        folder.mkdir(parents=True, exist_ok=True)
+        return None
+    folder, root = Path(os.path.abspath(folder)), Path(os.path.abspath(root))
+    for lexical in (True, False):
+        if not lexical:  # the folders the path leads to, past any symlink
+            folder, root = Path(os.path.realpath(folder)), Path(os.path.realpath(root))
+        for path in (*reversed(folder.parents), folder):
+            if lexical and not os.path.lexists(path):
+                try:
+                    path.mkdir(mode=0o700)
+                except FileExistsError:  # made meanwhile: checked below
+                    pass
+            problem = folder_problem(path, own=path == root or root in path.parents)
+            if problem:
+                return f"{path} {problem}"
+    return None
+
+
+def kernel_folder() -> tuple[Path, str | None]:
+    """The folder of generated kernel modules and derived systems' source, and what makes
+    it unsafe, if anything.
+
+    ``<cache_dir>/kernels`` (`cache_dir`), with its ``__pycache__``; if that cannot be
+    made or written, ``<tmp>/sweep-kernels-<uid>`` (checked the same way).
+
+    Returns
+    -------
+    folder : Path
+    problem : str or None
+        ``"<path> <problem>"`` (`checked_folder`) if another user could change it (the
+        caller must then not use it), else None.
+    """
+    root = cache_dir()
+    try:
+        folder = root / "kernels"
+        problem = checked_folder(folder / "__pycache__", root)
+        if not problem:
+            probe = folder / ".write-probe"
+            probe.touch()
+            probe.unlink()
+    except OSError:
+        root = folder = Path(tempfile.gettempdir()) / f"sweep-kernels-{os.getuid()}"
+        try:
+            problem = checked_folder(folder / "__pycache__", root)
+        except OSError as error:
+            problem = f"{folder} cannot be made ({error})"
+    return folder, problem

@@ -22,7 +22,6 @@ import hashlib
 import importlib.util
 import os
 import shutil
-import stat
 import sys
 import tempfile
 import threading
@@ -97,80 +96,6 @@ def _serialise_numba_index() -> None:
     IndexDataCacheFile.save = serialised_save
 
 
-def _problem(path: Path, own: bool) -> str | None:
-    """What lets another user change the folder ``path``, or None.
-
-    Parameters
-    ----------
-    path : Path
-        An existing folder, or a symlink to one (NotADirectoryError otherwise).
-    own : bool
-        True for a folder of the cache itself (it must be the user's and writable by
-        the user alone), False for a folder above it (the user's or root's, and not
-        writable by others unless sticky).
-
-    Returns
-    -------
-    str or None
-        The problem (``"is owned by uid 1001 ..."``, ``"has mode 0777 ..."``), or None.
-    """
-    uid = os.getuid()
-    info = os.lstat(path)
-    if stat.S_ISLNK(info.st_mode):
-        if info.st_uid not in (uid, 0):
-            return f"is a symlink owned by uid {info.st_uid}"
-        info = os.stat(path)
-    if not stat.S_ISDIR(info.st_mode):
-        raise NotADirectoryError(f"{path} is not a folder")
-    if info.st_uid != uid and (own or info.st_uid != 0):
-        return f"is owned by uid {info.st_uid} (you are uid {uid})"
-    mode = stat.S_IMODE(info.st_mode)
-    if mode & 0o022 and (own or not mode & stat.S_ISVTX):
-        return f"has mode {mode:04o} (writable by others{'' if own else ', not sticky'})"
-    return None
-
-
-def _checked(folder: Path, root: Path) -> str | None:
-    """Create ``folder`` (each missing component 0700, once the one above it passed)
-    and check it, its ancestors and, through symlinks, the real ones.
-
-    Parameters
-    ----------
-    folder : Path
-        The folder to use.
-    root : Path
-        ``folder`` or a folder above it: it and the folders below it must be the user's
-        alone (``own``); the folders above it are checked as ancestors.
-
-    Returns
-    -------
-    str or None
-        ``"<path> <problem>"`` for the first unsafe component, None if all are safe.
-
-    Raises
-    ------
-    OSError
-        When a folder cannot be made (not writable, a file in the way).
-    """
-    if not hasattr(os, "getuid"):  # Windows: no POSIX owners and modes to check
-        folder.mkdir(parents=True, exist_ok=True)
-        return None
-    folder, root = Path(os.path.abspath(folder)), Path(os.path.abspath(root))
-    for lexical in (True, False):
-        if not lexical:  # the folders the path leads to, past any symlink
-            folder, root = Path(os.path.realpath(folder)), Path(os.path.realpath(root))
-        for path in (*reversed(folder.parents), folder):
-            if lexical and not os.path.lexists(path):
-                try:
-                    path.mkdir(mode=0o700)
-                except FileExistsError:  # made meanwhile: checked below
-                    pass
-            problem = _problem(path, own=path == root or root in path.parents)
-            if problem:
-                return f"{path} {problem}"
-    return None
-
-
 def _private_folder() -> Path:
     """This process's own folder (0700, unpredictable name), made on first use and
     removed at exit."""
@@ -183,24 +108,11 @@ def _private_folder() -> Path:
 
 
 def _module_dir() -> Path:
-    """The folder of the generated modules: ``<cache_dir>/kernels``; if that cannot be
-    written, ``<tmp>/sweep-kernels-<uid>`` (checked the same way); if the one chosen is
-    unsafe, this process's private folder (with one warning per process)."""
+    """The folder of the generated modules: `sweep._config.kernel_folder` (``<cache_dir>/
+    kernels``, or ``<tmp>/sweep-kernels-<uid>`` if that cannot be written), or, if the one
+    chosen is unsafe, this process's private folder (with one warning per process)."""
     global _warned
-    root = _config.cache_dir()
-    try:
-        folder = root / "kernels"
-        problem = _checked(folder / "__pycache__", root)
-        if not problem:
-            probe = folder / ".write-probe"
-            probe.touch()
-            probe.unlink()
-    except OSError:
-        root = folder = Path(tempfile.gettempdir()) / f"sweep-kernels-{os.getuid()}"
-        try:
-            problem = _checked(folder / "__pycache__", root)
-        except OSError as error:
-            problem = f"{folder} cannot be made ({error})"
+    folder, problem = _config.kernel_folder()
     if not problem:
         return folder
     with _lock:
