@@ -356,7 +356,19 @@ def soft_springs():
         potential="kw*(sqrt(1 + xa**2) - 1) + kw*(sqrt(1 + xb**2) - 1) + kc/2*(xb - xa)**2")
 
 
-DECLARATIONS = [double_pendulum(damping=True), triple_pendulum(),
+def shaken_pendulum():
+    """One pendulum whose pivot moves sideways as ``a sin(w t)``: a Lagrangian with a
+    term linear in the velocity that depends on time (the ``d2L/(dv dt)`` term), one
+    coordinate."""
+    return SystemDeclaration(
+        "shaken_pendulum", _coordinates(1),
+        (_parameter("m"), _parameter("l"), _parameter("grav", 9.81), _parameter("a", 0.3),
+         _parameter("w", 2.0)),
+        lagrangian="m/2*((a*w*cos(w*t) + l*cos(th1)*om1)**2 + (l*sin(th1)*om1)**2)"
+                   " + m*grav*l*cos(th1)")
+
+
+DECLARATIONS = [shaken_pendulum(), double_pendulum(damping=True), triple_pendulum(),
                 coupled_pendula(3, "spring", "ring", damping=True), soft_springs()]
 
 
