@@ -537,6 +537,10 @@ TOY = SystemDeclaration(
      r"calls a function that is not accepted .*'exp\(th1\)'.*accepted: .*sin, cos, sqrt"),
     (dict(lagrangian="m*om1**2/2 + m*om2**2/2 + th1**(1/3)"),
      r"power .* which the kernels cannot evaluate; accepted: integer and half-integer"),
+    (dict(lagrangian="m*om1**2/2 + m*om2**2/2 + 1/(th1 - th1)"),
+     r"the lagrangian, .*, is zoo \(a division by zero or the root of a negative number\)"),
+    (dict(lagrangian="m*om1**2*sqrt(m - 2) + m*om2**2"),  # m is drawn in (0.5, 2) here
+     r"the mass matrix .* is not finite and real at m=.*; accepted: a Lagrangian whose"),
     (dict(forces=("-c*om1", "0")), r"force on 'theta1', '-c\*om1', names 'c'"),
     (dict(forces=("0",)), r"forces has 1 entries; accepted: a tuple of 2 strings"),
     (dict(forces=["0", "0"]), r"forces is a list; accepted: a tuple of 2 strings"),

@@ -416,7 +416,11 @@ def _parse(sp, declaration: SystemDeclaration, names: dict, what: str, text: str
             return getattr(sp, node.func.id)(convert(node.args[0]))
         raise bad(node, "holds something that is not accepted")
 
-    return convert(tree)
+    expr = convert(tree)
+    if expr.has(sp.zoo, sp.nan, sp.oo, -sp.oo, sp.I):
+        raise ValueError(f"{who}: the {what}, {text!r}, is {expr} (a division by zero or "
+                         f"the root of a negative number); {accepted}")
+    return expr
 
 
 def _euler_lagrange(sp, lagrangian, forces, q, v, t):
@@ -494,17 +498,22 @@ def _check_mass(sp, declaration, mass, q, v, params, t) -> None:
         raise ValueError(f"{who}: the mass matrix {matrix.tolist()} is singular (its "
                          f"determinant is 0 for every state); {accepted}")
     point = _random_point(declaration, q, v, params, t)
+    where = ", ".join(f"{s}={x:.6g}" for s, x in point.items())
+    entries = [mass[i][i] for i in range(n)] if diagonal else [e for row in mass for e in row]
+    values = [complex(e.evalf(subs=point)) for e in entries]
+    if not all(math.isfinite(x.real) and x.imag == 0 for x in values):
+        raise ValueError(f"{who}: the mass matrix {matrix.tolist()} is not finite and real "
+                         f"at {where}; {accepted}")
+    numeric = [x.real for x in values]
     if diagonal:  # only the diagonal: its entries must not vanish
-        numeric = [[float(mass[i][i].evalf(subs=point)) for i in range(n)]]
-        value, bound = math.prod(numeric[0]), math.prod(map(abs, numeric[0]))
+        value, bound = math.prod(numeric), math.prod(map(abs, numeric))
     else:
-        numeric = [[float(entry.evalf(subs=point)) for entry in row] for row in mass]
-        value = float(sp.Matrix(numeric).det())
-        bound = math.prod(math.sqrt(sum(x * x for x in row)) for row in numeric)
+        rows = [numeric[i * n:(i + 1) * n] for i in range(n)]
+        value = float(sp.Matrix(rows).det())
+        bound = math.prod(math.sqrt(sum(x * x for x in row)) for row in rows)
     # Hadamard's inequality: |det| <= the product of the rows' lengths; a determinant
     # below 1e-10 of that bound at a random point is zero but for rounding
-    if not (math.isfinite(bound) and abs(value) > 1e-10 * bound):
-        where = ", ".join(f"{s}={x:.6g}" for s, x in point.items())
+    if not abs(value) > 1e-10 * bound:
         raise ValueError(f"{who}: the mass matrix {matrix.tolist()} is singular at "
                          f"{where} (determinant {value:.3g}); {accepted}")
 
@@ -554,14 +563,18 @@ def _solve(sp, mass, rhs):
 
 def _jacobian(sp, mass, rhs, inverse, accelerations, state):
     """``d a_i / d z`` for every coordinate i and state variable z, as
-    ``M^-1 (db/dz - (dM/dz) a)`` with the accelerations a substituted."""
+    ``M^-1 (db/dz - (dM/dz) a)`` with the accelerations a substituted (only M's entries
+    that depend on some state variable are differentiated: n^2 of them for a diagonal
+    mass matrix of n coordinates would cost n^3 derivatives)."""
     n = len(mass)
+    free = set(state)
+    moving = [(j, k) for j in range(n) for k in range(n) if mass[j][k].free_symbols & free]
     entries = []
     columns = {}
     for z in state:
-        column = [sp.diff(rhs[j], z) - sum((sp.diff(mass[j][k], z) * accelerations[k]
-                                            for k in range(n)), sp.S.Zero)
-                  for j in range(n)]
+        column = [sp.diff(rhs[j], z) for j in range(n)]
+        for j, k in moving:
+            column[j] -= sp.diff(mass[j][k], z) * accelerations[k]
         columns[z] = column
     for i in range(n):
         for z in state:
