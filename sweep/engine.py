@@ -10,15 +10,14 @@ import inspect
 import math
 import os
 import warnings
-from dataclasses import dataclass
 
 import numpy as np
 
 from . import _config, io
 from . import methods as _methods
 from . import stability as _stability
-from ._timesteps import WHOLE_STEPS_RTOL, transient_steps, whole_steps
-from ._validate import check_flag, check_positive_int, check_real
+from ._timesteps import WHOLE_STEPS_RTOL
+from ._validate import check_flag, check_positive_int
 from ._version import __version__
 from .execution import RunContext, execute
 from .execution.local import allocate as _allocate
@@ -41,40 +40,20 @@ from .kernels import (
 from .methods import METHODS
 from .observables import DEFAULT_OBSERVE, OBSERVABLES, STROBE_SAMPLES, STROBE_SAMPLES_RANGE, resolve
 from .physics import EFFECTS, Scene
+from .physics.system import System
+from .settings import (  # re-exported: sweep.engine.RunSettings, validate_settings, ...
+    DEFAULT_ATOL,  # noqa: F401
+    DEFAULT_RTOL,  # noqa: F401
+    MIN_RTOL,  # noqa: F401
+    RunSettings,
+    _block,
+    default_chunk_size,
+    validate_method,  # noqa: F401
+    validate_settings,
+)
 
 __all__ = ["run", "prepare", "warm_up", "estimate_error", "default_chunk_size", "RunSettings",
            "METHODS"]
-
-#: Default tolerances of the adaptive methods (per step, RMS norm over theta, omega):
-#: about 1e-6 global error on a few periods of the pendulum.
-DEFAULT_RTOL = 1e-6
-DEFAULT_ATOL = 1e-9
-
-#: Smallest rtol accepted: below ~100 machine epsilons the local error estimate is
-#: round-off, and the controller would shrink the step for nothing (SciPy's floor too).
-MIN_RTOL = 100 * np.finfo(np.float64).eps
-
-@dataclass(frozen=True)
-class RunSettings:
-    """Validated time-stepping settings of a run (see `run` for the meaning)."""
-
-    t0: float
-    t_end: float
-    dt: float
-    t_transient: float
-    n_steps: int
-    n_transient: int
-    save_every: int | None
-    method: str
-    rtol: float | None = None
-    atol: float | None = None
-    integrator: object = None
-
-    @property
-    def adaptive(self) -> bool:
-        """True for an embedded pair (per-trajectory step-size control)."""
-        return bool(self.integrator is not None and self.integrator.adaptive)
-
 
 def _available_memory() -> int:
     """Bytes of memory available to this process (MemAvailable on Linux, else the
@@ -87,106 +66,6 @@ def _available_memory() -> int:
     except OSError:  # pragma: no cover - non-Linux
         pass
     return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")  # pragma: no cover
-
-
-def validate_settings(*, t_end, dt, t0, t_transient, save_every, method, rtol=None,
-                      atol=None) -> RunSettings:
-    """Check the time-stepping arguments of `run`; return them cleaned.
-
-    ``method`` is a `sweep.methods.METHODS` name or a method object; ``rtol``/``atol``
-    belong to adaptive methods only (defaults `DEFAULT_RTOL`, `DEFAULT_ATOL`).
-
-    Raises
-    ------
-    ValueError, TypeError
-        Naming the argument, its value and what is accepted.
-    """
-    t0 = check_real("t0", t0)
-    t_end = check_real("t_end", t_end)
-    dt = check_real("dt", dt, minimum=0.0, strict=True, accepted="a finite number > 0 (s)")
-    t_transient = check_real("t_transient", t_transient, minimum=0.0,
-                             accepted="a finite number >= 0 (s)")
-    if not t_end > t0:
-        raise ValueError(f"t_end must be > t0 = {t0!r}, got t_end = {t_end!r}")
-    if not t_transient < t_end - t0:
-        raise ValueError(
-            f"t_transient must be < t_end - t0 = {t_end - t0!r} (something must remain "
-            f"to observe), got t_transient = {t_transient!r}"
-        )
-    integrator = validate_method(method)
-    if integrator.adaptive:
-        if save_every is not None:
-            raise ValueError(
-                f"save_every = {save_every!r} cannot be used with the adaptive method "
-                f"{integrator.name!r}: each trajectory takes its own steps, so there is no "
-                "common time axis to sample; accepted: save_every=None, or a fixed-step "
-                f"method ({', '.join(repr(n) for n, m in METHODS.items() if not m.adaptive)})"
-            )
-        rtol = DEFAULT_RTOL if rtol is None else check_real(
-            "rtol", rtol, minimum=MIN_RTOL, accepted=f"a finite number >= {MIN_RTOL:.3g} "
-            "(100 machine epsilons)")
-        atol = DEFAULT_ATOL if atol is None else check_real(
-            "atol", atol, minimum=0.0, strict=True, accepted="a finite number > 0 "
-            "(rad and rad/s)")
-        # adaptive: dt is the first trial step and the largest step; no whole-step rule
-        return RunSettings(t0=t0, t_end=t_end, dt=dt, t_transient=t_transient, n_steps=0,
-                           n_transient=0, save_every=None, method=integrator.name,
-                           rtol=rtol, atol=atol, integrator=integrator)
-    for name, value in (("rtol", rtol), ("atol", atol)):
-        if value is not None:
-            raise ValueError(
-                f"{name} = {value!r} applies only to adaptive methods "
-                f"({', '.join(repr(n) for n, m in METHODS.items() if m.adaptive)}), but "
-                f"method {integrator.name!r} takes fixed steps dt; accepted: {name}=None "
-                "with a fixed-step method, or an adaptive method"
-            )
-    n_steps = whole_steps("t_end - t0", t_end - t0, dt)
-    # first step index whose time t0 + n dt is >= t0 + t_transient
-    n_transient = transient_steps(t_transient, dt)
-    if n_transient >= n_steps:
-        raise ValueError(
-            f"t_transient = {t_transient!r} leaves no step to observe before t_end - t0 = "
-            f"{t_end - t0!r} with dt = {dt!r}; accepted: t_transient <= t_end - t0 - dt"
-        )
-    if save_every is not None:
-        if isinstance(save_every, (bool, np.bool_)) or not isinstance(
-            save_every, (int, np.integer)
-        ):
-            raise TypeError(f"save_every must be None or an int >= 1 (steps), got "
-                            f"{save_every!r}")
-        if save_every < 1:
-            raise ValueError(f"save_every must be None or an int >= 1 (steps), got "
-                             f"{save_every!r}")
-        save_every = int(save_every)
-    return RunSettings(t0=t0, t_end=t_end, dt=dt, t_transient=t_transient, n_steps=n_steps,
-                       n_transient=n_transient, save_every=save_every,
-                       method=integrator.name, integrator=integrator)
-
-
-def validate_method(method):
-    """The method object for ``method`` (a `METHODS` name or a method object).
-
-    Raises
-    ------
-    ValueError
-        Listing the valid names.
-    """
-    if isinstance(method, str) and method in METHODS:
-        return METHODS[method]
-    if isinstance(method, (_methods.ButcherTableau, _methods.SplittingMethod)):
-        return method
-    raise ValueError(f"method must be one of {', '.join(map(repr, METHODS))} (or a "
-                     f"sweep.methods.ButcherTableau or SplittingMethod), got {method!r}")
-
-
-def default_chunk_size(settings: RunSettings) -> int:
-    """Trajectories per chunk when ``run`` is given none: about `_config.CHUNK_WORK`
-    trajectory-steps of work (a second or so), a multiple of `_config.CHUNK_MIN`, at
-    most `_config.CHUNK_SIZE`. A function of the time settings alone, so a resumed run
-    computes the same chunks."""
-    steps = settings.n_steps or math.ceil((settings.t_end - settings.t0) / settings.dt)
-    chunks = max(1, _config.CHUNK_WORK // max(steps, 1) // _config.CHUNK_MIN)
-    return min(_config.CHUNK_SIZE, chunks * _config.CHUNK_MIN)
 
 
 def _check_stop_early(names, scene: Scene, grid: Grid, stop_early, save_every) -> None:
@@ -364,19 +243,6 @@ def _check_device(device, integrator) -> None:
     if reason is not None:
         raise ValueError(f"device='cuda' cannot run here: {reason}; accepted: "
                          "device='cpu'")
-
-
-def _block(n: int, stop_early: bool) -> int:
-    """Trajectories per block of a fixed-step run of ``n`` (see `sweep._config`): one
-    each for a handful, 16 for a few dozen, small blocks for small grids and early
-    stop, else `_config.BLOCK`."""
-    if n < _config.NARROW_BELOW:
-        return 1
-    if n < _config.TINY_BELOW and not stop_early:
-        return _config.TINY_BLOCK
-    if stop_early or n < 16 * _config.BLOCK:
-        return _config.SMALL_BLOCK
-    return _config.BLOCK
 
 
 def _drive_axes(effect) -> tuple[str, str]:
@@ -578,8 +444,12 @@ def run(
 
     Parameters
     ----------
-    scene : Scene
-        The physics; only its effects are simulated.
+    scene : Scene or System
+        The physics; only its effects are simulated. A system with several coordinates
+        (`sweep.DoublePendulum`) runs its own kernel (`sweep.engine_systems`): fixed-step
+        explicit Runge-Kutta methods, observables ``final``, ``winding``, ``energy`` and
+        ``flip`` (`sweep.system_observables`), ``save_every``, ``stop_early`` at the
+        first flip, Dask; the other options are refused for it, before any compute.
     grid : Grid
         Named axes; the run covers their Cartesian product.
     t_end : float
@@ -719,6 +589,18 @@ def run(
         When some trajectories failed (counts by kind: non-finite, step underflow;
         see ``ds.status``).
     """
+    if isinstance(scene, System):  # several coordinates: sweep.engine_systems
+        from .engine_systems import run_system
+
+        return run_system(
+            scene, grid, t_end=t_end, dt=dt, t0=t0, t_transient=t_transient,
+            observe=None if observe is DEFAULT_OBSERVE else observe,
+            save_every=save_every, method=method, rtol=rtol, atol=atol, progress=progress,
+            chunk_size=chunk_size, specialize=specialize, check_stability=check_stability,
+            estimate_error=estimate_error, checkpoint=checkpoint, resume=resume,
+            keep_checkpoint=keep_checkpoint, stop_early=stop_early, client=client,
+            device=device, strobe_samples=None if strobe_samples == STROBE_SAMPLES
+            else strobe_samples, dtype=dtype, attractors=attractors)
     check_flag("progress", progress, allow_none=True)
     check_flag("keep_checkpoint", keep_checkpoint)
     settings, spec, chunk_size = _prepare(
