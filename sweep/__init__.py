@@ -12,11 +12,14 @@ from .grid import sample as sample
 from .io import load as load
 from .io import save as save
 from .kernels import Status as Status
+from .physics import CoupledPendula as CoupledPendula
 from .physics import Damping as Damping
+from .physics import DoublePendulum as DoublePendulum
 from .physics import Forcing as Forcing
 from .physics import PivotDrive as PivotDrive
 from .physics import QuadraticDrag as QuadraticDrag
 from .physics import Scene as Scene
+from .physics import SwingNetwork as SwingNetwork
 from .physics import Torque as Torque
 
 #: Submodules imported on first use, so that ``import sweep`` stays cheap (no
@@ -44,7 +47,9 @@ def __getattr__(name):
 
 
 __all__ = [
+    "CoupledPendula",
     "Damping",
+    "DoublePendulum",
     "Forcing",
     "Grid",
     "PivotDrive",
@@ -52,6 +57,7 @@ __all__ = [
     "QuadraticDrag",
     "Scene",
     "Status",
+    "SwingNetwork",
     "Torque",
     "__version__",
     "explore",

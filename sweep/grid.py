@@ -19,6 +19,7 @@ import numpy as np
 
 from ._validate import check_axis, check_choice, check_count, check_numbers
 from .physics import EFFECTS, Scene, parameter_names, parameters
+from .physics.system import System, system_axis
 
 __all__ = ["Grid", "GridRows", "ParameterRows", "Points", "from_degrees", "sample"]
 
@@ -117,8 +118,13 @@ class ParameterRows:
         checked = {}
         for name, values in axes.items():
             if name not in declared:
-                raise ValueError(f"unknown {self._what} {name!r}; accepted axis names: "
-                                 f"{', '.join(declared)}")
+                found = system_axis(name)  # a coordinate or parameter of a system
+                if found is None:
+                    raise ValueError(f"unknown {self._what} {name!r}; accepted axis names: "
+                                     f"{', '.join(declared)} (and a system's, e.g. "
+                                     "sweep.DoublePendulum's theta1_0, theta2_0, omega1_0, "
+                                     "omega2_0, mass1, length2)")
+                declared[name] = found
             # a copy: the axes are read-only, and the caller's array stays as it was
             array = checked[name] = np.array(column(name, values), dtype=np.float64)
             bad = declared[name].is_outside(array)
@@ -155,6 +161,16 @@ class ParameterRows:
         ------
         ValueError
         """
+        if isinstance(scene, System):
+            self._check_against_system(scene)
+            return
+        pendulum = parameter_names()
+        for name in self._axes:
+            if name not in pendulum:
+                raise ValueError(
+                    f"{self._what} {name!r} is a system's, not the single pendulum's; a "
+                    f"sweep.Scene accepts the axes {', '.join(pendulum)}; accepted: those, "
+                    "or a system (e.g. sweep.DoublePendulum) in place of the scene")
         for name, effect_type in EFFECTS.items():
             declaration = effect_type.declaration
             given = [axis for axis in declaration.axes if axis in self._axes]
@@ -166,22 +182,42 @@ class ParameterRows:
                     f"add {effect_type.signature()} to Scene.effects"
                 )
 
+    def _check_against_system(self, system: System) -> None:
+        """Refuse an axis that names no coordinate or parameter of ``system``."""
+        columns = system.columns(True)
+        for name in self._axes:
+            if name not in columns:
+                raise ValueError(
+                    f"{self._what} {name!r} names no coordinate or parameter of "
+                    f"{type(system).__name__}; accepted axis names: {', '.join(columns)}")
+
     def effects(self, scene: Scene) -> frozenset[str]:
         """Names of the effects the run must simulate: the scene's, plus those an axis
         switches on (see `check_against`)."""
+        if isinstance(scene, System):
+            on = scene.damping is not None or "damping" in self._axes
+            return frozenset({"damping"} if on else ())
         names = {e.declaration.name for e in scene.effects}
         for name, effect_type in EFFECTS.items():
             if any(axis in self._axes for axis in effect_type.declaration.axes):
                 names.add(name)
         return frozenset(names)
 
-    def _template(self, scene: Scene) -> np.ndarray:
-        """The scene's parameter row, theta0 = omega0 = 0 (axes override them)."""
-        fixed = {"theta0": 0.0, "omega0": 0.0, **scene.parameters()}
-        return np.array([fixed[name] for name in parameter_names()], dtype=np.float64)
+    def table_names(self, scene) -> tuple[str, ...]:
+        """The columns of the parameter table for ``scene``: `sweep.physics.
+        parameter_names` for a `Scene`; a system's initial state, parameters and (where
+        the run simulates it) damping rate for a `sweep.physics.System`."""
+        if isinstance(scene, System):
+            return scene.columns("damping" in self.effects(scene))
+        return parameter_names()
 
-    def _columns(self) -> np.ndarray:
-        names = parameter_names()
+    def _template(self, scene: Scene) -> np.ndarray:
+        """The scene's parameter row, the initial state 0 (axes override it)."""
+        fixed = {**dict.fromkeys(self.table_names(scene), 0.0), **scene.parameters()}
+        return np.array([fixed[name] for name in self.table_names(scene)], dtype=np.float64)
+
+    def _columns(self, scene) -> np.ndarray:
+        names = self.table_names(scene)
         return np.array([names.index(name) for name in self._axes], dtype=np.int64)
 
     def table(self, scene: Scene, start: int = 0, stop: int | None = None) -> np.ndarray:
@@ -273,7 +309,7 @@ class Grid(ParameterRows):
         strides = np.cumprod((self.shape + (1,))[:0:-1])[::-1] if self._axes else ()
         sizes = [values.size for values in self._axes.values()]
         return GridRows(
-            template=self._template(scene), columns=self._columns(),
+            template=self._template(scene), columns=self._columns(scene),
             strides=np.array(strides, dtype=np.int64), sizes=np.array(sizes, dtype=np.int64),
             offsets=np.array(np.cumsum([0] + sizes[:-1]), dtype=np.int64),
             values=np.concatenate([np.zeros(0)] + list(self._axes.values())).astype(np.float64),
@@ -400,7 +436,7 @@ class Points(ParameterRows):
         stop = self._n if stop is None else stop
         n, count = int(stop - start), len(self._axes)
         return GridRows(
-            template=self._template(scene), columns=self._columns(),
+            template=self._template(scene), columns=self._columns(scene),
             strides=np.ones(count, dtype=np.int64), sizes=np.full(count, n, dtype=np.int64),
             offsets=np.arange(count, dtype=np.int64) * n,
             values=np.concatenate([np.zeros(0)] + [values[start:stop]
@@ -498,8 +534,11 @@ def sample(n: int, *, seed: int, method: str = "sobol", **ranges) -> Points:
     checked = {}
     for name, value in ranges.items():
         if name not in declared:
-            raise ValueError(f"sample: unknown axis {name!r}; accepted axis names: "
-                             f"{', '.join(declared)}")
+            found = system_axis(name)  # a coordinate or parameter of a system
+            if found is None:
+                raise ValueError(f"sample: unknown axis {name!r}; accepted axis names: "
+                                 f"{', '.join(declared)} (and a system's, e.g. theta1_0)")
+            declared[name] = found
         checked[name] = _sample_range(name, value, declared)
     boxed = [name for name, array in checked.items() if array.shape == (2,)]
     if not boxed:

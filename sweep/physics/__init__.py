@@ -5,8 +5,11 @@ later adds its parameters); code inside sweep calls `parameter_names` and
 `parameter_info`.
 """
 
+from .coupled import CoupledPendula
+from .double import DoublePendulum
 from .effect import EFFECTS, Drive, Effect, EffectDeclaration, Parameter, register, unregister
 from .effects import Damping, Forcing, PivotDrive, QuadraticDrag, Torque
+from .network import SwingNetwork
 from .scene import (
     BASE_PARAMETERS,
     MODELS,
@@ -17,9 +20,10 @@ from .scene import (
     parameters,
 )
 
-__all__ = ["BASE_PARAMETERS", "Damping", "Drive", "EFFECTS", "Effect", "EffectDeclaration",
+__all__ = ["BASE_PARAMETERS", "CoupledPendula", "Damping", "DoublePendulum", "Drive",
+           "EFFECTS", "Effect", "EffectDeclaration",
            "Forcing", "MODELS", "PARAMETERS", "PARAMETER_INFO", "Parameter", "PivotDrive",
-           "QuadraticDrag", "Scene", "Torque", "parameter_info", "parameter_names",
+           "QuadraticDrag", "Scene", "SwingNetwork", "Torque", "parameter_info", "parameter_names",
            "parameter_table", "parameters", "register", "unregister"]
 
 

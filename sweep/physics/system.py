@@ -41,7 +41,9 @@ from dataclasses import dataclass
 
 from .effect import Parameter
 
-__all__ = ["Coordinate", "DerivedSystem", "SystemDeclaration"]
+__all__ = ["Coordinate", "DerivedSystem", "SYSTEMS", "SYSTEM_DAMPING", "System",
+           "SystemDeclaration", "initial_parameters", "register_system", "system_axis",
+           "system_columns", "system_parameters"]
 
 
 @dataclass(frozen=True)
@@ -123,3 +125,128 @@ class SystemDeclaration:
     forces: tuple[str, ...] = ()
     accelerations: tuple[str, ...] = ()
     potential: str | None = None
+
+
+def initial_parameters(system: SystemDeclaration) -> tuple[Parameter, ...]:
+    """The initial-state parameters of ``system``: every coordinate's initial value
+    (axis ``<name>_0``), then every initial velocity (``<velocity>_0``)."""
+    positions = tuple(Parameter(f"{c.name}_0", f"{c.name}_0", f"{c.symbol}_0", c.units,
+                                c.units, f"initial {c.long_name or c.name}", default=0.0,
+                                angle=c.angular) for c in system.coordinates)
+    velocities = tuple(Parameter(f"{c.velocity}_0", f"{c.velocity}_0", f"{c.velocity_symbol}_0",
+                                 c.velocity_units, c.velocity_units, f"initial {c.velocity}",
+                                 default=0.0, angle=c.angular) for c in system.coordinates)
+    return positions + velocities
+
+
+#: The parameter of `sweep.Damping` on a system (mass-proportional damping: every
+#: coordinate's acceleration gains ``- c v_i``).
+SYSTEM_DAMPING = Parameter("damping", "coefficient", "damping_c", "s-1", "1/s",
+                           "mass-proportional damping rate c (every acceleration gains "
+                           "- c times its velocity)", minimum=0.0, default=0.0)
+
+
+def system_parameters(system: SystemDeclaration, damping: bool) -> tuple[Parameter, ...]:
+    """Every column of a system's parameter table, in order: the initial state, the
+    system's parameters, then the damping rate where damping is present."""
+    return initial_parameters(system) + tuple(system.parameters) + \
+        ((SYSTEM_DAMPING,) if damping else ())
+
+
+def system_columns(system: SystemDeclaration, damping: bool) -> tuple[str, ...]:
+    """Names (grid axes, table columns) of `system_parameters`."""
+    return tuple(p.axis for p in system_parameters(system, damping))
+
+
+#: The user-facing system classes (`register_system`), for the grid's axis names.
+SYSTEMS: dict[str, type] = {}
+
+
+def register_system(cls: type) -> type:
+    """Add a `System` subclass to `SYSTEMS` (a class decorator); returns the class."""
+    SYSTEMS[cls.__name__] = cls
+    return cls
+
+
+def system_axis(name: str) -> Parameter | None:
+    """The parameter of any registered system whose axis is ``name``, or None."""
+    for cls in SYSTEMS.values():
+        found = cls.axis_parameter(name)
+        if found is not None:
+            return found
+    return None
+
+
+class System:
+    """Base of the systems with several coordinates (`DoublePendulum`, ...), what
+    `sweep.run` takes where it takes a `sweep.Scene`.
+
+    A subclass is a frozen dataclass with a field per parameter of its declaration
+    (same names as the `Parameter` fields) and ``effects``; it defines `declaration`
+    (a `SystemDeclaration`, which may depend on the instance, e.g. on a number of
+    pendula) and `axis_parameter`.
+    """
+
+    #: Effects a system accepts (only `sweep.Damping` so far: mass-proportional).
+    ACCEPTED_EFFECTS = ("Damping",)
+
+    #: UDUNITS units of its energy (its Lagrangian's).
+    energy_units = "J"
+
+    #: The lowest energy at which any angle can be upright (an odd multiple of pi), as
+    #: kernel source in the parameters' symbols, or None if unknown: with
+    #: ``stop_early`` a start below it is known never to flip and is not integrated.
+    flip_energy: str | None = None
+
+    @property
+    def declaration(self) -> SystemDeclaration:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    @classmethod
+    def axis_parameter(cls, name: str) -> Parameter | None:  # pragma: no cover
+        """The parameter of any instance of this class whose grid axis is ``name``."""
+        raise NotImplementedError
+
+    def _check_effects(self) -> tuple:
+        """``effects`` as a tuple, each accepted, at most one of each kind."""
+        from .effects import Damping
+
+        effects = self.effects
+        if not isinstance(effects, (tuple, list)):
+            effects = (effects,)
+        seen = set()
+        for effect in effects:
+            if not isinstance(effect, Damping):
+                raise TypeError(f"{type(self).__name__} accepts the effects "
+                                f"{', '.join(self.ACCEPTED_EFFECTS)} (Damping(coefficient): "
+                                f"mass-proportional, every acceleration gains - c v_i); got "
+                                f"{effect!r}")
+            if type(effect) in seen:
+                raise ValueError(f"{type(self).__name__} got {type(effect).__name__} twice; "
+                                 "accepted: at most one of each effect")
+            seen.add(type(effect))
+        return tuple(effects)
+
+    @property
+    def damping(self) -> float | None:
+        """The damping rate c [1/s] of its `sweep.Damping`, or None without one."""
+        found = [e for e in self.effects if type(e).__name__ == "Damping"]
+        return found[0].coefficient if found else None
+
+    def parameters(self) -> dict[str, float]:
+        """Values of every table column except the initial state (the damping rate
+        0 where there is no damping: read only where a grid axis switches it on)."""
+        values = {p.axis: float(getattr(self, p.axis)) for p in self.declaration.parameters}
+        values["damping"] = self.damping or 0.0
+        return values
+
+    def columns(self, damping: bool) -> tuple[str, ...]:
+        """The parameter table's columns (`system_columns`)."""
+        return system_columns(self.declaration, damping)
+
+    def to_dict(self) -> dict:
+        """A JSON-able description (dataset attribute ``system``)."""
+        return {"system": type(self).__name__,
+                **{p.axis: float(getattr(self, p.axis))
+                   for p in self.declaration.parameters},
+                "effects": [{"effect": type(e).__name__, **e.values()} for e in self.effects]}

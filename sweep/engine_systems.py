@@ -1,0 +1,324 @@
+"""`sweep.run` for a system with several coordinates (`sweep.physics.System`): validate
+-> parameter table -> kernel (`sweep.kernels.system`) -> chunks -> dataset.
+
+The same path as the single pendulum's below the kernel (chunks, threads, progress,
+Dask through `sweep.execution`); `sweep.engine.run` hands a system here.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import warnings
+
+import numpy as np
+import xarray as xr
+
+from . import _config
+from ._version import __version__
+from .execution import RunContext, execute
+from .execution.progress import progress_bar
+from .grid import ParameterRows
+from .kernels import Status, failure_summary, status_counts, vectors
+from .kernels.network import NETWORK_OBSERVABLES, NetworkSpec, network_outputs
+from .kernels.system import SystemSpec, n_outputs
+from .physics.network import NETWORK_PARAMETERS, SwingNetwork
+from .physics.system import System, system_parameters
+from .settings import _block, default_chunk_size, validate_settings
+from .system_observables import resolve_system_observe, variables
+
+__all__ = ["prepare_system", "run_system", "to_network_dataset", "to_system_dataset"]
+
+#: `sweep.run`'s arguments that a system run does not take yet, with the value that
+#: means "not used"; any other value is refused before any compute.
+_NOT_YET = {"rtol": None, "atol": None, "specialize": True, "estimate_error": None,
+            "checkpoint": None, "resume": False, "device": "cpu", "dtype": "float64",
+            "attractors": None}
+
+
+def _check_not_yet(system: System, given: dict) -> None:
+    for name, unused in _NOT_YET.items():
+        value = given.get(name, unused)
+        if value is not unused and value != unused:
+            raise ValueError(f"{name}={value!r} is not available for a system "
+                             f"({type(system).__name__}) yet; accepted: {name}={unused!r} "
+                             "(the single pendulum's sweep.Scene takes it)")
+
+
+def _network_observe(observe) -> tuple[str, ...]:
+    if isinstance(observe, str):
+        observe = (observe,)
+    for name in observe:
+        if name not in NETWORK_OBSERVABLES:
+            raise ValueError(f"unknown observable {name!r} for a SwingNetwork; accepted: "
+                             f"{', '.join(map(repr, NETWORK_OBSERVABLES))}")
+    return tuple(name for name in NETWORK_OBSERVABLES if name in observe)
+
+
+def _check_network_grid(network: SwingNetwork, grid: ParameterRows) -> None:
+    """Perturbed nodes must be node indices (or -1); the coupling is not an axis (the
+    synchronous state depends on it)."""
+    axes = grid.axes
+    if "coupling" in axes and grid.varies("coupling"):
+        raise ValueError("grid axis 'coupling' is not available for a SwingNetwork yet (its "
+                         "synchronous state, the starts' origin, depends on it); accepted: "
+                         "SwingNetwork(..., coupling=K), one network per coupling")
+    nodes = axes.get("perturbed_node")
+    if nodes is not None:
+        bad = (nodes != np.round(nodes)) | (nodes < -1) | (nodes >= network.n_nodes)
+        if bad.any():
+            raise ValueError(f"axis 'perturbed_node' has value {float(nodes[bad][0])!r}; "
+                             f"accepted: node indices 0 to {network.n_nodes - 1}, or -1 (none)")
+
+
+def _prepare_network(network, grid, settings, observe, save_every, stop_early):
+    if stop_early:
+        raise ValueError("stop_early is not available for a SwingNetwork; accepted: "
+                         "stop_early=False")
+    _check_network_grid(network, grid)
+    names = _network_observe(("synchrony",) if observe is None else observe)
+    if not names and save_every is None:
+        raise ValueError("observe is empty and save_every is None -- nothing would be "
+                         "computed; accepted: final, synchrony, or a save_every")
+    coupling = grid.axes.get("coupling", [network.coupling])[0]
+    return NetworkSpec(edges=tuple(tuple(e) for e in network.edges.tolist()),
+                       power=tuple(network.power.tolist()),
+                       synchronous=tuple(network.synchronous_state(coupling).tolist()),
+                       observe=names, save=save_every is not None, method=settings.method,
+                       block=_block(grid.size, False))
+
+
+def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
+                   t_transient=0.0, observe=None, save_every=None,
+                   method="rk4", chunk_size=None, stop_early=False, strobe_samples=None,
+                   check_stability=True, **not_yet):
+    """Validate a system run (before any compute); return its settings, kernel spec and
+    chunk size.
+
+    Raises
+    ------
+    ValueError, TypeError
+        Naming the argument, its value and what is accepted.
+    """
+    from ._validate import check_flag, check_positive_int
+
+    if not isinstance(grid, ParameterRows):
+        raise TypeError(f"grid must be a sweep.Grid or sweep.Points, got {grid!r}")
+    _check_not_yet(system, not_yet)
+    grid.check_against(system)
+    settings = validate_settings(t_end=t_end, dt=dt, t0=t0, t_transient=t_transient,
+                                 save_every=save_every, method=method)
+    integrator = settings.integrator
+    if integrator.adaptive or integrator.kind != "explicit":
+        from .methods import METHODS
+
+        accepted = ", ".join(repr(n) for n, m in METHODS.items()
+                             if not m.adaptive and m.kind == "explicit")
+        raise ValueError(f"a system integrates with a fixed-step explicit Runge-Kutta "
+                         f"method; got method {integrator.name!r}; accepted: {accepted}")
+    check_flag("stop_early", stop_early)
+    if chunk_size is None:
+        chunk_size = default_chunk_size(settings)
+    check_positive_int("chunk_size", chunk_size)
+    if isinstance(system, SwingNetwork):
+        if strobe_samples is not None:
+            raise ValueError(f"strobe_samples={strobe_samples!r} is not available for a "
+                             "SwingNetwork; accepted: strobe_samples=None")
+        return settings, _prepare_network(system, grid, settings, observe, save_every,
+                                          stop_early), int(chunk_size)
+    names = resolve_system_observe(("final", "winding") if observe is None else observe)
+    if not names and save_every is None:
+        raise ValueError("observe is empty and save_every is None -- nothing would be "
+                         "computed; accepted: at least one of final, winding, energy, "
+                         "flip, or a save_every")
+    if strobe_samples is not None:
+        raise ValueError(f"strobe_samples={strobe_samples!r} is not available for a system "
+                         "yet; accepted: strobe_samples=None")
+    check_flag("check_stability", check_stability)
+    if stop_early and (names != ("flip",) or save_every is not None):
+        raise ValueError(
+            "stop_early stops a system's trajectory at its first flip, so it observes only "
+            f"'flip' and saves nothing; got observe={names!r}, save_every={save_every!r}; "
+            "accepted: observe=('flip',) and save_every=None, or stop_early=False")
+    damping = "damping" in grid.effects(system)
+    spec = SystemSpec(system=system.declaration,
+                      derived=system.derived(jacobian="lyapunov" in names), observe=names,
+                      damping=damping, save=save_every is not None, method=settings.method,
+                      stop_early=bool(stop_early), block=_block(grid.size, bool(stop_early)),
+                      flip_energy=system.flip_energy)
+    if "energy" in names and not spec.derived.energy_lines:
+        raise ValueError(f"observable 'energy' needs the energy of {type(system).__name__}, "
+                         "which its declaration does not give; accepted: observe without "
+                         "'energy'")
+    return settings, spec, int(chunk_size)
+
+
+def run_system(system: System, grid: ParameterRows, *, progress=None, client=None,
+               **kwargs) -> xr.Dataset:
+    """`sweep.run` for a `sweep.physics.System` (see `sweep.run` for the arguments)."""
+    from ._validate import check_flag
+
+    check_flag("progress", progress, allow_none=True)
+    keep = kwargs.pop("keep_checkpoint", False)
+    check_flag("keep_checkpoint", keep)
+    settings, spec, chunk_size = prepare_system(system, grid, **kwargs)
+    if client is not None:
+        from .execution.dask import check_client
+
+        check_client(client)
+    n = grid.size
+    network = isinstance(spec, NetworkSpec)
+    m = spec.n_nodes if network else len(spec.system.coordinates)
+    width = network_outputs(spec) if network else n_outputs(spec)
+    arrays = {"out": np.empty((n, width)), "status": np.empty(n, dtype=np.int8)}
+    if settings.save_every is not None:
+        n_saved = settings.n_steps // settings.save_every + 1
+        arrays["saved"] = np.full((n, 2 * m, n_saved), np.nan)
+    todo = list(grid.chunks(chunk_size))
+    with progress_bar(progress, n) as bar:
+        execute(RunContext(system, grid, spec, settings), todo, arrays,
+                lambda start, stop: bar.update(stop - start), client=client)
+    failures = failure_summary(status_counts(arrays["status"]), n)
+    if failures:
+        warnings.warn(failures, RuntimeWarning, stacklevel=3)
+    build = to_network_dataset if network else to_system_dataset
+    return build(system=system, grid=grid, settings=settings, spec=spec, out=arrays["out"],
+                 status=arrays["status"], saved=arrays.get("saved"))
+
+
+def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
+                      saved=None) -> xr.Dataset:
+    """Wrap a system run's flat outputs into a labelled Dataset.
+
+    Parameters
+    ----------
+    system : sweep.physics.System
+    grid : Grid or Points
+    settings : sweep.engine.RunSettings
+    spec : SystemSpec
+    out : ndarray, shape (grid.size, n_outputs(spec)), float64
+    status : ndarray, shape (grid.size,), int8
+    saved : ndarray, shape (grid.size, 2 m, n_saved), float64, optional
+        The m coordinates then the m velocities at the saved steps.
+    """
+    dims = grid.dims
+    info = {p.axis: p for p in system_parameters(spec.system, True)}
+    coords = {name: xr.Variable(dim, values, {"units": info[name].units,
+                                              "long_name": info[name].long_name})
+              for name, dim, values in grid.coordinates()}
+    data_vars, col = {}, 0
+    coordinates = spec.system.coordinates
+    for name in spec.observe:
+        for variable, units, long_name in variables(name, coordinates, system.energy_units):
+            data_vars[variable] = xr.Variable(dims, grid.unflatten(out[:, col]),
+                                              {"units": units, "long_name": long_name})
+            col += 1
+    data_vars["status"] = _status(grid, status)
+    if saved is not None:
+        coords["time"] = _time(settings, saved.shape[2])
+        rows = [(c.name, c.units, f"{c.long_name or c.name}"
+                 + (", unwrapped" if c.angular else "")) for c in coordinates] + \
+            [(c.velocity, c.velocity_units, c.velocity) for c in coordinates]
+        for k, (name, units, long_name) in enumerate(rows):
+            data_vars[name] = xr.Variable(dims + ("time",), grid.unflatten(saved[:, k, :]),
+                                          {"units": units, "long_name": long_name})
+    fixed = {k: v for k, v in system.parameters().items()
+             if k not in grid.axes and (k != "damping" or spec.damping)}
+    attrs = _attributes(system, grid, settings, spec, fixed)
+    attrs.update(system_name=spec.system.name,
+                 coordinates_names=" ".join(c.name for c in coordinates),
+                 effects="damping" if spec.damping else "none")
+    if spec.stop_early:
+        attrs["stop_early"] = "at the first flip"
+    return xr.Dataset(data_vars, coords, attrs)
+
+
+def _status(grid, status) -> xr.Variable:
+    """The ``status`` variable, with its CF flags."""
+    codes = np.array([s.value for s in Status], dtype=np.int8)
+    return xr.Variable(grid.dims, grid.unflatten(status), {
+        "long_name": "per-trajectory integration status", "flag_values": codes,
+        "flag_meanings": " ".join(s.name.lower() for s in Status),
+        "comment": "; ".join(f"{s.name.lower()}: {s.message}" for s in Status)})
+
+
+def _time(settings, n_saved: int) -> xr.Variable:
+    return xr.Variable("time", settings.t0 + np.arange(n_saved) * settings.save_every
+                       * settings.dt, {"units": "s", "long_name": "time (t0 + n dt at saved "
+                                                                 "steps n)"})
+
+
+def _attributes(system, grid, settings, spec, fixed: dict) -> dict:
+    """The attributes every system dataset has: provenance and how to reproduce it."""
+    attrs = {
+        "Conventions": "CF-1.10",
+        "title": f"{type(system).__name__} parameter sweep",
+        "source": f"sweep {__version__}",
+        "history": f"{datetime.datetime.now(datetime.UTC).isoformat(timespec='seconds')}"
+                   f" created by sweep {__version__}",
+        "sweep_version": __version__,
+        **{name: float(value) for name, value in fixed.items()},
+        "system": json.dumps(system.to_dict(), sort_keys=True),
+        **grid.provenance(),
+        "method": settings.method,
+        "t0": settings.t0,
+        "t_end": settings.t_end,
+        "dt": settings.dt,
+        "t_transient": settings.t_transient,
+        "n_steps": settings.n_steps,
+        "observe": " ".join(spec.observe),
+        "vector_width": vectors.describe(_config.vector_width()),
+    }
+    if settings.save_every is not None:
+        attrs["save_every"] = settings.save_every
+    return attrs
+
+
+def to_network_dataset(*, system: SwingNetwork, grid, settings, spec: NetworkSpec, out,
+                       status, saved=None) -> xr.Dataset:
+    """Wrap a swing network run's flat outputs into a labelled Dataset: per-node
+    variables have a ``node`` dimension (last before ``time``).
+
+    Parameters
+    ----------
+    out : ndarray, shape (grid.size, network_outputs(spec)), float64
+    saved : ndarray, shape (grid.size, 2 N, n_saved), float64, optional
+    """
+    dims, n = grid.dims, spec.n_nodes
+    info = {p.axis: p for p in NETWORK_PARAMETERS}
+    coords = {name: xr.Variable(dim, values, {"units": info[name].units,
+                                              "long_name": info[name].long_name})
+              for name, dim, values in grid.coordinates()}
+    coords["node"] = xr.Variable("node", np.arange(n), {"long_name": "node index"})
+    data_vars, col = {}, 0
+    for name in spec.observe:
+        if name == "final":
+            for variable, units, meaning in (
+                    ("theta_final", "rad", "phase of each node at t_end, unwrapped"),
+                    ("omega_final", "rad s-1", "frequency deviation of each node at t_end")):
+                data_vars[variable] = xr.Variable(
+                    dims + ("node",), grid.unflatten(out[:, col:col + n]),
+                    {"units": units, "long_name": meaning})
+                col += n
+        else:
+            data_vars["frequency_spread"] = xr.Variable(dims, grid.unflatten(out[:, col]), {
+                "units": "rad s-1", "long_name": "max |omega_i| at t_end: 0 in the "
+                                                 "synchronous state"})
+            data_vars["order_parameter"] = xr.Variable(dims, grid.unflatten(out[:, col + 1]), {
+                "units": "1", "long_name": "Kuramoto order parameter r = |mean exp(i theta)| "
+                                           "at t_end"})
+            col += 2
+    data_vars["status"] = _status(grid, status)
+    if saved is not None:
+        coords["time"] = _time(settings, saved.shape[2])
+        data_vars["theta"] = xr.Variable(dims + ("node", "time"),
+                                         grid.unflatten(saved[:, :n, :]),
+                                         {"units": "rad", "long_name": "phase, unwrapped"})
+        data_vars["omega"] = xr.Variable(dims + ("node", "time"),
+                                         grid.unflatten(saved[:, n:, :]),
+                                         {"units": "rad s-1", "long_name": "frequency deviation"})
+    fixed = {k: v for k, v in system.parameters().items()
+             if k not in grid.axes and k in ("damping", "coupling")}
+    attrs = _attributes(system, grid, settings, spec, fixed)
+    attrs.update(system_name="swing_network", n_nodes=n, n_edges=len(spec.edges))
+    return xr.Dataset(data_vars, coords, attrs)

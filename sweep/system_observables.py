@@ -1,0 +1,119 @@
+"""What a run of a system with several coordinates can observe (`sweep.physics.system`).
+
+The single pendulum's observables (`sweep.observables`) read its state ``th, om``; a
+system's read every coordinate. Each is declared here as data (its variables per
+coordinate, units, meaning); `sweep.kernels.system` writes their kernel source and
+`sweep.io` their dataset variables, in this order.
+
+- ``final``: every coordinate and velocity at ``t_end`` (``theta1_final``, ...);
+- ``winding``: per angle, the wells crossed (``round(theta_final / 2 pi) -
+  round(theta0 / 2 pi)``, ties rounded up), so a start on either side of the bottom
+  that ends in the same well counts the same;
+- ``energy``: the system's energy at the start and at ``t_end`` (``energy_initial``,
+  ``energy_final``; a conservative run's drift is their difference);
+- ``flip``: ``flip_time``, the first time any angle passes an upright position (an odd
+  multiple of pi), interpolated linearly within the step; NaN where no angle flipped
+  before ``t_end`` (the trajectory's ``status`` says it is ok). With ``stop_early`` a
+  trajectory stops at its first flip: the time-to-first-flip map of the double
+  pendulum costs only the time each start takes to flip;
+- ``lyapunov``: ``lyapunov_max`` [1/s], the largest Lyapunov exponent over the steady
+  window (Benettin's method on the integrator's step map, from the system's derived
+  Jacobian), as the single pendulum's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .observables import LYAPUNOV_EVERY
+
+__all__ = ["SYSTEM_OBSERVABLES", "SystemObservable", "resolve_system_observe", "variables"]
+
+
+@dataclass(frozen=True)
+class SystemObservable:
+    """One observable of a system run.
+
+    Attributes
+    ----------
+    name : str
+    per : {"coordinate", "angle", "system"}
+        Whether it has a variable per coordinate (position and velocity), per angular
+        coordinate, or one set for the system.
+    stops : bool
+        Whether ``stop_early`` may stop a trajectory on it (its answer is final).
+    """
+
+    name: str
+    per: str
+    stops: bool = False
+
+
+SYSTEM_OBSERVABLES = {o.name: o for o in (
+    SystemObservable("final", "coordinate"),
+    SystemObservable("winding", "angle"),
+    SystemObservable("energy", "system"),
+    SystemObservable("flip", "system", stops=True),
+    SystemObservable("lyapunov", "system"),
+)}
+
+
+def resolve_system_observe(observe) -> tuple[str, ...]:
+    """``observe`` checked and put in canonical order.
+
+    Raises
+    ------
+    ValueError
+        On an unknown name, naming it and the accepted ones.
+    TypeError
+        On something that is not a sequence of names.
+    """
+    if isinstance(observe, str):
+        observe = (observe,)
+    try:
+        names = list(observe)
+    except TypeError:
+        raise TypeError(f"observe must be a sequence of observable names, got {observe!r}; "
+                        f"accepted for a system: {', '.join(SYSTEM_OBSERVABLES)}") from None
+    for name in names:
+        if name not in SYSTEM_OBSERVABLES:
+            raise ValueError(f"unknown observable {name!r} for a system; accepted: "
+                             f"{', '.join(map(repr, SYSTEM_OBSERVABLES))}")
+    return tuple(name for name in SYSTEM_OBSERVABLES if name in names)
+
+
+def variables(name: str, coordinates, energy_units: str) -> list[tuple[str, str, str]]:
+    """``(variable, units, long_name)`` of observable ``name`` for these coordinates, in
+    the order of the kernel's output columns.
+
+    Parameters
+    ----------
+    name : str
+        A `SYSTEM_OBSERVABLES` name.
+    coordinates : sequence of sweep.physics.Coordinate
+    energy_units : str
+        Units of the system's energy (its Lagrangian's).
+    """
+    if name == "final":
+        return [(f"{c.name}_final", c.units, f"{c.long_name or c.name} at t_end"
+                 + (", unwrapped (not reduced modulo 2 pi)" if c.angular else ""))
+                for c in coordinates] + \
+            [(f"{c.velocity}_final", c.velocity_units, f"{c.velocity} at t_end")
+             for c in coordinates]
+    if name == "winding":
+        return [(f"winding_{c.name}", "1",
+                 f"wells of {c.name} crossed from t0 to t_end: round({c.name}_final / 2 pi) "
+                 f"- round({c.name}_0 / 2 pi), ties rounded up")
+                for c in coordinates if c.angular]
+    if name == "energy":
+        return [("energy_initial", energy_units, "energy of the system at t0"),
+                ("energy_final", energy_units, "energy of the system at t_end")]
+    if name == "flip":
+        return [("flip_time", "s", "time of the first flip: the first time any angle "
+                 "passes an upright position (an odd multiple of pi), interpolated within "
+                 "the step; NaN where none flipped before t_end")]
+    if name == "lyapunov":
+        return [("lyapunov_max", "s-1", "largest Lyapunov exponent over t >= t0 + t_transient "
+                 "(finite-time, of the integrator's step map; one tangent vector from "
+                 f"(1, ..., 1) / sqrt(2 m), renormalised every {LYAPUNOV_EVERY} steps)")]
+    raise ValueError(f"unknown system observable {name!r}")

@@ -1,0 +1,314 @@
+"""Systems with several coordinates (`sweep.DoublePendulum`) run through `sweep.run`,
+checked against oracles: SciPy's DOP853 on the textbook equations of motion (written
+out here, not read from sweep), the small-angle normal modes, RK4's measured order, and
+DOP853's event location for the first flip.
+
+Tolerances: RK4's global error is C dt^4; the same case at dt and dt/2 differs by
+D = (15/16) C dt^4, so ``2 D`` bounds the dt run's error with room for higher-order
+terms (as in tests/test_oracles.py). DOP853 at rtol = atol = 1e-13 adds ~1e-12 over
+these short runs.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import sweep
+
+G = 9.81
+
+
+def textbook(t, y, m1=1.0, m2=1.0, l1=1.0, l2=1.0, g=G, c=0.0):
+    """The double pendulum's equations of motion for absolute angles, in the textbook
+    closed form (e.g. myphysicslab's "Double Pendulum"), plus mass-proportional damping
+    ``- c theta_i'``."""
+    th1, th2, w1, w2 = y
+    d = th1 - th2
+    den = 2 * m1 + m2 - m2 * np.cos(2 * d)
+    a1 = (-g * (2 * m1 + m2) * np.sin(th1) - m2 * g * np.sin(th1 - 2 * th2)
+          - 2 * np.sin(d) * m2 * (w2 ** 2 * l2 + w1 ** 2 * l1 * np.cos(d))) / (l1 * den)
+    a2 = (2 * np.sin(d) * (w1 ** 2 * l1 * (m1 + m2) + g * (m1 + m2) * np.cos(th1)
+                           + w2 ** 2 * l2 * m2 * np.cos(d))) / (l2 * den)
+    return [w1, w2, a1 - c * w1, a2 - c * w2]
+
+
+def dop853(y0, t_end, **params):
+    return solve_ivp(textbook, (0.0, t_end), y0, method="DOP853", rtol=1e-13, atol=1e-13,
+                     args=tuple(params.get(k, d) for k, d in (
+                         ("m1", 1.0), ("m2", 1.0), ("l1", 1.0), ("l2", 1.0), ("g", G),
+                         ("c", 0.0)))).y[:, -1]
+
+
+FINAL = ("theta1_final", "theta2_final", "omega1_final", "omega2_final")
+
+# a regular start, a large-amplitude one and one that flips (all non-chaotic over 2 s)
+STARTS = [(0.3, -0.2, 0.0, 0.0), (2.0, 1.0, 0.5, -0.5), (1.0, 2.5, 0.0, 1.0)]
+
+
+def _points(starts):
+    return sweep.Points(theta1_0=[s[0] for s in starts], theta2_0=[s[1] for s in starts],
+                        omega1_0=[s[2] for s in starts], omega2_0=[s[3] for s in starts])
+
+
+def _finals(ds):
+    return np.stack([ds[name].values for name in FINAL], axis=-1)
+
+
+@pytest.mark.parametrize("params", [
+    {},
+    {"m1": 2.0, "m2": 0.5, "l1": 1.5, "l2": 0.7, "g": 3.0},
+    {"c": 0.4},
+])
+def test_final_state_matches_dop853_on_the_textbook_equations(params):
+    system = sweep.DoublePendulum(
+        mass1=params.get("m1", 1.0), mass2=params.get("m2", 1.0),
+        length1=params.get("l1", 1.0), length2=params.get("l2", 1.0),
+        gravity=params.get("g", G),
+        effects=(sweep.Damping(params["c"]),) if "c" in params else ())
+    t_end, dt = 2.0, 0.002
+    coarse = _finals(sweep.run(system, _points(STARTS), t_end=t_end, dt=dt,
+                               observe=("final",)))
+    fine = _finals(sweep.run(system, _points(STARTS), t_end=t_end, dt=dt / 2,
+                             observe=("final",)))
+    reference = np.array([dop853(list(s), t_end, **params) for s in STARTS])
+    tol = 2 * np.abs(coarse - fine) + 1e-11  # 2 D (module docstring) + DOP853's error
+    assert np.all(tol < 1e-6), "dt resolves the motion, so the bound means something"
+    np.testing.assert_array_less(np.abs(coarse - reference), tol)
+
+
+def test_convergence_order_is_4():
+    """The error against DOP853 falls 16x per halving of dt: the order, measured."""
+    errors = []
+    for dt in (0.002, 0.001, 0.0005):
+        got = _finals(sweep.run(sweep.DoublePendulum(), _points(STARTS), t_end=2.0, dt=dt,
+                                observe=("final",)))
+        reference = np.array([dop853(list(s), 2.0) for s in STARTS])
+        errors.append(np.max(np.abs(got - reference)))
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    # RK4: 4; the next term (dt^5) and round-off move it by < 0.3 at these steps
+    np.testing.assert_allclose(orders, 4.0, atol=0.3)
+
+
+def test_small_angle_normal_modes_of_equal_masses_and_lengths():
+    """For m1 = m2 and l1 = l2 = l the small-angle modes are omega^2 = (2 -+ sqrt 2) g/l
+    with theta2/theta1 = +-sqrt 2 (linearise the Lagrangian: M = m l^2 [[2, 1], [1, 1]],
+    K = m g l [[2, 0], [0, 1]], det(K - w^2 M) = 0). Started in a mode's shape, the
+    pendulum oscillates at that frequency alone; measured from the zero crossings of
+    theta1 (interpolated) over ~20 periods."""
+    length, amplitude = 0.8, 1e-4
+    system = sweep.DoublePendulum(length1=length, length2=length)
+    for sign in (+1, -1):
+        expected = math.sqrt((2 - sign * math.sqrt(2)) * G / length)
+        period = 2 * math.pi / expected
+        dt = period / 400
+        n = 400 * 20
+        ds = sweep.run(system, _points([(amplitude, sign * math.sqrt(2) * amplitude, 0, 0)]),
+                       t_end=n * dt, dt=dt, save_every=1, observe=())
+        theta = ds["theta1"].values[0]
+        time = ds["time"].values
+        k = np.flatnonzero(np.sign(theta[:-1]) != np.sign(theta[1:]))
+        crossings = time[k] - theta[k] * (time[k + 1] - time[k]) / (theta[k + 1] - theta[k])
+        measured = math.pi / np.mean(np.diff(crossings))
+        # nonlinearity: relative shift ~ amplitude^2 = 1e-8; linear interpolation of the
+        # crossings at 400 steps per period: ~(2 pi / 400)^2 / 8 relative = 3e-5 per
+        # crossing, averaged over 40: 1e-5 keeps a margin, while a mode of the other
+        # frequency (1.85x) or a wrong g/l fails by far
+        assert measured == pytest.approx(expected, rel=1e-5)
+
+
+def test_energy_error_shrinks_at_rk4_order_without_damping():
+    drifts = []
+    for dt in (0.01, 0.005):
+        ds = sweep.run(sweep.DoublePendulum(), _points(STARTS[:2]), t_end=4.0, dt=dt,
+                       observe=("energy",))
+        drifts.append(np.max(np.abs(ds.energy_final - ds.energy_initial).values))
+    # order 4 (16x), or more: the energy error of RK4 can cancel better than the state's;
+    # 10x rejects a second-order error (4x) with margin
+    assert drifts[0] / drifts[1] > 10
+    # and small: energies here are ~20-30 J, so 1e-5 J is < 1e-6 relative (a wrong term
+    # in the energy or the accelerations drifts by order 1)
+    assert drifts[1] < 1e-5
+
+
+def test_energy_is_the_textbook_energy():
+    m1, m2, l1, l2 = 1.3, 0.7, 0.9, 1.1
+    system = sweep.DoublePendulum(mass1=m1, mass2=m2, length1=l1, length2=l2)
+    ds = sweep.run(system, _points(STARTS), t_end=0.01, dt=0.01, observe=("energy",))
+    th1, th2, w1, w2 = np.array(STARTS).T
+    # T + V with V = 0 hanging at rest (sweep's convention, as the single pendulum's)
+    expected = (0.5 * m1 * l1 ** 2 * w1 ** 2
+                + 0.5 * m2 * (l1 ** 2 * w1 ** 2 + l2 ** 2 * w2 ** 2
+                              + 2 * l1 * l2 * w1 * w2 * np.cos(th1 - th2))
+                + (m1 + m2) * G * l1 * (1 - np.cos(th1)) + m2 * G * l2 * (1 - np.cos(th2)))
+    # the same sum in another order: a few ulps of the largest term (~30 J)
+    np.testing.assert_allclose(ds.energy_initial.values, expected, rtol=0, atol=1e-12)
+
+
+def _first_flip(y0, t_end):
+    """DOP853 with event location: the first time |theta_i| reaches pi (starts within
+    (-pi, pi))."""
+    events = [lambda t, y, i=i: abs(y[i]) - math.pi for i in (0, 1)]
+    for event in events:
+        event.terminal = True
+    result = solve_ivp(textbook, (0, t_end), y0, method="DOP853", rtol=1e-12, atol=1e-12,
+                       events=events)
+    times = [e[0] for e in result.t_events if len(e)]
+    return min(times) if times else math.nan
+
+
+def test_flip_time_matches_dop853_events_and_stop_early_keeps_it():
+    starts = [(2.0, 1.0, 0.5, -0.5), (1.0, 2.5, 0.0, 1.0), (0.3, -0.2, 0.0, 0.0),
+              (-2.5, 2.9, 0.0, 0.0)]
+    dt = 0.001
+    full = sweep.run(sweep.DoublePendulum(), _points(starts), t_end=5.0, dt=dt,
+                     observe=("final", "flip"))
+    expected = np.array([_first_flip(list(s), 5.0) for s in starts])
+    got = full.flip_time.values
+    assert np.isnan(expected[2]) and np.isnan(got[2])  # the small start never flips
+    flipped = ~np.isnan(expected)
+    # RK4's state error at dt = 1e-3 is ~1e-10 rad; the linear interpolation of the
+    # crossing within a step errs by ~dt^2 |theta''| / (8 |theta'|) <~ 1e-6 s here
+    np.testing.assert_allclose(got[flipped], expected[flipped], rtol=0, atol=1e-5)
+    early = sweep.run(sweep.DoublePendulum(), _points(starts), t_end=5.0, dt=dt,
+                      observe=("flip",), stop_early=True)
+    # the same arithmetic up to the flip: the same bits
+    np.testing.assert_array_equal(early.flip_time.values, got)
+
+
+def test_bits_do_not_depend_on_blocks_chunks_or_threads():
+    import numba
+
+    rng = np.random.default_rng(1)
+    starts = rng.uniform(-3, 3, size=(200, 4))
+    points = _points(starts)
+    kwargs = dict(t_end=1.0, dt=0.01, observe=("final", "winding", "energy", "flip"))
+    whole = sweep.run(sweep.DoublePendulum(), points, **kwargs)
+    chunked = sweep.run(sweep.DoublePendulum(), points, chunk_size=37, **kwargs)
+    alone = sweep.run(sweep.DoublePendulum(), _points(starts[:3]), **kwargs)  # one lane each
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        serial = sweep.run(sweep.DoublePendulum(), points, **kwargs)
+    finally:
+        numba.set_num_threads(threads)
+    for name in FINAL + ("winding_theta1", "energy_final", "flip_time"):
+        np.testing.assert_array_equal(chunked[name].values, whole[name].values)
+        np.testing.assert_array_equal(serial[name].values, whole[name].values)
+        np.testing.assert_array_equal(alone[name].values, whole[name].values[:3])
+
+
+def test_saved_trajectory_and_winding():
+    ds = sweep.run(sweep.DoublePendulum(), _points(STARTS), t_end=2.0, dt=0.01, save_every=10,
+                   observe=("final", "winding"))
+    assert ds["theta1"].dims == ("point", "time") and ds.sizes["time"] == 21
+    for name in ("theta1", "theta2", "omega1", "omega2"):
+        np.testing.assert_array_equal(ds[name].values[:, -1], ds[f"{name}_final"].values)
+    np.testing.assert_array_equal(ds["theta1"].values[:, 0], [s[0] for s in STARTS])
+    wells = np.floor(ds["theta2_final"].values / (2 * np.pi) + 0.5) - \
+        np.floor(np.array([s[1] for s in STARTS]) / (2 * np.pi) + 0.5)
+    np.testing.assert_array_equal(ds["winding_theta2"].values, wells)
+
+
+def test_dataset_round_trips_through_netcdf(tmp_path):
+    grid = sweep.Grid(theta1_0=np.linspace(-1, 1, 3), theta2_0=np.linspace(-1, 1, 4),
+                      mass2=[0.5, 2.0])
+    ds = sweep.run(sweep.DoublePendulum(), grid, t_end=0.5, dt=0.01, observe=("final", "flip"))
+    assert ds.theta1_final.dims == ("theta1_0", "theta2_0", "mass2")
+    assert ds.theta1_0.attrs["units"] == "rad"
+    path = sweep.save(ds, tmp_path / "double.nc")
+    back = sweep.load(path)
+    np.testing.assert_array_equal(back.theta2_final.values, ds.theta2_final.values)
+    assert back.attrs["system_name"] == "double_pendulum"
+
+
+@pytest.mark.parametrize("make, match", [
+    (lambda: sweep.run(sweep.DoublePendulum(), sweep.Grid(theta0=[0.1]), t_end=1, dt=0.1),
+     "names no coordinate or parameter of DoublePendulum"),
+    (lambda: sweep.run(sweep.Scene(), sweep.Grid(theta1_0=[0.1]), t_end=1, dt=0.1),
+     "is a system's, not the single pendulum's"),
+    (lambda: sweep.Grid(phi_0=[0.1]), "unknown grid axis 'phi_0'"),
+    (lambda: sweep.run(sweep.DoublePendulum(), sweep.Grid(theta3_0=[0.1]), t_end=1, dt=0.1),
+     "grid axis 'theta3_0' names no coordinate or parameter of DoublePendulum"),
+    (lambda: sweep.Grid(mass1=[-1.0]), "mass1"),
+    (lambda: sweep.DoublePendulum(mass1=0.0), "mass1"),
+    (lambda: sweep.DoublePendulum(effects=(sweep.Forcing(1.0, 1.0),)), "accepts the effects"),
+    (lambda: sweep.run(sweep.DoublePendulum(), sweep.Grid(theta1_0=[0.1]), t_end=1, dt=0.1,
+                       device="cuda"), "device='cuda' is not available for a system"),
+    (lambda: sweep.run(sweep.DoublePendulum(), sweep.Grid(theta1_0=[0.1]), t_end=1, dt=0.1,
+                       method="dopri5"), "fixed-step explicit Runge-Kutta"),
+    (lambda: sweep.run(sweep.DoublePendulum(), sweep.Grid(theta1_0=[0.1]), t_end=1, dt=0.1,
+                       observe=("final", "flip"), stop_early=True), "observes only 'flip'"),
+    (lambda: sweep.run(sweep.DoublePendulum(), sweep.Grid(theta1_0=[0.1]), t_end=1, dt=0.1,
+                       observe=("amplitude",)), "unknown observable 'amplitude'"),
+])
+def test_bad_input_is_refused_before_any_compute(make, match):
+    with pytest.raises((ValueError, TypeError), match=match):
+        make()
+
+
+def _variational(t, z):
+    """The textbook equations and their variational equations d' = J d, with J d by
+    complex-step differentiation (exact to rounding: no finite-difference error)."""
+    y, d = z[:4], z[4:]
+    return np.concatenate([textbook(t, y), np.imag(textbook(t, y + 1e-30j * d)) / 1e-30])
+
+
+def test_lyapunov_max_is_the_finite_time_exponent_of_dop853_variational_equations():
+    """Benettin's method: from d(0) = (1, 1, 1, 1) / 2 (sweep's tangent vector), the
+    finite-time exponent over [0, T] is log |d(T)| / T whatever the renormalisations
+    (they rescale, the product is the same). DOP853 on the variational equations gives
+    it; sweep's RK4 tangent is the derivative of its step map, which converges to the
+    flow's at order 4, so the 2 D rule of the module docstring bounds its error. One
+    regular start (small angles: the exponent of a quasi-periodic orbit, ~1/T) and two
+    chaotic ones."""
+    starts = [(0.1, 0.1, 0.0, 0.0), (2.0, 2.5, 0.0, 0.0), (3.0, 1.0, 0.0, 0.0)]
+    t_end = 5.0
+    reference = []
+    for s in starts:
+        z = solve_ivp(_variational, (0, t_end), list(s) + [0.5] * 4, method="DOP853",
+                      rtol=1e-13, atol=1e-13).y[:, -1]
+        reference.append(math.log(np.linalg.norm(z[4:])) / t_end)
+    coarse, fine = (sweep.run(sweep.DoublePendulum(), _points(starts), t_end=t_end, dt=dt,
+                              observe=("lyapunov",)).lyapunov_max.values
+                    for dt in (0.001, 0.0005))
+    tol = 2 * np.abs(coarse - fine) + 1e-9  # + DOP853's own error over 5 s
+    assert np.all(tol < 1e-3)
+    np.testing.assert_array_less(np.abs(coarse - np.array(reference)), tol)
+    assert reference[0] < 0.2 < 1.0 < min(reference[1:])  # regular, then chaotic
+
+
+@pytest.mark.parametrize("kind, stiffness, expected", [
+    ("spring", 3.0, lambda g, rod, m, k: g / rod + 2 * k / m),
+    ("torsion", 3.0, lambda g, rod, m, k: g / rod + 2 * k / (m * rod * rod)),
+])
+def test_coupled_pendula_normal_modes(kind, stiffness, expected):
+    """Two pendula joined by a spring (or a torsion spring): in phase they swing at
+    omega^2 = g/l (the spring stays relaxed), in anti-phase at g/l + 2k/m (or
+    + 2 kappa/(m l^2)); linearise the Lagrangian of `sweep.physics.systems` by hand.
+    Measured from the zero crossings of theta1 as in the double pendulum's modes."""
+    g, length, mass = 9.81, 0.6, 1.5
+    system = sweep.CoupledPendula(2, mass=mass, length=length, gravity=g,
+                                  coupling=stiffness, kind=kind)
+    amplitude = 1e-4
+    for sign, omega_squared in ((+1, g / length), (-1, expected(g, length, mass, stiffness))):
+        omega = math.sqrt(omega_squared)
+        dt = 2 * math.pi / omega / 400
+        ds = sweep.run(system, sweep.Points(theta1_0=[amplitude], theta2_0=[sign * amplitude]),
+                       t_end=400 * 20 * dt, dt=dt, save_every=1, observe=())
+        theta, time = ds["theta1"].values[0], ds["time"].values
+        k = np.flatnonzero(np.sign(theta[:-1]) != np.sign(theta[1:]))
+        crossings = time[k] - theta[k] * (time[k + 1] - time[k]) / (theta[k + 1] - theta[k])
+        # as in test_small_angle_normal_modes_of_equal_masses_and_lengths
+        assert math.pi / np.mean(np.diff(crossings)) == pytest.approx(omega, rel=1e-5)
+
+
+def test_coupled_pendula_ring_with_damping_runs_and_loses_energy():
+    system = sweep.CoupledPendula(4, coupling=2.0, topology="ring",
+                                  effects=(sweep.Damping(0.2),))
+    ds = sweep.run(system, sweep.Grid(theta1_0=[0.5, 1.0], theta3_0=[-0.3]), t_end=5.0,
+                   dt=0.01, observe=("final", "energy"))
+    assert ds.theta4_final.dims == ("theta1_0", "theta3_0")
+    # mass-proportional damping: dE/dt = -2 c T <= 0, and T > 0 along the way
+    assert (ds.energy_final < 0.5 * ds.energy_initial).all()
