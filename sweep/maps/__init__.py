@@ -20,12 +20,13 @@ from .labels import (
                      natural_frequency_squared,
                      well,
 )
+from .networks import basin_stability, synchronized
 from .period import NO_PERIOD, period
 from .pilot import pilot_catalogue, pilot_grid
 from .refine import refine
 
-__all__ = ["NO_PERIOD", "UNRESOLVED", "amplitude", "attractor_catalogue", "basins",
-           "continuation", "fractions",
+__all__ = ["NO_PERIOD", "UNRESOLVED", "amplitude", "attractor_catalogue", "basin_stability",
+           "basins", "continuation", "fractions",
            "identify_attractors", "inverted", "motion", "natural_frequency_squared", "period",
-           "pilot_catalogue", "pilot_grid", "refine",
+           "pilot_catalogue", "pilot_grid", "refine", "synchronized",
            "well"]
