@@ -23,6 +23,7 @@ ARGUMENTS = {
     "basin_stability": ["--samples", "2048"],
     "continuation": ["--size", "11"],
     "damped_basins": ["--size", "161"],
+    "double_pendulum_flip": ["--size", "121", "--t-max", "30"],
     "forced_basins": ["--size", "61", "--periods", "100", "--pilot", "21"],
     "frequency_response": ["--points", "41"],
     "kapitza": ["--size", "41"],
@@ -31,6 +32,7 @@ ARGUMENTS = {
     "orbit_diagram": ["--size", "41"],
     "rotation_map": ["--size", "61"],
     "seed_cases": [],
+    "swing_basin_stability": ["--samples", "40"],
     "torque_locked_running": ["--size", "61"],
 }
 
