@@ -672,8 +672,9 @@ def _demo_maps(ds, folder: Path, plot) -> list[Path]:
     setting = (f"damped pendulum, c = {DEMO['damping']:g} 1/s, "
                f"g/L = {DEMO['gravity'] / DEMO['length']:g} 1/s²")
     maps = {
-        "winding.png": (ds.winding.assign_attrs(long_name="net full turns before capture"),
-                        f"Turns before capture ({setting})"),
+        "winding.png": (ds.winding.assign_attrs(long_name="passes over the top before "
+                                                          "capture (wells crossed)"),
+                        f"Passes over the top before capture ({setting})"),
         "well.png": (ds.well.assign_attrs(long_name="final potential well index, "
                                           "round(θ_final / 2π)"),
                      f"Final well ({setting})"),
