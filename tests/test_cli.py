@@ -250,7 +250,10 @@ def test_the_example_run_file_parses():
     assert grid.dims == ("theta0", "omega0") and grid.shape == (181, 181)
     np.testing.assert_allclose(grid.axes["theta0"][[0, -1]], [-np.pi, np.pi])
     np.testing.assert_allclose(grid.axes["omega0"][[0, -1]], [-np.pi, np.pi])
-    assert kwargs == {"t0": 0.0, "t_end": 120.0, "dt": 0.01, "t_transient": 90.0,
+    # whole forcing periods, 2 pi / (2/3) = 3 pi s, written as these floats' repr
+    period = 3 * np.pi
+    assert kwargs == {"t0": 0.0, "t_end": 26 * period, "dt": period / 1000,
+                      "t_transient": 10 * period,
                       "observe": ("final", "winding", "amplitude", "theta_max")}
 
 
