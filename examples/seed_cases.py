@@ -293,7 +293,7 @@ def _nonlinear_label(ds: xr.Dataset) -> str:
     turns = int(ds.winding)
     if turns == 0:
         return "nonlinear"
-    return f"nonlinear ({abs(turns)} full turns; angle wrapped to [-180, 180) deg)"
+    return f"nonlinear ({abs(turns)} turns over the top; angle wrapped to [-180, 180) deg)"
 
 
 def plot_case(case: Case, results: dict[str, xr.Dataset], path: Path) -> Path:
@@ -378,7 +378,7 @@ def summary(case: Case, results: dict[str, xr.Dataset]) -> dict[str, float]:
     -------
     dict
         ``theta_max_linear``, ``theta_max_nonlinear`` [deg, max |theta| of the
-        unwrapped angle], ``winding_nonlinear`` (net full turns), ``rotated`` (bool),
+        unwrapped angle], ``winding_nonlinear`` (net passes over the top), ``rotated`` (bool),
         ``tension_min``, ``tension_max`` [m/s^2, nonlinear model, per unit mass].
     """
     lin, nl = results["linear"], results["nonlinear"]
@@ -474,7 +474,7 @@ def main(argv: Sequence[str] | None = None) -> int:
           f"{N_STEPS} RK4 steps (t_end = {T_END:g} s)")
     print(_table(rows))
     print("max|theta| is of the unwrapped angle; rotated = the nonlinear pendulum's "
-          "net full turns (winding) != 0;\nT/m = L theta'^2 + g cos(theta) of the "
+          "net passes over the top (winding) != 0;\nT/m = L theta'^2 + g cos(theta) of the "
           "nonlinear model (negative: the rod is in compression).")
     print(f"Wrote {len(CASES)} figures to {out} in {time.perf_counter() - start:.1f} s")
     return 0

@@ -121,7 +121,7 @@ def build_parser() -> argparse.ArgumentParser:
         "demo", help="sweep the damped pendulum over the phase plane and draw maps",
         description="Sweep a damped pendulum (c = 0.3 1/s, g/L = 9.81 1/s^2) over "
         "theta0 in [-180, 180] deg and omega0 in [-10, 10] rad/s, then draw the "
-        "number of turns before capture and the final potential well.")
+        "passes over the top before capture and the final potential well.")
     demo.add_argument("-o", "--output", default="sweep-demo", metavar="FOLDER",
                       help="folder for demo.nc and the PNG maps (created if missing; "
                       "default: %(default)s)")
@@ -672,8 +672,9 @@ def _demo_maps(ds, folder: Path, plot) -> list[Path]:
     setting = (f"damped pendulum, c = {DEMO['damping']:g} 1/s, "
                f"g/L = {DEMO['gravity'] / DEMO['length']:g} 1/s²")
     maps = {
-        "winding.png": (ds.winding.assign_attrs(long_name="net full turns before capture"),
-                        f"Turns before capture ({setting})"),
+        "winding.png": (ds.winding.assign_attrs(long_name="passes over the top before "
+                                                          "capture (wells crossed)"),
+                        f"Passes over the top ({setting})"),
         "well.png": (ds.well.assign_attrs(long_name="final potential well index, "
                                           "round(θ_final / 2π)"),
                      f"Final well ({setting})"),

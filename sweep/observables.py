@@ -196,9 +196,18 @@ OBSERVABLES: dict[str, Observable] = {
             name="winding",
             variables=(
                 ("winding", "1",
-                 "net full turns from t0 to t_end: trunc((theta_final - theta0) / 2 pi)"),
+                 "wells crossed from t0 to t_end, round(theta_final / 2 pi) - "
+                 "round(theta0 / 2 pi) (half to even): the net signed number of passes "
+                 "over the top (theta = pi mod 2 pi)"),
             ),
-            final="out[i, COL] = math.trunc((th - th0) / TWO_PI)",
+            # the well index k (rest at 2 pi k) of the end minus that of the start. It
+            # changes by +-1 exactly where the angle crosses a top, so it is the net count
+            # of those crossings, whatever the path between steps; a pendulum that never
+            # crosses one (a libration) gets 0, wherever it starts or stops in its well.
+            # round() is half to even on every target (llvm.rint on the CPU, libdevice's
+            # llrint on CUDA, np.round in the maps), odd (mirror starts give opposite
+            # windings) and puts the edges theta0 = +-pi of a [-pi, pi] grid in well 0.
+            final="out[i, COL] = round(th / TWO_PI) - round(th0 / TWO_PI)",
         ),
         Observable(
             name="theta_max",

@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-__all__ = ["energy", "integrate", "rhs", "rk4_step", "tension", "top_distance"]
+__all__ = ["energy", "integrate", "rhs", "rk4_step", "tension", "top_distance", "tops_crossed"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -80,6 +80,17 @@ def top_distance(theta):
     return np.abs(np.mod(theta, TWO_PI) - math.pi)
 
 
+def tops_crossed(thetas):
+    """Net signed passes over the top (theta = pi mod 2 pi) of the sampled path
+    ``thetas``, counted step by step as a streaming observable would: each step adds
+    the number of odd multiples of pi it crosses upward minus those it crosses downward.
+    (The sweep observable takes the difference of the end's and the start's well index
+    instead, the same number; at an angle exactly on a top the two may differ by one,
+    which the tests that compare them exclude.)"""
+    wells = np.floor((np.asarray(thetas, dtype=float) + math.pi) / TWO_PI)
+    return float(np.sum(np.diff(wells)))
+
+
 def integrate(theta0, omega0, *, t_end, dt, t0=0.0, t_transient=0.0, save_every=None,
               model="nonlinear", gravity=9.81, length=1.0, damping=0.0,
               forcing_amplitude=0.0, forcing_frequency=0.0, forcing_phase=0.0, torque=0.0,
@@ -125,7 +136,7 @@ def integrate(theta0, omega0, *, t_end, dt, t0=0.0, t_transient=0.0, save_every=
     out = {
         "theta_final": theta,
         "omega_final": omega,
-        "winding": float(math.trunc((theta - theta0) / TWO_PI)),
+        "winding": tops_crossed(thetas),
         "theta_max": float(np.max(np.abs(th_s))),
         "amplitude": float(0.5 * (np.max(th_s) - np.min(th_s))),
         "omega_mean": float((th_s[-1] - th_s[0]) / ((th_s.size - 1) * dt)),

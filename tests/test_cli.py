@@ -133,6 +133,11 @@ def test_demo_writes_the_dataset_and_two_maps(demo):
     np.testing.assert_array_equal(ds.well, np.round(ds.theta_final / (2 * np.pi)))
     assert ds.well.attrs["units"] == "1" and "round" in ds.well.attrs["long_name"]
     assert int(abs(ds.winding).max()) >= 2
+    # every start lies in well 0 (the edges theta0 = +-pi too: the well index rounds
+    # half to even), so the passes over the top are the final well, with no cut along
+    # theta0 = 0 (the former net-turn count had one); the upright starts stay at 0
+    np.testing.assert_array_equal(ds.winding.where(~upright), ds.well.where(~upright))
+    np.testing.assert_array_equal(ds.winding.where(upright, 0), 0)
 
 
 def test_demo_refuses_a_bad_size_before_creating_anything(tmp_path):
@@ -250,7 +255,10 @@ def test_the_example_run_file_parses():
     assert grid.dims == ("theta0", "omega0") and grid.shape == (181, 181)
     np.testing.assert_allclose(grid.axes["theta0"][[0, -1]], [-np.pi, np.pi])
     np.testing.assert_allclose(grid.axes["omega0"][[0, -1]], [-np.pi, np.pi])
-    assert kwargs == {"t0": 0.0, "t_end": 120.0, "dt": 0.01, "t_transient": 90.0,
+    # whole forcing periods, 2 pi / (2/3) = 3 pi s, written as these floats' repr
+    period = 3 * np.pi
+    assert kwargs == {"t0": 0.0, "t_end": 26 * period, "dt": period / 1000,
+                      "t_transient": 10 * period,
                       "observe": ("final", "winding", "amplitude", "theta_max")}
 
 

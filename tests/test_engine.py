@@ -255,13 +255,32 @@ def test_dataset_layout_units_and_provenance(small_grid):
     np.testing.assert_array_equal(ds.theta.isel(time=-1), ds.theta_final)
 
 
-def test_winding_counts_net_full_turns():
-    # undamped, fast start: omega0 = 10 rad/s is above the separatrix (2 sqrt(g/L) = 6.26)
-    ds = sweep.run(sweep.Scene(), sweep.Grid(omega0=[-10.0, 0.0, 10.0]), t_end=10.0,
-                   dt=0.001, observe=("final", "winding"))
-    expected = np.trunc(ds.theta_final / (2 * np.pi))
-    np.testing.assert_array_equal(ds.winding, expected)
-    assert ds.winding[0] < -5 and ds.winding[1] == 0 and ds.winding[2] > 5
+def test_winding_counts_the_wells_crossed():
+    """winding = round(theta_final / 2 pi) - round(theta0 / 2 pi): the demo's damped
+    pendulum (c = 0.3 1/s, g/L = 9.81 1/s^2) started 0.01 rad either side of the
+    bottom of wells -1, 0 and 2 at 7.5 rad/s goes over the top once and is captured in
+    the next well, so every start counts 1 (-1 for the mirror starts). The old
+    definition, trunc((theta_final - theta0) / 2 pi), counted 0 from +0.01 (net angle
+    2 pi - 0.01) and 1 from -0.01: the cut along theta0 = 0 of the demo's map."""
+    bottoms = 2 * np.pi * np.array([-1, 0, 2])
+    theta0 = np.concatenate([bottoms - 0.01, bottoms + 0.01])
+    ds = sweep.run(sweep.Scene(effects=(sweep.Damping(0.3),)),
+                   sweep.Grid(theta0=theta0, omega0=[7.5, -7.5]), t_end=40.0, dt=0.01,
+                   observe=("final", "winding", "energy"))
+    assert (ds.energy_final < 2 * 9.81).all()  # captured: below the separatrix energy
+    k = np.round(theta0 / (2 * np.pi))[:, None] + np.array([1, -1])  # the next well
+    np.testing.assert_array_equal(np.round(ds.theta_final / (2 * np.pi)), k)
+    np.testing.assert_array_equal(ds.winding, np.broadcast_to([1, -1], ds.winding.shape))
+    # at rest near the bottom of a well, or near its top: a libration crosses no top
+    starts = (bottoms[:, None] + [0.3, -3.0, 3.0]).ravel()
+    rest = sweep.run(sweep.Scene(), sweep.Grid(theta0=starts), t_end=10.0, dt=0.01,
+                     observe=("final", "winding"))
+    np.testing.assert_array_equal(rest.winding, 0)
+    # fast, undamped: many wells crossed, the sense of rotation, and the end's well
+    fast = sweep.run(sweep.Scene(), sweep.Grid(omega0=[-10.0, 0.0, 10.0]), t_end=10.0,
+                     dt=0.001, observe=("final", "winding"))
+    np.testing.assert_array_equal(fast.winding, np.round(fast.theta_final / (2 * np.pi)))
+    assert fast.winding[0] < -5 and fast.winding[1] == 0 and fast.winding[2] > 5
 
 
 def test_fresh_process_loads_the_kernel_from_the_disk_cache(tmp_path):

@@ -363,11 +363,13 @@ def test_unknown_run_keyword_is_refused():
 
 
 def test_a_forced_run_file_without_a_strobe_period_opens_on_motion():
-    """examples/forced.toml's dt = 0.01 does not divide its forcing period 3 pi: no
-    stroboscopic samples, so no basins; the explorer opens on the motion map and says
-    why (it used to refuse to start). Asking for basins explicitly is still refused.
-    Nothing is computed: the constructor only validates."""
+    """examples/forced.toml with dt = 0.01 (its step until it was made to fit the basins
+    map), which does not divide its forcing period 3 pi: no stroboscopic samples, so no
+    basins; the explorer opens on the motion map and says why (it used to refuse to
+    start). Asking for basins explicitly is still refused. Nothing is computed: the
+    constructor only validates."""
     scene, grid, kwargs = load_run("examples/forced.toml", {})
+    kwargs = dict(kwargs, t_end=120.0, dt=0.01)
     grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, N), omega0=np.linspace(-3, 3, N))
     with pytest.warns(UserWarning, match=r"attractor basins .* not a whole number of "
                                          r"steps .* showing the motion map"):

@@ -127,7 +127,10 @@ def test_rotation_just_above_the_separatrix_turn_time_and_sense(excess):
         # the slow passage past the top (measured 1.9e-11 and 5.2e-8 after 3 turns);
         # 1e-6 is still far below a turn's worth of mistiming.
         assert abs(_one(ds, "theta_final") - sense * 7 * np.pi) < 1e-6
-        assert int(ds.winding.values.ravel()[0]) == sense * 3
+        # the winding counts passes over the top: pi, 3 pi and 5 pi passed, and the end
+        # is on the fourth top, 7 pi, to within 1e-6, so 3 or 4 (whichever side of it
+        # the computed angle is) in the sense of rotation
+        assert int(ds.winding.values.ravel()[0]) in (sense * 3, sense * 4)
         assert int(maps.motion(ds).values.ravel()[0]) == sense
         # energy k^2 * 2 above the separatrix, kept to 1e-12 (measured 7e-14), far less
         # than the 4e-6 (excess 1e-6) that separates it from the separatrix energy
@@ -348,7 +351,10 @@ def test_huge_angles_move_like_the_reduced_angle_and_keep_the_winding():
         # energy depends on cos theta only: the same to the same budget (times w^2)
         assert np.all(np.abs(huge.energy_final.values - small.energy_final.values)
                       < w**2 * tolerance)
-    assert set(np.unique(huge.winding.values)) == {12}  # the rotation: 12 turns in 10 s
+    # the rotation turns 12.4 to 12.9 times in 10 s; the start at remainder(-1e4, 2 pi)
+    # = +2.83 rad, 0.31 rad below the top at +pi and going up, passes it at once: 13
+    # passes over the top, the other two starts 12
+    np.testing.assert_array_equal(huge.winding.values[:, 0], [12, 13, 12])
 
 
 def test_inverted_start_stays_put_until_round_off_tips_it():

@@ -120,3 +120,44 @@ def test_continuation(tmp_path, capsys):
     _assert_png(tmp_path / "continuation.png")
     out = capsys.readouterr().out
     assert "attractor 0 (period 1): A from 0.020" in out
+
+
+def _forced_run_files():
+    """The shipped run files (examples/*.toml) whose scene has a forcing."""
+    from sweep.toml_spec import load_run
+
+    return [path for path in sorted(EXAMPLES.glob("*.toml"))
+            if load_run(path, {})[0].forcing is not None]
+
+
+def test_the_forced_run_files_are_found():
+    assert [p.name for p in _forced_run_files()] == ["forced.toml", "points.toml"]
+
+
+@pytest.mark.parametrize("path", _forced_run_files(), ids=lambda p: p.name)
+def test_each_forced_run_file_fits_the_basins_map(path):
+    """A forced scene's own map is its basins, from stroboscopic samples: the step must
+    divide the forcing period and the run must hold the samples after the transient.
+    The explorer opens a grid run file on that map without falling back to motion (its
+    check is sweep.run's own, made before anything is computed; examples/forced.toml's
+    dt = 0.01 did not divide 3 pi), and its settings, run at one start with the strobe
+    observable, fill every sample and give an attractor label."""
+    import warnings
+
+    import sweep
+    from sweep import maps
+    from sweep.explore.model import Explorer
+    from sweep.toml_spec import load_run
+
+    scene, rows, kwargs = load_run(path, {})
+    if isinstance(rows, sweep.Grid):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # a fallback to the motion map warns
+            explorer = Explorer(scene, rows, resolution=8, **kwargs)
+        assert explorer.state.quantity == "basins"
+    timing = {k: v for k, v in kwargs.items()
+              if k in ("t0", "t_end", "dt", "t_transient", "method", "strobe_samples")}
+    ds = sweep.run(scene, sweep.Grid(theta0=[0.5], omega0=[0.5]), observe=("strobe",),
+                   progress=False, **timing)
+    assert np.isfinite(ds.strobe_theta).all() and np.isfinite(ds.strobe_omega).all()
+    assert (maps.basins(ds) >= 0).all()

@@ -62,6 +62,25 @@ def damped():
                      t_end=30.0, dt=0.01, observe=("final", "winding", "energy"))
 
 
+@pytest.mark.parametrize("source", ["winding", "final"])
+def test_motion_of_the_damped_pendulum_is_the_sense_of_its_final_well(damped, source):
+    """Every start of the damped grid lies in well 0 (theta0 in [-pi, pi]; the edges
+    +-pi too: the well index rounds half to even) and ends captured in some well k, so it
+    went over |k| tops in the sense of k: motion (min_turns = 1) is sign(k), from the
+    winding or, without it, from theta_final. The former net turns,
+    trunc((theta_final - theta0) / 2 pi), made the starts just right of theta0 = 0 that
+    go over the top once count 0 turns (libration) while those just left counted 1."""
+    ds = damped if source == "winding" else damped.drop_vars("winding")
+    wells = maps.well(ds).values
+    # captured by t = 30 s (energy down by e^-12), but for the two starts upright at
+    # rest (theta0 = +-pi, omega0 = 0), an equilibrium to rounding: never captured
+    captured = np.isfinite(wells)
+    assert (~captured).sum() == 2
+    np.testing.assert_array_equal(maps.motion(ds).values[captured],
+                                  np.sign(wells[captured]).astype(np.int8))
+    assert (wells == 1).sum() > 20 and (wells == -1).sum() > 20  # one turn: many starts
+
+
 def test_wells_match_dop853_away_from_basin_boundaries(damped):
     solve_ivp = pytest.importorskip("scipy.integrate").solve_ivp
     wells = maps.well(damped)

@@ -171,8 +171,10 @@ def test_every_method_runs_through_the_kernel_builder_with_all_observables(metho
                  "tension_min", "tension_max", "energy_initial", "energy_final"):
         assert name in ds and np.isfinite(ds[name]).all(), name
     # the observables are consistent with one another whatever the method
-    np.testing.assert_array_equal(ds.winding, np.trunc((ds.theta_final - ds.theta0) /
-                                                       (2 * np.pi)))
+    # the winding is the wells crossed, round (half to even, as np.round) of the end's
+    # well index minus the start's (theta0 = +-2 rad: well 0)
+    np.testing.assert_array_equal(ds.winding, np.round(ds.theta_final / (2 * np.pi))
+                                  - np.round(ds.theta0 / (2 * np.pi)))
     assert (ds.theta_max >= np.abs(ds.theta_final) - 1e-12).all()
     assert (ds.tension_max >= ds.tension_min).all()
     # The end state against a 4x finer RK4 run (error ~1e-9): catches a wrong stage,

@@ -85,17 +85,20 @@ def motion(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
 
     With ``omega_mean`` observed the classification is of the steady motion (after
     ``t_transient``): a trajectory rotates if it turns at least ``min_turns`` full
-    turns net during the steady window. Otherwise ``winding`` (net full turns over the
-    whole run) is used, which for conservative scenes is the same thing.
+    turns net during the steady window. Otherwise ``winding`` (wells crossed over the
+    whole run: the net signed number of passes over the top) is used, which for
+    conservative scenes is the same thing; a libration crosses no top, so it counts 0
+    wherever in its well it starts and ends.
 
     Parameters
     ----------
     ds : xarray.Dataset
         From `sweep.run` with ``observe`` containing ``"omega_mean"``, ``"winding"`` or
-        ``"final"`` (in that order of preference: the net turns from ``theta0`` to
-        ``theta_final`` are the winding).
+        ``"final"`` (in that order of preference: ``round(theta_final / 2 pi) -
+        round(theta0 / 2 pi)`` is the winding).
     min_turns : float, default 1
-        Net full turns that count as rotation; a finite number > 0.
+        Net turns that count as rotation (the angle turned over 2 pi in the steady
+        window, or passes over the top with ``winding``); a finite number > 0.
 
     Returns
     -------
@@ -121,8 +124,9 @@ def motion(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
     else:
         _require(ds, ("theta_final",), "omega_mean", "motion")
         theta0 = ds["theta0"] if "theta0" in ds.coords else 0.0
-        turns = np.trunc((ds["theta_final"] - theta0) / (2 * np.pi))
-        source = "net turns from theta0 to theta_final over the whole run"
+        # the winding observable's wells crossed (np.round: half to even, as the kernel)
+        turns = np.round(ds["theta_final"] / (2 * np.pi)) - np.round(theta0 / (2 * np.pi))
+        source = "wells crossed from theta0 to theta_final over the whole run"
     code = xr.where(np.abs(turns) >= min_turns, np.sign(turns), 0)
     code = xr.where(_ok(ds), code, _MOTION_FILL).astype(np.int8)
     code.attrs = {
