@@ -27,7 +27,6 @@ from .grid import Grid, ParameterRows
 from .kernels import (
     KernelSpec,
     build,
-    check_device,
     check_dtype,
     check_method_fits,
     check_observables_fit,
@@ -42,11 +41,13 @@ from .observables import DEFAULT_OBSERVE, OBSERVABLES, STROBE_SAMPLES, STROBE_SA
 from .physics import EFFECTS, Scene
 from .physics.system import System
 from .settings import (  # re-exported: sweep.engine.RunSettings, validate_settings, ...
+    CUDA_CHUNK,
     DEFAULT_ATOL,  # noqa: F401
     DEFAULT_RTOL,  # noqa: F401
     MIN_RTOL,  # noqa: F401
     RunSettings,
     _block,
+    _check_device,
     default_chunk_size,
     validate_method,  # noqa: F401
     validate_settings,
@@ -224,25 +225,6 @@ def check_strobe_samples(strobe_samples, names) -> None:
         raise ValueError(f"strobe_samples = {strobe_samples!r} is read only by the 'strobe' "
                          "observable, which this run does not observe; accepted: "
                          "observe=(..., 'strobe'), or no strobe_samples")
-
-
-#: Default trajectories per chunk on a GPU (2^20: ~8 threads per CUDA core of an
-#: H100; the chunk's arrays are a few tens of MB).
-CUDA_CHUNK = 2 ** 20
-
-
-def _check_device(device, integrator) -> None:
-    """Refuse an unknown device, an adaptive method on the GPU, and ``"cuda"`` where no
-    GPU (or numba's CUDA simulator) is available -- before any compute."""
-    check_device(device, integrator)
-    if device != "cuda":
-        return
-    from .kernels.cuda import available
-
-    reason = available()
-    if reason is not None:
-        raise ValueError(f"device='cuda' cannot run here: {reason}; accepted: "
-                         "device='cpu'")
 
 
 def _drive_axes(effect) -> tuple[str, str]:

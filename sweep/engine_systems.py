@@ -24,7 +24,7 @@ from .kernels.network import NETWORK_OBSERVABLES, NetworkSpec, network_outputs
 from .kernels.system import SystemSpec, n_outputs
 from .physics.network import NETWORK_PARAMETERS, SwingNetwork
 from .physics.system import System, system_parameters
-from .settings import _block, default_chunk_size, validate_settings
+from .settings import CUDA_CHUNK, _block, _check_device, default_chunk_size, validate_settings
 from .system_observables import resolve_system_observe, variables
 
 __all__ = ["prepare_system", "run_system", "to_network_dataset", "to_system_dataset"]
@@ -32,8 +32,7 @@ __all__ = ["prepare_system", "run_system", "to_network_dataset", "to_system_data
 #: `sweep.run`'s arguments that a system run does not take yet, with the value that
 #: means "not used"; any other value is refused before any compute.
 _NOT_YET = {"rtol": None, "atol": None, "specialize": True, "estimate_error": None,
-            "checkpoint": None, "resume": False, "device": "cpu", "dtype": "float64",
-            "attractors": None}
+            "checkpoint": None, "resume": False, "dtype": "float64", "attractors": None}
 
 
 def _check_not_yet(system: System, given: dict) -> None:
@@ -91,7 +90,7 @@ def _prepare_network(network, grid, settings, observe, save_every, stop_early):
 def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
                    t_transient=0.0, observe=None, save_every=None,
                    method="rk4", chunk_size=None, stop_early=False, strobe_samples=None,
-                   check_stability=True, **not_yet):
+                   check_stability=True, device="cpu", **not_yet):
     """Validate a system run (before any compute); return its settings, kernel spec and
     chunk size.
 
@@ -117,10 +116,14 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
         raise ValueError(f"a system integrates with a fixed-step explicit Runge-Kutta "
                          f"method; got method {integrator.name!r}; accepted: {accepted}")
     check_flag("stop_early", stop_early)
+    _check_device(device, settings.integrator)
     if chunk_size is None:
-        chunk_size = default_chunk_size(settings)
+        chunk_size = default_chunk_size(settings) if device != "cuda" else CUDA_CHUNK
     check_positive_int("chunk_size", chunk_size)
     if isinstance(system, SwingNetwork):
+        if device != "cpu":
+            raise ValueError(f"device={device!r} is not available for a SwingNetwork yet; "
+                             "accepted: device='cpu'")
         if strobe_samples is not None:
             raise ValueError(f"strobe_samples={strobe_samples!r} is not available for a "
                              "SwingNetwork; accepted: strobe_samples=None")
@@ -145,7 +148,7 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
                       derived=system.derived(jacobian="lyapunov" in names), observe=names,
                       damping=damping, save=save_every is not None, method=settings.method,
                       stop_early=bool(stop_early), block=_block(grid.size, bool(stop_early)),
-                      flip_energy=system.flip_energy)
+                      flip_energy=system.flip_energy, device=device)
     if "energy" in names and not spec.derived.energy_lines:
         raise ValueError(f"observable 'energy' needs the energy of {type(system).__name__}, "
                          "which its declaration does not give; accepted: observe without "
@@ -230,6 +233,9 @@ def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
                  effects="damping" if spec.damping else "none")
     if spec.stop_early:
         attrs["stop_early"] = "at the first flip"
+    if spec.device != "cpu":  # where it ran (the SIMD width means nothing there)
+        attrs["device"] = spec.device
+        attrs.pop("vector_width")
     return xr.Dataset(data_vars, coords, attrs)
 
 

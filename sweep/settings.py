@@ -13,10 +13,11 @@ from . import _config
 from . import methods as _methods
 from ._timesteps import transient_steps, whole_steps
 from ._validate import check_real
+from .kernels.spec import check_device
 from .methods import METHODS
 
-__all__ = ["DEFAULT_ATOL", "DEFAULT_RTOL", "MIN_RTOL", "RunSettings", "default_chunk_size",
-           "validate_method", "validate_settings"]
+__all__ = ["CUDA_CHUNK", "DEFAULT_ATOL", "DEFAULT_RTOL", "MIN_RTOL", "RunSettings",
+           "default_chunk_size", "validate_method", "validate_settings"]
 
 #: Default tolerances of the adaptive methods (per step, RMS norm over theta, omega):
 #: about 1e-6 global error on a few periods of the pendulum.
@@ -160,3 +161,22 @@ def _block(n: int, stop_early: bool) -> int:
     if stop_early or n < 16 * _config.BLOCK:
         return _config.SMALL_BLOCK
     return _config.BLOCK
+
+
+#: Default trajectories per chunk on a GPU (2^20: ~8 threads per CUDA core of an
+#: H100; the chunk's arrays are a few tens of MB).
+CUDA_CHUNK = 2 ** 20
+
+
+def _check_device(device, integrator) -> None:
+    """Refuse an unknown device, an adaptive method on the GPU, and ``"cuda"`` where no
+    GPU (or numba's CUDA simulator) is available -- before any compute."""
+    check_device(device, integrator)
+    if device != "cuda":
+        return
+    from .kernels.cuda import available
+
+    reason = available()
+    if reason is not None:
+        raise ValueError(f"device='cuda' cannot run here: {reason}; accepted: "
+                         "device='cpu'")

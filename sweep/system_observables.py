@@ -7,8 +7,8 @@ coordinate, units, meaning); `sweep.kernels.system` writes their kernel source a
 
 - ``final``: every coordinate and velocity at ``t_end`` (``theta1_final``, ...);
 - ``winding``: per angle, the wells crossed (``round(theta_final / 2 pi) -
-  round(theta0 / 2 pi)``, ties rounded up), so a start on either side of the bottom
-  that ends in the same well counts the same;
+  round(theta0 / 2 pi)``, half to even, as the single pendulum's `winding`): the net
+  signed number of passes over the top;
 - ``energy``: the system's energy at the start and at ``t_end`` (``energy_initial``,
   ``energy_final``; a conservative run's drift is their difference);
 - ``flip``: ``flip_time``, the first time any angle passes an upright position (an odd
@@ -103,7 +103,8 @@ def variables(name: str, coordinates, energy_units: str) -> list[tuple[str, str,
     if name == "winding":
         return [(f"winding_{c.name}", "1",
                  f"wells of {c.name} crossed from t0 to t_end: round({c.name}_final / 2 pi) "
-                 f"- round({c.name}_0 / 2 pi), ties rounded up")
+                 f"- round({c.name}_0 / 2 pi) (half to even): the net signed number of "
+                 f"passes of {c.name} over the top")
                 for c in coordinates if c.angular]
     if name == "energy":
         return [("energy_initial", energy_units, "energy of the system at t0"),

@@ -166,6 +166,9 @@ def test_dead_ends_undermine_basin_stability_and_repairing_them_restores_it():
                        sweep.Grid(theta1_0=[1.0]), t_end=1, dt=0.1),
      "names no coordinate or parameter of SwingNetwork"),
     (lambda: sweep.run(sweep.SwingNetwork([(0, 1)], power=[1, -1]),
+                       sweep.Grid(perturbed_node=[0]), t_end=1, dt=0.1, device="cuda"),
+     "device='cuda' is not available for a SwingNetwork"),
+    (lambda: sweep.run(sweep.SwingNetwork([(0, 1)], power=[1, -1]),
                        sweep.Grid(perturbed_node=[0]), t_end=1, dt=0.1, observe=("flip",)),
      "unknown observable 'flip' for a SwingNetwork"),
 ])

@@ -41,7 +41,7 @@ from .spec import KernelSpec, Status, n_columns
 from .steppers import STEPPERS
 from .terms import load_lines
 
-__all__ = ["THREADS_PER_BLOCK", "available", "cuda_kernel", "device_functions"]
+__all__ = ["THREADS_PER_BLOCK", "available", "cuda_kernel", "cuda_module", "device_functions"]
 
 #: CUDA threads per block: a multiple of the warp (32); 128 keeps several blocks per
 #: multiprocessor with the kernels' register use.
@@ -157,6 +157,33 @@ def _param(column, params, flat, columns, strides, sizes, offsets, values):
     return params[column]
 '''
 
+#: The module's ``kernel``: the CPU kernels' contract around the CUDA ``_thread``.
+_LAUNCHER = '''\
+def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
+    """Run one GPU thread per trajectory and copy the outputs back (the CPU kernels'
+    contract). ``params``: the chunk's rows described (`sweep.grid.GridRows`: a few
+    hundred bytes go to the GPU, and each thread reads its own parameters from it, see
+    ``_param``) or a table."""
+    n = params.shape[0]
+    if n == 0:
+        return
+    rows = params if isinstance(params, GridRows) else GridRows.from_table(params)
+    d_out = cuda.device_array(out.shape, dtype=out.dtype)
+    d_status = cuda.device_array(status.shape, dtype=status.dtype)
+    d_saved = cuda.to_device(np.ascontiguousarray(saved))
+    with warnings.catch_warnings():  # a small grid is a legitimate run, not a mistake
+        warnings.filterwarnings("ignore", ".*Grid size .* under-utilization")
+        _thread[(n + THREADS - 1) // THREADS, THREADS](
+            cuda.to_device(rows.template), t0, dt, n_steps, n_transient, save_every, d_out,
+            d_status, d_saved, rows.start, cuda.to_device(rows.columns),
+            cuda.to_device(rows.strides), cuda.to_device(rows.sizes),
+            cuda.to_device(rows.offsets), cuda.to_device(rows.values))
+    out[...] = d_out.copy_to_host()
+    status[...] = d_status.copy_to_host()
+    if saved.size:
+        saved[...] = d_saved.copy_to_host()
+'''
+
 _NP_FLOOR = re.compile(r"\bnp\.floor\(")
 
 
@@ -214,28 +241,25 @@ def _thread(params, t0, dt, n_steps, n_transient, save_every, out, status, saved
 {indent(_device(body), 1)}
 
 
-def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
-    """Run one GPU thread per trajectory and copy the outputs back (the CPU kernels'
-    contract). ``params``: the chunk's rows described (`sweep.grid.GridRows`: a few
-    hundred bytes go to the GPU, and each thread reads its own parameters from it, see
-    ``_param``) or a table."""
-    n = params.shape[0]
-    if n == 0:
-        return
-    rows = params if isinstance(params, GridRows) else GridRows.from_table(params)
-    d_out = cuda.device_array(out.shape, dtype=out.dtype)
-    d_status = cuda.device_array(status.shape, dtype=status.dtype)
-    d_saved = cuda.to_device(np.ascontiguousarray(saved))
-    with warnings.catch_warnings():  # a small grid is a legitimate run, not a mistake
-        warnings.filterwarnings("ignore", ".*Grid size .* under-utilization")
-        _thread[(n + THREADS - 1) // THREADS, THREADS](
-            cuda.to_device(rows.template), t0, dt, n_steps, n_transient, save_every, d_out,
-            d_status, d_saved, rows.start, cuda.to_device(rows.columns),
-            cuda.to_device(rows.strides), cuda.to_device(rows.sizes),
-            cuda.to_device(rows.offsets), cuda.to_device(rows.values))
-    out[...] = d_out.copy_to_host()
-    status[...] = d_status.copy_to_host()
-    if saved.size:
-        saved[...] = d_saved.copy_to_host()
-'''
+{_LAUNCHER}'''
 
+
+
+def cuda_module(thread_body: str, arguments: str = "") -> str:
+    """A CUDA kernel module's body from a thread's code: ``_param``, the ``_thread``
+    kernel (``thread_body``, indented once, reading its parameters with ``_param``) and
+    the ``kernel`` launcher with the CPU contract; shared by the systems' kernels
+    (`sweep.kernels.system`)."""
+    return f'''
+THREADS = {THREADS_PER_BLOCK}
+
+
+{_PARAMETER}
+
+@cuda.jit
+def _thread(params, t0, dt, n_steps, n_transient, save_every, out, status, saved, first,
+            columns, strides, sizes, offsets, values):
+{indent(_device(thread_body), 1)}
+
+
+{_LAUNCHER}'''

@@ -87,6 +87,8 @@ class SystemSpec:
     flip_energy: str | None = None
 
     def __post_init__(self) -> None:
+        if self.device == "cuda":  # one thread per trajectory: no lanes
+            object.__setattr__(self, "block", 1)
         block = _config.BLOCK if self.block is None else self.block
         if not isinstance(block, int) or not (block == 1 or (block >= 8 and block % 8 == 0)):
             raise ValueError(f"block must be 1 or a positive multiple of 8, got {block!r}")
@@ -235,8 +237,10 @@ def _flip_lines(spec: SystemSpec) -> list[str]:
     return lines
 
 
-def _finish(spec: SystemSpec, state: list[str], symbols: list[str]) -> str:
-    """Per real lane: status and outputs into ``out[i]``."""
+def _finish(spec: SystemSpec, state: list[str], symbols: list[str],
+            index: str = "i = base + j\n") -> str:
+    """Per real lane (from the line ``index``, which sets ``i``): status and outputs
+    into ``out[i]``."""
     coords = spec.system.coordinates
     finite = " and ".join(f"math.isfinite({x})" for x in state +
                           (["acc_ly"] if "lyapunov" in spec.observe else []))
@@ -255,8 +259,7 @@ def _finish(spec: SystemSpec, state: list[str], symbols: list[str]) -> str:
                 col += 1
         elif name == "winding":
             for c in _angles(spec):
-                writes.append(f"out[i, {col}] = math.floor({c.symbol} / TWO_PI + 0.5) - "
-                              f"well_{c.symbol}")
+                writes.append(f"out[i, {col}] = round({c.symbol} / TWO_PI) - well_{c.symbol}")
                 col += 1
         elif name == "energy":
             writes += [f"out[i, {col}] = energy_0",
@@ -284,34 +287,47 @@ def _finish(spec: SystemSpec, state: list[str], symbols: list[str]) -> str:
     frozen = ""
     if spec.stop_early:  # a stopped lane kept its state at the stop
         frozen = "if done:\n" + indent(NL.join(f"{x} = stop_{x}" for x in state), 1) + NL
-    return (f"i = base + j\n{frozen}if {ok}:\n    status[i] = {int(Status.OK)}\n"
+    return (f"{index}{frozen}if {ok}:\n    status[i] = {int(Status.OK)}\n"
             + indent(NL.join(writes) or "pass", 1) + NL
             + f"else:\n    status[i] = {failed}\n"
             + f"    for col in range({width}):\n        out[i, col] = math.nan\n"
             + indent(saved, 1))
 
 
-def system_kernel(spec: SystemSpec) -> str:
-    """The kernel body (see the module docstring)."""
+@dataclass
+class _Parts:
+    """A system kernel's per-trajectory code, free of lanes: the CPU kernel wraps it in
+    lane loops (`system_kernel`), the CUDA kernel in one thread (`system_cuda_kernel`)."""
+
+    state: list[str]        # positions then velocities
+    symbols: list[str]      # parameters, in table-column order after the state
+    lane: dict[str, str]    # every per-trajectory variable -> dtype
+    constants: dict[str, str]  # per call (dt / 2, ...)
+    first: list[str]        # after the loads: observables' state, early stop
+    body: list[str]         # one step (and the flip's bookkeeping)
+    stopped: list[str]      # with stop_early: the lines when a trajectory flips
+    renormalise: str        # the tangent vector's renormalisation (with lyapunov)
+    stores: list[str]       # variables a step changes
+
+
+def _parts(spec: SystemSpec) -> _Parts:
+    """The per-trajectory pieces of ``spec``'s kernel (see `_Parts`)."""
     method = _tableau(spec)
     if spec.stop_early and spec.observe != ("flip",):
         raise ValueError("stop_early stops a system's trajectory at its first flip, so it "
                          f"observes only 'flip'; got observe={spec.observe!r}; accepted: "
                          "observe=('flip',), or stop_early=False")
     coords = spec.system.coordinates
-    positions = [c.symbol for c in coords]
-    velocities = [c.velocity_symbol for c in coords]
-    state = positions + velocities
+    state = [c.symbol for c in coords] + [c.velocity_symbol for c in coords]
     symbols = _symbols(spec)
     constants: dict[str, str] = {}
     step = _step(spec, method, constants, symbols)
     flip = "flip" in spec.observe
     angles = [c.symbol for c in _angles(spec)]
     lane = {x: "float64" for x in state + symbols}
-    first = ["i = min(base + j, n - 1)  # padding lanes repeat the last trajectory"]
-    first += [f"{x} = params[i, {k}]" for k, x in enumerate(state + symbols)]
+    first = []
     if "winding" in spec.observe or flip:
-        first += [f"well_{q} = math.floor({q} / TWO_PI + 0.5)" for q in angles]
+        first += [f"well_{q} = round({q} / TWO_PI)" for q in angles]
         lane.update({f"well_{q}": "float64" for q in angles})
     if "energy" in spec.observe:
         first.append(f"energy_0 = energy({', '.join(state + symbols)})")
@@ -324,36 +340,51 @@ def system_kernel(spec: SystemSpec) -> str:
         first += [f"ly_{x} = {1.0 / len(state) ** 0.5!r}" for x in state] + ["acc_ly = 0.0"]
         lane.update({f"ly_{x}": "float64" for x in state})
         lane["acc_ly"] = "float64"
-        renormalise = (
-            f"if k_state % {LYAPUNOV_EVERY} == 0 or k_state == n_transient or "
-            "k_state == n_steps:\n    keep = k_state > n_transient\n"
-            + lane_loop("ly_norm = math.sqrt(" + " + ".join(f"ly_{x} * ly_{x}" for x in state)
-                        + ")\nif keep:\n    acc_ly += math.log(ly_norm)\n"
-                        + NL.join(f"ly_{x} = ly_{x} / ly_norm" for x in state),
-                        lane, level=1))
+        renormalise = ("ly_norm = math.sqrt(" + " + ".join(f"ly_{x} * ly_{x}" for x in state)
+                       + ")\nif keep:\n    acc_ly += math.log(ly_norm)\n"
+                       + NL.join(f"ly_{x} = ly_{x} / ly_norm" for x in state))
+    stopped = []
     if spec.stop_early:
         first += ["done = False"] + [f"stop_{x} = {x}" for x in state]
         if spec.flip_energy:  # below the lowest flipping energy: it never flips
             first += [f"if energy({', '.join(state + symbols)}) < {spec.flip_energy}:",
                       "    done = True", "    n_done += 1"]
         lane.update({"done": "bool_", **{f"stop_{x}": "float64" for x in state}})
-    if spec.save:
-        first += ["if base + j < n:"] + [f"    saved[base + j, {k}, 0] = {x}"
-                                         for k, x in enumerate(state)]
+        stopped = ["done = True"] + [f"stop_{x} = {x}" for x in state] + ["n_done += 1"]
     body = list(step)
     if flip:
         body = [f"prev_{q} = {q}" for q in angles] + body + _flip_lines(spec)
-    head = ""
-    if spec.stop_early:
-        head = "    if lane_done[j]:\n        continue\n"
-        body += ["if flip_t < math.inf:", "    done = True"] + \
-            [f"    stop_{x} = {x}" for x in state] + ["    n_done += 1"]
     stores = [x for x in state] + (["flip_t"] if flip else []) + \
         ([f"ly_{x}" for x in state] if "lyapunov" in spec.observe else []) + \
         (["done"] + [f"stop_{x}" for x in state] if spec.stop_early else [])
+    return _Parts(state, symbols, lane, constants, first, body, stopped, renormalise, stores)
+
+
+_RENORMALISE_HEAD = (f"if k_state % {LYAPUNOV_EVERY} == 0 or k_state == n_transient or "
+                     "k_state == n_steps:\n    keep = k_state > n_transient")
+
+
+def system_kernel(spec: SystemSpec) -> str:
+    """The kernel body (see the module docstring)."""
+    parts = _parts(spec)
+    state, symbols, lane = parts.state, parts.symbols, parts.lane
+    constants = parts.constants
+    first = ["i = min(base + j, n - 1)  # padding lanes repeat the last trajectory"]
+    first += [f"{x} = params[i, {k}]" for k, x in enumerate(state + symbols)] + parts.first
+    if spec.save:
+        first += ["if base + j < n:"] + [f"    saved[base + j, {k}, 0] = {x}"
+                                         for k, x in enumerate(state)]
+    body = list(parts.body)
+    head = ""
+    if spec.stop_early:
+        head = "    if lane_done[j]:\n        continue\n"
+        body += ["if flip_t < math.inf:"] + [indent(line, 1) for line in parts.stopped]
+    renormalise = ""
+    if parts.renormalise:
+        renormalise = _RENORMALISE_HEAD + NL + lane_loop(parts.renormalise, lane, level=1)
     init_loop = lane_loop(NL.join(first), lane, level=2, load=False)
     step_loop = lane_loop(NL.join(body), lane, level=3, head=head,
-                          stores=[x for x in lane if x in stores])
+                          stores=[x for x in lane if x in parts.stores])
     save = ""
     if spec.save:
         save = ("if (step + 1) % save_every == 0:\n"
@@ -397,8 +428,41 @@ def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
         _physics(spec, state, symbols)
 
 
+def system_cuda_kernel(spec: SystemSpec) -> tuple[str, str]:
+    """The CUDA kernel (one thread per trajectory, `sweep.kernels.cuda`) from the same
+    per-trajectory parts as the CPU kernel, and its physics as device functions."""
+    from .cuda import cuda_module, device_functions
+
+    parts = _parts(spec)
+    state, symbols = parts.state, parts.symbols
+    loads = [f"{x} = _param({k}, params, flat, columns, strides, sizes, offsets, values)"
+             for k, x in enumerate(state + symbols)]
+    loop = (["if done:", "    break"] if spec.stop_early else []) + list(parts.body)
+    if spec.stop_early:
+        loop += ["if flip_t < math.inf:"] + [indent(line, 1) for line in parts.stopped] + \
+            ["    break"]
+    loop.append("k_state = step + 1")
+    if parts.renormalise:
+        loop += [_RENORMALISE_HEAD, indent(parts.renormalise, 1)]
+    save_first = []
+    if spec.save:
+        save_first = [f"saved[i, {k}, 0] = {x}" for k, x in enumerate(state)]
+        loop += ["if (step + 1) % save_every == 0:"] + \
+            [f"    saved[i, {k}, (step + 1) // save_every] = {x}" for k, x in enumerate(state)]
+    body = NL.join(["i = cuda.grid(1)", "if i >= out.shape[0]:", "    return",
+                    "flat = first + i", "TWO_PI = 2.0 * math.pi", "k_state = 0",
+                    "n_done = 0"] + list(parts.constants.values()) + loads + parts.first
+                   + save_first + ["for step in range(n_steps):", indent(NL.join(loop), 1),
+                                   _finish(spec, state, symbols, index="")])
+    physics = _physics(spec, state, symbols).replace(_INLINE, "@njit(**JIT)")
+    return cuda_module(body), device_functions(physics, spec.dtype)
+
+
 def system_source(spec: SystemSpec, header: str) -> str:
     """The module text: ``header`` (imports and ``JIT``, `sweep.kernels.source`), the
     physics and the kernel body."""
-    body, physics = system_kernel(spec)
+    if spec.device == "cuda":
+        body, physics = system_cuda_kernel(spec)
+    else:
+        body, physics = system_kernel(spec)
     return header + physics + body
