@@ -19,7 +19,8 @@ from ._version import __version__
 from .execution import RunContext, execute
 from .execution.progress import progress_bar
 from .grid import ParameterRows
-from .kernels import Status, failure_summary, status_counts, vectors
+from .io import status_variable
+from .kernels import failure_summary, status_counts, vectors
 from .kernels.network import NETWORK_OBSERVABLES, NetworkSpec, network_outputs
 from .kernels.system import SystemSpec, n_outputs
 from .physics.network import NETWORK_PARAMETERS, SwingNetwork
@@ -216,7 +217,7 @@ def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
             data_vars[variable] = xr.Variable(dims, grid.unflatten(out[:, col]),
                                               {"units": units, "long_name": long_name})
             col += 1
-    data_vars["status"] = _status(grid, status)
+    data_vars["status"] = status_variable(grid, status)
     if saved is not None:
         coords["time"] = _time(settings, saved.shape[2])
         rows = [(c.name, c.units, f"{c.long_name or c.name}"
@@ -237,15 +238,6 @@ def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
         attrs["device"] = spec.device
         attrs.pop("vector_width")
     return xr.Dataset(data_vars, coords, attrs)
-
-
-def _status(grid, status) -> xr.Variable:
-    """The ``status`` variable, with its CF flags."""
-    codes = np.array([s.value for s in Status], dtype=np.int8)
-    return xr.Variable(grid.dims, grid.unflatten(status), {
-        "long_name": "per-trajectory integration status", "flag_values": codes,
-        "flag_meanings": " ".join(s.name.lower() for s in Status),
-        "comment": "; ".join(f"{s.name.lower()}: {s.message}" for s in Status)})
 
 
 def _time(settings, n_saved: int) -> xr.Variable:
@@ -314,7 +306,7 @@ def to_network_dataset(*, system: SwingNetwork, grid, settings, spec: NetworkSpe
                 "units": "1", "long_name": "Kuramoto order parameter r = |mean exp(i theta)| "
                                            "at t_end"})
             col += 2
-    data_vars["status"] = _status(grid, status)
+    data_vars["status"] = status_variable(grid, status)
     if saved is not None:
         coords["time"] = _time(settings, saved.shape[2])
         data_vars["theta"] = xr.Variable(dims + ("node", "time"),

@@ -22,8 +22,8 @@ from .kernels import Status, vectors
 from .observables import OBSERVABLES
 from .physics import EFFECTS, Scene, parameter_info
 
-__all__ = ["to_dataset", "save", "load", "scene_from", "grid_from", "run_arguments",
-           "netcdf_encoding",
+__all__ = ["to_dataset", "status_variable", "save", "load", "scene_from", "grid_from",
+           "run_arguments", "netcdf_encoding",
            "file_size_bound"]
 
 #: zlib level of the variables `save` writes (with the byte shuffle filter), chosen by
@@ -96,17 +96,7 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
                     observable.sample_dim, np.arange(1 - width, 1),
                     {"units": "1", "long_name": "forcing periods before the last sample"})
             col += width
-    codes = np.array([s.value for s in Status], dtype=np.int8)
-    data_vars["status"] = xr.Variable(
-        dims,
-        grid.unflatten(status),
-        {
-            "long_name": "per-trajectory integration status",
-            "flag_values": codes,
-            "flag_meanings": " ".join(s.name.lower() for s in Status),
-            "comment": "; ".join(f"{s.name.lower()}: {s.message}" for s in Status),
-        },
-    )
+    data_vars["status"] = status_variable(grid, status)
     if saved is not None:
         n_saved = saved.shape[2]
         stride = settings.save_every
@@ -157,6 +147,19 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     if spec.dtype != "float64":  # its working precision, when not the default
         attrs["dtype"] = spec.dtype
     return xr.Dataset(data_vars, coords, attrs)
+
+
+def status_variable(grid, status) -> xr.Variable:
+    """The ``status`` variable of a run over ``grid``: the flat `sweep.kernels.Status`
+    codes in the grid's shape, with their CF flags (``flag_values``, ``flag_meanings``)
+    and what each means."""
+    codes = np.array([s.value for s in Status], dtype=np.int8)
+    return xr.Variable(grid.dims, grid.unflatten(status), {
+        "long_name": "per-trajectory integration status",
+        "flag_values": codes,
+        "flag_meanings": " ".join(s.name.lower() for s in Status),
+        "comment": "; ".join(f"{s.name.lower()}: {s.message}" for s in Status),
+    })
 
 
 def warm_up() -> None:

@@ -229,19 +229,7 @@ def cuda_kernel(spec: KernelSpec, method) -> str:
                     "flat = first + i", "TWO_PI = 2.0 * math.pi", "k_state = 0"]
                    + parts["preamble"] + first
                    + ["for step in range(n_steps):", indent(NL.join(loop), 1)] + finish)
-    return f'''
-THREADS = {THREADS_PER_BLOCK}
-
-
-{_PARAMETER}
-
-@cuda.jit
-def _thread(params, t0, dt, n_steps, n_transient, save_every, out, status, saved, first,
-            columns, strides, sizes, offsets, values):
-{indent(_device(body), 1)}
-
-
-{_LAUNCHER}'''
+    return cuda_module(body)
 
 
 

@@ -24,7 +24,7 @@ import textwrap
 from dataclasses import dataclass, field
 
 from ..observables import OBSERVABLES
-from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet, scalar_lanes
+from .lanes import IDENTIFIER, allocate, blocks_head, indent, lane_loop, lane_snippet, scalar_lanes
 from .precision import float64_symbols
 from .snippets import (
     failed_samples,
@@ -209,18 +209,7 @@ def fixed_kernel(spec: KernelSpec, method) -> str:
     renormalise_blocks = NL.join(head + NL + lane_loop(code, lane, level=1)
                                  for head, code in renormalise)
     finish_loop = lane_loop(finish, lane, level=2, stores=[], count="n_real")
-    kernel = f'''
-BLOCK = {spec.block}
-
-
-def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
-    run_blocks(blocks, (params.shape[0] + BLOCK - 1) // BLOCK,
-               params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
-
-
-@njit(nogil=True, **JIT)
-def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
-           b_first, b_stop):
+    kernel = blocks_head(spec.block) + f'''\
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(parts["preamble"]), 1)}

@@ -7,8 +7,8 @@ from __future__ import annotations
 import re
 import textwrap
 
-__all__ = ["ASSIGNED", "IDENTIFIER", "allocate", "indent", "lane_loop", "lane_snippet",
-           "scalar_lanes", "skip_unless"]
+__all__ = ["ASSIGNED", "IDENTIFIER", "allocate", "blocks_head", "indent", "lane_loop",
+           "lane_snippet", "scalar_lanes", "skip_unless"]
 
 IDENTIFIER = re.compile(r"\b[A-Za-z_]\w*\b")
 ASSIGNED = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:[-+*/]?=)(?!=)", re.MULTILINE)
@@ -33,6 +33,26 @@ def lane_loop(body: str, lane: dict[str, str], *, level: int, head: str = "",
     lines = loads + [body] + [f"lane_{name}[j] = {name}" for name in stores]
     return indent(f"for j in range({count}):\n{head}" + indent("\n".join(lines), 1),
                   level)
+
+
+def blocks_head(block: int) -> str:
+    """The head of a fixed-step kernel module's body: ``BLOCK``, the Python ``kernel``
+    (the contract of `sweep.kernels.source`) that spreads the blocks over threads
+    (`sweep.kernels.threads.run_blocks`), and the signature of the compiled ``blocks``
+    over a range of blocks, whose body follows."""
+    return f'''
+BLOCK = {block}
+
+
+def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
+    run_blocks(blocks, (params.shape[0] + BLOCK - 1) // BLOCK,
+               params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
+
+
+@njit(nogil=True, **JIT)
+def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
+           b_first, b_stop):
+'''
 
 
 def indent(code: str, level: int) -> str:

@@ -23,10 +23,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .. import _config
 from .. import methods as _methods
-from .lanes import indent
-from .spec import Status
+from .lanes import blocks_head, indent
+from .spec import Status, check_block
 from .steppers import fused
 
 __all__ = ["NETWORK_OBSERVABLES", "NetworkSpec", "network_outputs", "network_source"]
@@ -71,10 +70,7 @@ class NetworkSpec:
     dtype: str = "float64"
 
     def __post_init__(self) -> None:
-        block = _config.BLOCK if self.block is None else self.block
-        if not isinstance(block, int) or not (block == 1 or (block >= 8 and block % 8 == 0)):
-            raise ValueError(f"block must be 1 or a positive multiple of 8, got {block!r}")
-        object.__setattr__(self, "block", block)
+        object.__setattr__(self, "block", check_block(self.block))
 
     @property
     def n_nodes(self) -> int:
@@ -164,7 +160,6 @@ DST = {_array([int(e[1]) for e in edges], "int64")}
 WEIGHT = {_array([float(e[2]) for e in edges], "float64")}
 POWER = {_array([float(p) for p in spec.power], "float64")}
 SYNC = {_array([float(x) for x in spec.synchronous], "float64")}
-BLOCK = {spec.block}
 
 
 @njit(inline="always", **JIT)
@@ -184,15 +179,7 @@ def accel(x, v, kx, kv, alpha, coupling):
             kv[c, j] -= f
 
 
-def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
-    run_blocks(blocks, (params.shape[0] + BLOCK - 1) // BLOCK,
-               params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
-
-
-@njit(nogil=True, **JIT)
-def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
-           b_first, b_stop):
-    n = params.shape[0]
+{blocks_head(spec.block)}    n = params.shape[0]
 {indent(NL.join(constants.values()), 1)}
     th = np.empty((N, BLOCK))
     om = np.empty((N, BLOCK))

@@ -13,7 +13,8 @@ from .. import methods as _methods
 from ..observables import OBSERVABLES, STROBE_SAMPLES
 from ..physics import EFFECTS, EffectDeclaration
 
-__all__ = ["DEVICES", "DTYPES", "KernelSpec", "Status", "check_device", "check_dtype",
+__all__ = ["DEVICES", "DTYPES", "KernelSpec", "Status", "check_block", "check_device",
+           "check_dtype",
            "check_method_fits",
            "check_observables_fit",
            "check_tangent_fits", "declarations", "failure_summary", "method_of", "n_columns",
@@ -206,10 +207,7 @@ class KernelSpec:
         object.__setattr__(self, "refill", bool(self.refill and self.stop_early
                                                 and not self.save))
         object.__setattr__(self, "shared_forcing", bool(self.shared_forcing and self.drives))
-        block = _config.BLOCK if self.block is None else self.block
-        if not isinstance(block, int) or not (block == 1 or (block >= 8 and block % 8 == 0)):
-            raise ValueError(f"block must be 1 or a positive multiple of 8, got {block!r}")
-        object.__setattr__(self, "block", block)
+        object.__setattr__(self, "block", check_block(self.block))
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -243,6 +241,20 @@ class KernelSpec:
                 + (f", dtype={self.dtype!r}" if self.dtype != "float64" else "")
                 + (f", attractors: {len(self.attractors)} orbits of "
                    f"{sum(map(len, self.attractors))} points" if self.attractors else ""))
+
+
+def check_block(block) -> int:
+    """``block`` (trajectories per block of SIMD lanes), `_config.BLOCK` for None.
+
+    Raises
+    ------
+    ValueError
+        Unless it is 1 or a positive multiple of 8.
+    """
+    block = _config.BLOCK if block is None else block
+    if not isinstance(block, int) or not (block == 1 or (block >= 8 and block % 8 == 0)):
+        raise ValueError(f"block must be 1 or a positive multiple of 8, got {block!r}")
+    return block
 
 
 def n_columns(spec: KernelSpec) -> int:

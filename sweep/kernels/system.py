@@ -25,13 +25,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .. import _config
 from .. import methods as _methods
 from ..observables import LYAPUNOV_EVERY
 from ..physics.system import DerivedSystem, SystemDeclaration, system_columns
 from ..system_observables import variables
-from .lanes import allocate, indent, lane_loop, scalar_lanes
-from .spec import Status
+from .lanes import allocate, blocks_head, indent, lane_loop, scalar_lanes
+from .spec import Status, check_block
 from .steppers import fused
 
 __all__ = ["SystemSpec", "n_outputs", "system_source"]
@@ -89,10 +88,7 @@ class SystemSpec:
     def __post_init__(self) -> None:
         if self.device == "cuda":  # one thread per trajectory: no lanes
             object.__setattr__(self, "block", 1)
-        block = _config.BLOCK if self.block is None else self.block
-        if not isinstance(block, int) or not (block == 1 or (block >= 8 and block % 8 == 0)):
-            raise ValueError(f"block must be 1 or a positive multiple of 8, got {block!r}")
-        object.__setattr__(self, "block", block)
+        object.__setattr__(self, "block", check_block(self.block))
         if not self.stop_early:  # it changes nothing then: one kernel either way
             object.__setattr__(self, "flip_energy", None)
 
@@ -395,18 +391,7 @@ def system_kernel(spec: SystemSpec) -> str:
     stop = "if n_done == BLOCK:\n    break" if spec.stop_early else ""
     finish = lane_loop(_finish(spec, state, symbols), lane, level=2, stores=[],
                        count="n_real")
-    kernel = f'''
-BLOCK = {spec.block}
-
-
-def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
-    run_blocks(blocks, (params.shape[0] + BLOCK - 1) // BLOCK,
-               params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
-
-
-@njit(nogil=True, **JIT)
-def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
-           b_first, b_stop):
+    kernel = blocks_head(spec.block) + f'''\
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(constants.values()), 1)}
