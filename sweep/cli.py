@@ -3,7 +3,7 @@
 ::
 
     sweep run RUN.toml -o OUT.nc [--checkpoint DIR] [--resume] [--scheduler ADDRESS]
-                                 [--progress | --no-progress]
+                                 [--no-space-check] [--progress | --no-progress]
     sweep demo [-o FOLDER] [--size N]
     sweep plot FILE.nc --var NAME [--sel DIM=VALUE ...] -o OUT.png
     sweep plot FILE.nc --trajectory --sel theta0=VALUE --sel omega0=VALUE -o OUT.png
@@ -114,6 +114,12 @@ def build_parser() -> argparse.ArgumentParser:
                      "2-core AMD EPYC Zen 5 (2026-11-25); not measured on Intel since "
                      "0.3; no faster on an H100; fixed-step methods); overrides [run] "
                      "dtype")
+    run.add_argument("--no-space-check", action="store_true",
+                     help="run even if OUT.nc (and the checkpoint) may not fit in the free "
+                     "space: the check bounds the file by its uncompressed size, and the "
+                     "file is compressed (usually 1.6-2.7x smaller). A file that does not "
+                     "fit after all fails when it is written, leaving no partial file; with "
+                     "--checkpoint the computed chunks stay")
     _progress_option(run)
     run.set_defaults(handler=_command_run)
 
@@ -332,7 +338,7 @@ def _command_run(args: argparse.Namespace) -> int:
         from .maps.pilot import pilot_catalogue, pilot_grid
 
         pilot_grid(grid, pilot)  # refuse a bad pilot before any compute
-    else:  # with a pilot, after it: its catalogue adds variables
+    elif not args.no_space_check:  # with a pilot, after it: its catalogue adds variables
         check_space(output, scene, grid, **kwargs)
     client = _client(args, options)
     bar = "\n" if args.progress or (args.progress is None and sys.stderr.isatty()) else ""
@@ -344,7 +350,8 @@ def _command_run(args: argparse.Namespace) -> int:
         with stop:
             if pilot is not None:  # after the scheduler answered: no pilot for a dead one
                 kwargs["attractors"] = pilot_catalogue(scene, grid, pilot, **kwargs)
-                check_space(output, scene, grid, **kwargs)
+                if not args.no_space_check:
+                    check_space(output, scene, grid, **kwargs)
             ds, seconds = _run_quietly(scene, grid, progress=args.progress, client=client,
                                        **kwargs)
             saving = True

@@ -249,6 +249,48 @@ def test_a_run_that_cannot_fit_is_refused_with_simulated_free_space(tmp_path, mo
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.toml"]
 
 
+# 250 x 250 trajectories: 1.3 MiB compressed, 2.5 MiB estimated (uncompressed): the file
+# fits on the 2 MiB tmpfs only because it is compressed
+_COMPRESSIBLE_RUN_FILE = _BIG_RUN_FILE.replace("num = 400", "num = 250")
+
+
+def test_no_space_check_writes_a_compressed_file_the_bound_refuses(small_disk, tmp_path):
+    run_file = _run_file(tmp_path, _COMPRESSIBLE_RUN_FILE)
+    out = small_disk / "out.nc"
+    code, _, stderr = call("run", run_file, "-o", out)
+    assert code == 2 and "not enough free disk space" in stderr
+    assert stderr.endswith("or, if the compressed file will fit, no check (sweep run "
+                           "--no-space-check; run_to_netcdf(..., check_space=False))\n")
+    code, stdout, stderr = call("run", run_file, "-o", out, "--no-space-check")
+    assert stdout.startswith(f"wrote {out}: 62500 trajectories")
+    assert (code, stderr) == (0, ""), stderr
+    scene, grid, kwargs = load_run(run_file)
+    assert os.path.getsize(out) < shutil.disk_usage(small_disk).total \
+        < diskspace.estimate_size(scene, grid, **kwargs)
+    assert sorted(p.name for p in small_disk.iterdir()) == ["out.nc"]
+
+
+def test_no_space_check_skips_the_bound_with_simulated_free_space(tmp_path, monkeypatch):
+    run_file = _run_file(tmp_path)
+    scene, grid, kwargs = load_run(run_file)
+    free = diskspace.estimate_size(scene, grid, **kwargs) - 1  # refused: one byte short
+    real = shutil.disk_usage
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: real(p)._replace(free=free))
+    out, streamed = tmp_path / "out.nc", tmp_path / "streamed.nc"
+    assert call("run", run_file, "-o", out)[0] == 2
+    with pytest.raises(ValueError, match="not enough free disk space"):
+        sweep.distributed.run_to_netcdf(streamed, scene, grid, **kwargs)
+    with pytest.raises(TypeError, match="check_space must be True or False, got 'no'"):
+        sweep.distributed.run_to_netcdf(streamed, scene, grid, check_space="no", **kwargs)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.toml"]
+    code, _, stderr = call("run", run_file, "-o", out, "--no-space-check")
+    assert (code, stderr) == (0, ""), stderr
+    sweep.distributed.run_to_netcdf(streamed, scene, grid, check_space=False, **kwargs)
+    for path in (out, streamed):  # the compressed files are well within that free space
+        assert os.path.getsize(path) < free
+        identical(sweep.load(path), sweep.run(scene, grid, **kwargs))
+
+
 def test_a_write_that_fails_on_a_real_full_disk_keeps_the_checkpoint(small_disk, tmp_path,
                                                                      monkeypatch):
     monkeypatch.setattr(diskspace, "check_space", lambda *a, **k: 0)  # let it try
