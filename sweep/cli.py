@@ -587,8 +587,8 @@ def _connect(address: str):
     except ImportError:
         raise ValueError(f"--scheduler {address}: running on a Dask cluster needs "
                          "dask.distributed, which is not installed; accepted: pip install "
-                         "'sweep[dask]', or run without --scheduler (and without [run] "
-                         "scheduler)") from None
+                         "'dask[distributed]' (the extra dask), or run without --scheduler "
+                         "(and without [run] scheduler)") from None
     try:
         return Client(address, timeout=CONNECT_TIMEOUT_S)
     except Exception as exc:  # noqa: BLE001 - OSError, TimeoutError, ValueError (address)
