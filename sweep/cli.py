@@ -3,7 +3,7 @@
 ::
 
     sweep run RUN.toml -o OUT.nc [--checkpoint DIR] [--resume] [--scheduler ADDRESS]
-                                 [--progress | --no-progress]
+                                 [--no-space-check] [--progress | --no-progress]
     sweep demo [-o FOLDER] [--size N]
     sweep plot FILE.nc --var NAME [--sel DIM=VALUE ...] -o OUT.png
     sweep plot FILE.nc --trajectory --sel theta0=VALUE --sel omega0=VALUE -o OUT.png
@@ -46,10 +46,10 @@ EXIT_INTERRUPTED = 130
 #: system reports for a process that signal ended.
 EXIT_TERMINATED = 128 + int(signal.SIGTERM)
 
-#: Seconds ``sweep run`` waits after SIGTERM for the chunk being computed to end (a chunk
-#: boundary) before it stops without it (`_Sigterm`). Chunks last about a second by
-#: default; Slurm sends SIGKILL 30 s after SIGTERM by default (KillWait), as Kubernetes
-#: does (terminationGracePeriodSeconds), so the process is gone well before.
+#: Seconds ``sweep run`` waits after SIGTERM or Ctrl-C for the chunk being computed to
+#: end (a chunk boundary) before it stops without it (`_Stop`). Chunks last about a
+#: second by default; Slurm sends SIGKILL 30 s after SIGTERM by default (KillWait), as
+#: Kubernetes does (terminationGracePeriodSeconds), so the process is gone well before.
 TERMINATE_WAIT_S = 10.0
 
 #: The demo sweep: a damped, unforced, nonlinear pendulum over the phase plane.
@@ -114,6 +114,12 @@ def build_parser() -> argparse.ArgumentParser:
                      "2-core AMD EPYC Zen 5 (2026-11-25); not measured on Intel since "
                      "0.3; no faster on an H100; fixed-step methods); overrides [run] "
                      "dtype")
+    run.add_argument("--no-space-check", action="store_true",
+                     help="run even if OUT.nc (and the checkpoint) may not fit in the free "
+                     "space: the check bounds the file by its uncompressed size, and the "
+                     "file is compressed (usually 1.6-2.7x smaller). A file that does not "
+                     "fit after all fails when it is written, leaving no partial file; with "
+                     "--checkpoint the computed chunks stay")
     _progress_option(run)
     run.set_defaults(handler=_command_run)
 
@@ -303,7 +309,7 @@ def _command_run(args: argparse.Namespace) -> int:
 
     With ``--checkpoint``/``--resume`` each finished chunk is kept in the checkpoint
     folder until the output file is saved; Ctrl-C then exits with status 130, SIGTERM
-    with 143 (`_Sigterm`), each with one line that says how to resume. If the output
+    with 143 (`_Stop`), each with one line that says how to resume. If the output
     file cannot be written (a full disk), the line says how to write it from the
     checkpoint, elsewhere if need be, without recomputing. The output file is only
     ever written whole, at the end.
@@ -332,19 +338,20 @@ def _command_run(args: argparse.Namespace) -> int:
         from .maps.pilot import pilot_catalogue, pilot_grid
 
         pilot_grid(grid, pilot)  # refuse a bad pilot before any compute
-    else:  # with a pilot, after it: its catalogue adds variables
+    elif not args.no_space_check:  # with a pilot, after it: its catalogue adds variables
         check_space(output, scene, grid, **kwargs)
     client = _client(args, options)
     bar = "\n" if args.progress or (args.progress is None and sys.stderr.isatty()) else ""
-    stop = _Sigterm(lambda: f"{bar}sweep: terminated (the running chunk did not end within "
-                    f"{TERMINATE_WAIT_S:g} s of SIGTERM and was abandoned); "
-                    f"{_resume_hint(args, folder, output)}")
+    stop = _Stop(lambda word, what: f"{bar}sweep: {word} (the running chunk did not end "
+                 f"within {TERMINATE_WAIT_S:g} s of {what} and was abandoned); "
+                 f"{_resume_hint(args, folder, output)}")
     saving = False
     try:
         with stop:
             if pilot is not None:  # after the scheduler answered: no pilot for a dead one
                 kwargs["attractors"] = pilot_catalogue(scene, grid, pilot, **kwargs)
-                check_space(output, scene, grid, **kwargs)
+                if not args.no_space_check:
+                    check_space(output, scene, grid, **kwargs)
             ds, seconds = _run_quietly(scene, grid, progress=args.progress, client=client,
                                        **kwargs)
             saving = True
@@ -387,7 +394,8 @@ def _command_refine(args, scene, grid, kwargs, options, output, folder, pilot) -
         kwargs["progress"] = args.progress
     start = time.perf_counter()
     try:
-        with _Sigterm(lambda: "sweep: terminated; no output written"), _warnings_as_lines():
+        with _Stop(lambda word, what: f"sweep: {word}; no output written"), \
+                _warnings_as_lines():
             labels = refine(scene, grid, label, step=options.get("refine_step", 16),
                             pilot=41 if pilot is None else pilot, **kwargs)
     except KeyboardInterrupt as exc:
@@ -409,15 +417,21 @@ def _command_refine(args, scene, grid, kwargs, options, output, folder, pilot) -
 
 class Terminated(KeyboardInterrupt):
     """SIGTERM stopped ``sweep run`` (raised once the running kernel's threads stop:
-    `_Sigterm`).
+    `_Stop`).
 
     A KeyboardInterrupt, so that everything that cleans up after Ctrl-C (the checkpoint,
     its lock, a half-written output file) does so after SIGTERM too.
     """
 
 
-class _Sigterm:
-    """SIGTERM stops ``sweep run`` as Ctrl-C does, within `TERMINATE_WAIT_S` seconds:
+#: signal number -> how `_Stop` says a stop it forced: (word, what the user did or the
+#: process was sent, exit status)
+_STOPS = {int(signal.SIGINT): ("interrupted", "Ctrl-C", EXIT_INTERRUPTED),
+          int(signal.SIGTERM): ("terminated", "SIGTERM", EXIT_TERMINATED)}
+
+
+class _Stop:
+    """Ctrl-C (SIGINT) and SIGTERM stop ``sweep run`` within `TERMINATE_WAIT_S` seconds:
     in effect in a ``with`` block (main thread, POSIX; elsewhere it does nothing).
 
     Python runs a signal handler in the main thread between two bytecodes. While a
@@ -425,31 +439,37 @@ class _Sigterm:
     (`sweep.kernels.threads.run_blocks`), so the handler runs at once; the raise is
     held back until the threads have ended the pieces of blocks they were computing
     (none starts another; a refill kernel's piece spans the chunk), as they write into
-    the run's arrays. The handler raises
-    `Terminated`, which unwinds the run exactly as Ctrl-C does: the chunks already
-    stored stay in the checkpoint (the one that was running is dropped and recomputed
-    on resume), the checkpoint's lock is released, a half-written output file is
-    deleted, and ``sweep run`` prints the resume command and exits with
-    `EXIT_TERMINATED`.
+    the run's arrays. Ctrl-C raises KeyboardInterrupt (Python's own handler); SIGTERM
+    raises `Terminated` (this block's handler), which unwinds the run exactly as Ctrl-C
+    does: the chunks already stored stay in the checkpoint (the one that was running is
+    dropped and recomputed on resume), the checkpoint's lock is released, a
+    half-written output file is deleted, and ``sweep run`` prints the resume command
+    and exits with `EXIT_INTERRUPTED` or `EXIT_TERMINATED`.
 
     A chunk lasts about a second by default (`sweep.engine.default_chunk_size`), but a
-    large ``chunk_size`` can make one last minutes, past a batch system's grace period
-    (then SIGKILL: no message, a stale lock file). So a watchdog thread, woken by the
-    signal itself (`signal.set_wakeup_fd`: the interpreter writes the signal's number
-    to a pipe at once, whatever the main thread does; the kernels release the GIL, so
-    the thread runs beside them), waits `TERMINATE_WAIT_S` seconds for the block to
-    end. If it has not, the thread prints the line, releases the checkpoint locks
+    large ``chunk_size`` can make one last minutes: past a batch system's grace period
+    after SIGTERM (then SIGKILL: no message, a stale lock file), and past the patience
+    of whoever pressed Ctrl-C. So a watchdog thread, woken by the signal itself
+    (`signal.set_wakeup_fd`: the interpreter writes the signal's number to a pipe at
+    once, whatever the main thread does; the kernels release the GIL, so the thread
+    runs beside them), waits `TERMINATE_WAIT_S` seconds for the block to end. If it has
+    not, the thread prints the line, releases the checkpoint locks
     (`sweep.execution.lock.release_all`), deletes a half-written output file
-    (`sweep.io.discard_partial_files`) and ends the process with ``os._exit``. The
-    stored chunks are whole files at any moment (each is renamed into place complete).
+    (`sweep.io.discard_partial_files`) and ends the process with ``os._exit`` and the
+    signal's exit status. The stored chunks are whole files at any moment (each is
+    renamed into place complete).
 
-    A SIGTERM the parent process ignores stays ignored; the previous handler and wakeup
-    fd are restored when the block ends. A second SIGTERM changes nothing.
+    A signal the parent process ignores stays ignored (a ``sweep run &`` of a script
+    inherits SIGINT ignored); Ctrl-C is watched only while SIGINT has Python's own
+    handler. The previous SIGTERM handler and wakeup fd are restored when the block
+    ends. A second signal changes nothing: the bound runs from the first.
 
     Parameters
     ----------
     line : callable
-        ``line()`` -> the message of a stop forced by the watchdog.
+        ``line(word, what)`` -> the message of a stop forced by the watchdog, with
+        ``word`` ``"interrupted"`` or ``"terminated"`` and ``what`` ``"Ctrl-C"`` or
+        ``"SIGTERM"``.
     """
 
     def __init__(self, line) -> None:
@@ -459,28 +479,40 @@ class _Sigterm:
         self._done = threading.Event()
         self._raised = False
         self._armed = False
+        self._previous = None
 
-    def __enter__(self) -> _Sigterm:
-        if (os.name != "posix" or threading.current_thread() is not threading.main_thread()
-                or signal.getsignal(signal.SIGTERM) == signal.SIG_IGN):
+    def __enter__(self) -> _Stop:
+        if os.name != "posix" or threading.current_thread() is not threading.main_thread():
             return self
+        watched = set()
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            watched.add(int(signal.SIGINT))
+        term = signal.getsignal(signal.SIGTERM) != signal.SIG_IGN
+        if term:
+            watched.add(int(signal.SIGTERM))
+        if not watched:
+            return self
+        self._watched = watched
         self._wait_s = float(TERMINATE_WAIT_S)
         self._read, self._write = os.pipe()
         os.set_blocking(self._write, False)  # set_wakeup_fd needs a non-blocking fd
-        self._watchdog = threading.Thread(target=self._watch, name="sweep-sigterm",
+        self._watchdog = threading.Thread(target=self._watch, name="sweep-stop",
                                           daemon=True)
         self._watchdog.start()
         self._previous_fd = signal.set_wakeup_fd(self._write, warn_on_full_buffer=False)
         self._armed = True
-        self._previous = signal.signal(signal.SIGTERM, self._handle)
+        self._term = term
+        if term:
+            self._previous = signal.signal(signal.SIGTERM, self._handle)
         return self
 
     def __exit__(self, *exc_info) -> bool:
         if self._armed:
             self._armed = False
             self._done.set()
-            signal.signal(signal.SIGTERM, self._previous if self._previous is not None
-                          else signal.SIG_DFL)
+            if self._term:
+                signal.signal(signal.SIGTERM, self._previous if self._previous is not None
+                              else signal.SIG_DFL)
             signal.set_wakeup_fd(self._previous_fd)
             os.close(self._write)  # the watchdog's read returns: it ends
             self._watchdog.join(timeout=1.0)
@@ -500,21 +532,23 @@ class _Sigterm:
                 return
             if not data:  # the block ended
                 return
-            if int(signal.SIGTERM) in data:  # one byte per signal caught
+            caught = [number for number in data if number in self._watched]
+            if caught:  # one byte per signal caught; the first one sets the exit
                 if not self._done.wait(self._wait_s):
-                    self._force()
+                    self._force(caught[0])
                 return
 
-    def _force(self) -> None:
+    def _force(self, signum: int) -> None:
         """End the process now: the main thread did not stop in time."""
+        word, what, status = _STOPS[signum]
         try:
             # never wait on a stuck main thread
             if self._say_lock.acquire(timeout=1.0) and not self._said:
                 self._said = True
                 try:
-                    line = self._line()
+                    line = self._line(word, what)
                 except Exception:  # noqa: BLE001 - the exit must not depend on it
-                    line = "sweep: terminated"
+                    line = f"sweep: {word}"
                 os.write(2, (line + "\n").encode())
             from .execution import lock as _lock
             from .io import discard_partial_files
@@ -522,7 +556,7 @@ class _Sigterm:
             _lock.release_all()
             discard_partial_files()
         finally:
-            os._exit(EXIT_TERMINATED)
+            os._exit(status)
 
     def say(self, text: str) -> None:
         """Print ``text`` on stderr unless the watchdog has printed its line."""
@@ -553,8 +587,8 @@ def _connect(address: str):
     except ImportError:
         raise ValueError(f"--scheduler {address}: running on a Dask cluster needs "
                          "dask.distributed, which is not installed; accepted: pip install "
-                         "'sweep[dask]', or run without --scheduler (and without [run] "
-                         "scheduler)") from None
+                         "'dask[distributed]' (the extra dask), or run without --scheduler "
+                         "(and without [run] scheduler)") from None
     try:
         return Client(address, timeout=CONNECT_TIMEOUT_S)
     except Exception as exc:  # noqa: BLE001 - OSError, TimeoutError, ValueError (address)

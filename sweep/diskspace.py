@@ -86,6 +86,13 @@ def check_space(path, scene, grid, **run_kwargs) -> int:
     files already in it. The checkpoint stays until the output file is written, so
     on one file system both must fit.
 
+    The output file's bound is its uncompressed size: the file is compressed, and
+    usually 1.6-2.7x smaller, but how much smaller is known only once the values
+    exist. So a run whose compressed file would just fit can be refused; ``sweep run
+    --no-space-check`` and ``run_to_netcdf(..., check_space=False)`` skip this check
+    (a write that then fails leaves no partial file, and a checkpoint keeps its
+    chunks).
+
     Parameters
     ----------
     path : str or Path
@@ -137,8 +144,10 @@ def check_space(path, scene, grid, **run_kwargs) -> int:
                          "(kept until the output file is written)")
         raise ValueError(f"not enough free disk space: {' and '.join(parts)}, but "
                          f"{str(where)!r} has {_size(free)} free; accepted: a folder with "
-                         f"at least {_size(file_bytes + chunk_bytes)} free, or a smaller "
-                         "run (fewer trajectories or observables, a larger save_every)")
+                         f"at least {_size(file_bytes + chunk_bytes)} free, a smaller "
+                         "run (fewer trajectories or observables, a larger save_every), or, "
+                         "if the compressed file will fit, no check (sweep run "
+                         "--no-space-check; run_to_netcdf(..., check_space=False))")
     return output
 
 

@@ -14,7 +14,7 @@ Chunks of one `sweep.run` on a Dask cluster are `sweep.execution.dask`'s work
 
 from __future__ import annotations
 
-from ._validate import check_positive_int
+from ._validate import check_flag, check_positive_int
 from .execution.dask import _KERNEL_LOCK, check_client
 
 __all__ = ["run_to_netcdf"]
@@ -37,7 +37,7 @@ _NOT_STREAMED = ("client", "checkpoint", "resume", "keep_checkpoint", "estimate_
 
 
 def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries=2,
-                  progress=None, **run_kwargs):
+                  progress=None, check_space=True, **run_kwargs):
     """`sweep.run` whose result is written to the netCDF4 file ``path`` block by block
     as blocks finish, so that the grid need not fit in memory (the client holds one
     block at a time; a worker, the block it computes).
@@ -64,6 +64,11 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
         Retries of a block whose task raised (a lost worker's blocks are rerun anyway).
     progress : bool, optional
         A progress bar on stderr (default as for `sweep.run`).
+    check_space : bool, default True
+        Refuse, before any compute, a file that may not fit in the free space of its
+        folder (`sweep.diskspace.check_space`). Its bound is the uncompressed size, so
+        a file that would fit compressed can be refused: False skips the check (a file
+        that does not fit after all raises `OSError` when written, leaving nothing).
 
     Returns
     -------
@@ -72,8 +77,9 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     Raises
     ------
     ValueError
-        Before any compute: bad arguments, or the file may not fit in the free space
-        of its folder (`sweep.diskspace.check_space`: its uncompressed size is the bound).
+        Before any compute: bad arguments, or (with ``check_space``) the file may not
+        fit in the free space of its folder (`sweep.diskspace.check_space`: its
+        uncompressed size is the bound).
     OSError
         The file could not be written (a full disk after all): one line naming it and
         the cause (`sweep.io.write_error`); no partial file is left.
@@ -91,13 +97,15 @@ def run_to_netcdf(path, scene, grid, *, client=None, rows_per_task=None, retries
     for name in _NOT_STREAMED:
         if name in run_kwargs:
             raise ValueError(f"run_to_netcdf does not take {name}= (accepted: the other "
-                             "arguments of sweep.run; client, progress and rows_per_task "
-                             "as its own)")
+                             "arguments of sweep.run; client, rows_per_task, retries, "
+                             "progress and check_space as its own)")
+    check_space = check_flag("check_space", check_space)
     _, _, chunk_size = engine.prepare(scene, grid, **run_kwargs)  # validation, no compute
     if client is not None:
         check_client(client)
     path = io.check_output_path(path)
-    needed = diskspace.check_space(path, scene, grid, **run_kwargs)
+    needed = (diskspace.check_space(path, scene, grid, **run_kwargs) if check_space
+              else diskspace.estimate_size(scene, grid, **run_kwargs))
     first = grid.dims[0]
     axes = grid.axes
     inner = grid.size // grid.shape[0]

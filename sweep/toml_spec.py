@@ -401,7 +401,8 @@ def _netcdf_columns(where: str, path: Path) -> dict[str, np.ndarray]:
 
 
 def _axis(source: str, name: str, value: Any, table: str = "grid") -> np.ndarray | list:
-    """One ``[grid]`` entry -> the values of that axis (radians for angles)."""
+    """One ``[grid]`` (or ``[points]``: ``table``) entry -> the values of that axis
+    (radians for angles)."""
     if isinstance(value, (bool, str)):
         raise TypeError(f"{source}: [{table}] {name} must be a number, a list of numbers or "
                          f"a table {{start, stop, num}}, got {value!r}")
@@ -424,45 +425,47 @@ def _numbers(source: str, name: str, values: list, table: str = "grid") -> list:
 
 
 def _axis_table(source: str, name: str, table: dict, kind: str = "grid") -> np.ndarray:
-    """``{start, stop, num[, units]}`` or ``{values[, units]}`` -> axis values."""
+    """``{start, stop, num[, units]}`` or ``{values[, units]}`` -> axis values; errors
+    name the table ``[kind.name]`` as the run file wrote it (``grid`` or ``points``)."""
     accepted = _RANGE_KEYS + ("values",) + (("units",) if name in angle_axes() else ())
     _check_keys(source, f"[{kind}.{name}]", table, accepted)
     if "values" in table:
         extra = [key for key in _RANGE_KEYS if key in table]
         if extra:
-            raise ValueError(f"{source}: [grid.{name}] gives both 'values' and {extra[0]!r}; "
+            raise ValueError(f"{source}: [{kind}.{name}] gives both 'values' and {extra[0]!r}; "
                              "accepted: either values or start, stop, num")
         if not isinstance(table["values"], list):
-            raise TypeError(f"{source}: [grid.{name}] values must be a list of numbers, "
+            raise TypeError(f"{source}: [{kind}.{name}] values must be a list of numbers, "
                              f"got {table['values']!r}")
         values = np.asarray(_numbers(source, f"{name}.values", table["values"], kind))
     else:
         missing = [key for key in _RANGE_KEYS if key not in table]
         if missing:
-            raise ValueError(f"{source}: [grid.{name}] missing key {missing[0]!r}; accepted: "
+            raise ValueError(f"{source}: [{kind}.{name}] missing key {missing[0]!r}; accepted: "
                              "a table with start, stop, num (np.linspace) or with values")
-        start, stop = (_number(source, f"{name}.{key}", table[key]) for key in ("start",
-                                                                                "stop"))
+        start, stop = (_number(source, f"{name}.{key}", table[key], kind)
+                       for key in ("start", "stop"))
         num = table["num"]
         if isinstance(num, bool) or not isinstance(num, int) or num < 1:
-            raise ValueError(f"{source}: [grid.{name}] num must be an integer >= 1, "
+            raise ValueError(f"{source}: [{kind}.{name}] num must be an integer >= 1, "
                              f"got {num!r}")
         values = np.linspace(start, stop, num)
     if "units" in table:
-        return from_degrees(values) if _is_degrees(source, name, table["units"]) else values
+        return (from_degrees(values) if _is_degrees(source, name, table["units"], kind)
+                else values)
     return values
 
 
-def _number(source: str, key: str, value: Any) -> float:
+def _number(source: str, key: str, value: Any, table: str = "grid") -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise TypeError(f"{source}: [grid] {key} must be a number, got {value!r}")
+        raise TypeError(f"{source}: [{table}] {key} must be a number, got {value!r}")
     return float(value)
 
 
-def _is_degrees(source: str, name: str, units: Any) -> bool:
+def _is_degrees(source: str, name: str, units: Any, table: str = "grid") -> bool:
     accepted = _units(name)
     if units not in accepted:
-        raise ValueError(f"{source}: [grid.{name}] units must be one of "
+        raise ValueError(f"{source}: [{table}.{name}] units must be one of "
                          f"{', '.join(map(repr, accepted))}, got {units!r}")
     return accepted[units]
 

@@ -169,3 +169,52 @@ def test_output_in_a_missing_folder_is_refused(tmp_path):
     assert code == 2 and out == "" and err.count("\n") == 1
     assert "nowhere" in err
     assert not output.parent.exists()
+
+
+# Each error of an axis written as a table names the table the run file wrote:
+# [points.theta0] (or [points] theta0.start) for a table of points, never [grid.theta0].
+# label -> (the keys of theta0's table, as TOML, and the start of the error)
+_AXIS_TABLE_ERRORS = {
+    "values and a range": ({"start": "-180", "stop": "180", "num": "3",
+                            "values": "[0.0, 1.0, 2.0]"},
+                           "[{table}.theta0] gives both 'values' and 'start'"),
+    "values not a list": ({"values": "3"},
+                          "[{table}.theta0] values must be a list of numbers"),
+    "range without num": ({"start": "-180", "stop": "180"},
+                          "[{table}.theta0] missing key 'num'"),
+    "zero num": ({"start": "-180", "stop": "180", "num": "0"},
+                 "[{table}.theta0] num must be an integer >= 1, got 0"),
+    "boolean start": ({"start": "true", "stop": "180", "num": "3"},
+                      "[{table}] theta0.start must be a number, got True"),
+    "bad units": ({"start": "-180", "stop": "180", "num": "3", "units": '"grad"'},
+                  "[{table}.theta0] units must be one of 'rad', 'deg', got 'grad'"),
+    "boolean in values": ({"values": "[0.0, true, 1.0]"},
+                          "[{table}] theta0.values[1] must be a number, got True"),
+    "unknown key": ({"values": "[0.0]", "step": "1"},
+                    "unknown key 'step' in [{table}.theta0]"),
+}
+
+
+def _axis_table_file(table: str, keys: dict, inline: bool) -> str:
+    """A run file whose [grid] or [points] gives theta0 as a table: inline
+    (``theta0 = {...}``) or as the sub-table ``[TABLE.theta0]``."""
+    if inline:
+        axis, sub = f"theta0 = {{{', '.join(f'{k} = {v}' for k, v in keys.items())}}}\n", ""
+    else:
+        axis, sub = "", f"[{table}.theta0]\n" + "".join(f"{k} = {v}\n" for k, v in keys.items())
+    return (f"[scene.damping]\ncoefficient = 0.3\n\n[{table}]\n{axis}"
+            f"omega0 = [-1.0, 0.0, 1.0]\n{sub}\n[run]\nt_end = 2.0\ndt = 0.05\n")
+
+
+@pytest.mark.parametrize("inline", [True, False], ids=["inline", "sub-table"])
+@pytest.mark.parametrize("table", ["grid", "points"])
+@pytest.mark.parametrize("label", list(_AXIS_TABLE_ERRORS))
+def test_an_axis_table_error_names_the_table_the_file_wrote(label, table, inline, tmp_path,
+                                                            no_compute):
+    keys, words = _AXIS_TABLE_ERRORS[label]
+    path = _run_file(tmp_path, _axis_table_file(table, keys, inline))
+    code, out, err = _call("run", path, "-o", tmp_path / "out.nc")
+    assert (code, out) == (2, "") and err.count("\n") == 1, err
+    assert err.startswith(f"sweep: error: {path}: ") and words.format(table=table) in err, err
+    if table == "points":
+        assert "grid" not in err, err

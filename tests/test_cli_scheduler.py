@@ -104,7 +104,8 @@ def test_resume_on_the_cluster(scheduler, local, tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("label,setup,words", [
     ("dask missing", lambda m: m.setitem(sys.modules, "distributed", None),
-     "needs dask.distributed, which is not installed; accepted: pip install 'sweep[dask]'"),
+     "needs dask.distributed, which is not installed; accepted: pip install "
+     "'dask[distributed]' (the extra dask)"),
     ("no scheduler there", lambda m: m.setattr(cli, "CONNECT_TIMEOUT_S", 1),
      "cannot connect to the Dask scheduler at 'tcp://127.0.0.1:9'"),
 ])

@@ -1,4 +1,4 @@
-"""Faults a long run meets: SIGTERM from a batch system during a long chunk, a full
+"""Faults a long run meets: SIGTERM from a batch system (or Ctrl-C) during a long chunk, a full
 disk (refused before compute by the size estimate; a write that fails anyway keeps the
 checkpoint), and a damaged checkpoint chunk (recomputed, with a warning).
 
@@ -46,15 +46,18 @@ def _run_file(folder: Path, text: str = RUN_FILE) -> Path:
     return path
 
 
-# ------------------------------------------------------------------------- SIGTERM
+# ------------------------------------------------------------------ SIGTERM, Ctrl-C
 # One chunk of ~30 s or more (1500 trajectories x 5e6 steps: pieces of ~7 s on 2
 # threads, sweep.kernels.threads), in a child whose wait for the running pieces is cut
 # to 1 s, with its kernel loaded beforehand (the first call
-# of a numba kernel loads it from the cache: interpreted code, where SIGTERM would be
-# handled at once), and which creates MARKER as it calls the kernel.
+# of a numba kernel loads it from the cache: interpreted code, where a signal would be
+# handled at once), and which creates MARKER as it calls the kernel. SIGINT gets
+# Python's own handler, as in a command typed at a terminal (a child of a background
+# job inherits it ignored: see test_resume._FOREGROUND).
 _LONG_RUN_FILE = SLOW_RUN_FILE.replace("t_end = 500.0", "t_end = 50000.0") \
     .replace("chunk_size = 10", "chunk_size = 1500")
 _WATCHED = ("import pathlib, signal, sys, sweep; "
+            "signal.signal(signal.SIGINT, signal.default_int_handler); "
             "from sweep import cli; from sweep.execution import local; "
             "from sweep.toml_spec import load_run; "
             "cli.TERMINATE_WAIT_S = 1.0; marker = pathlib.Path(sys.argv[1]); "
@@ -65,7 +68,8 @@ _WATCHED = ("import pathlib, signal, sys, sweep; "
             "sys.exit(cli.main(sys.argv[2:]))")
 
 
-def test_sigterm_during_a_long_chunk_stops_within_the_bound(tmp_path):
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "Ctrl-C"])
+def test_a_stop_during_a_long_chunk_ends_within_the_bound(sig, tmp_path):
     run_file = _run_file(tmp_path, _LONG_RUN_FILE)
     out, folder, marker = tmp_path / "out.nc", tmp_path / "ck", tmp_path / "kernel-started"
     process = subprocess.Popen([sys.executable, "-c", _WATCHED, str(marker), "run",
@@ -80,7 +84,7 @@ def test_sigterm_during_a_long_chunk_stops_within_the_bound(tmp_path):
             time.sleep(0.01)
         time.sleep(0.2)  # inside the kernel, whose pieces run ~7 s and never look at signals
         assert (folder / _lock.LOCK).exists()
-        process.send_signal(signal.SIGTERM)
+        process.send_signal(sig)
         sent = time.monotonic()
         _, stderr = process.communicate(timeout=WAIT_S)
         waited = time.monotonic() - sent
@@ -88,11 +92,13 @@ def test_sigterm_during_a_long_chunk_stops_within_the_bound(tmp_path):
         if process.poll() is None:
             process.kill()
             process.communicate()
-    # the watchdog stopped it after its 1 s, not the kernel after its ~30 s
-    assert process.returncode == 143, stderr
+    # the watchdog stopped it after its 1 s, not the kernel's running pieces after ~7 s
+    word, what, code = {signal.SIGTERM: ("terminated", "SIGTERM", 143),
+                        signal.SIGINT: ("interrupted", "Ctrl-C", 130)}[sig]
+    assert process.returncode == code, stderr
     assert 1.0 <= waited < 6.0, waited
-    assert stderr == (f"sweep: terminated (the running chunk did not end within 1 s of "
-                      f"SIGTERM and was abandoned); 0 finished chunks are checkpointed in "
+    assert stderr == (f"sweep: {word} (the running chunk did not end within 1 s of "
+                      f"{what} and was abandoned); 0 finished chunks are checkpointed in "
                       f"'{folder}'; resume with: sweep run {run_file} -o {out} "
                       f"--checkpoint {folder} --resume\n")
     assert sorted(p.name for p in folder.iterdir()) == [ckpt.MANIFEST]  # no lock left
@@ -247,6 +253,48 @@ def test_a_run_that_cannot_fit_is_refused_with_simulated_free_space(tmp_path, mo
         sweep.distributed.run_to_netcdf(tmp_path / "x.nc", SCENE, _grid(9), t_end=1.0,
                                         dt=0.01)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.toml"]
+
+
+# 250 x 250 trajectories: 1.3 MiB compressed, 2.5 MiB estimated (uncompressed): the file
+# fits on the 2 MiB tmpfs only because it is compressed
+_COMPRESSIBLE_RUN_FILE = _BIG_RUN_FILE.replace("num = 400", "num = 250")
+
+
+def test_no_space_check_writes_a_compressed_file_the_bound_refuses(small_disk, tmp_path):
+    run_file = _run_file(tmp_path, _COMPRESSIBLE_RUN_FILE)
+    out = small_disk / "out.nc"
+    code, _, stderr = call("run", run_file, "-o", out)
+    assert code == 2 and "not enough free disk space" in stderr
+    assert stderr.endswith("or, if the compressed file will fit, no check (sweep run "
+                           "--no-space-check; run_to_netcdf(..., check_space=False))\n")
+    code, stdout, stderr = call("run", run_file, "-o", out, "--no-space-check")
+    assert stdout.startswith(f"wrote {out}: 62500 trajectories")
+    assert (code, stderr) == (0, ""), stderr
+    scene, grid, kwargs = load_run(run_file)
+    assert os.path.getsize(out) < shutil.disk_usage(small_disk).total \
+        < diskspace.estimate_size(scene, grid, **kwargs)
+    assert sorted(p.name for p in small_disk.iterdir()) == ["out.nc"]
+
+
+def test_no_space_check_skips_the_bound_with_simulated_free_space(tmp_path, monkeypatch):
+    run_file = _run_file(tmp_path)
+    scene, grid, kwargs = load_run(run_file)
+    free = diskspace.estimate_size(scene, grid, **kwargs) - 1  # refused: one byte short
+    real = shutil.disk_usage
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: real(p)._replace(free=free))
+    out, streamed = tmp_path / "out.nc", tmp_path / "streamed.nc"
+    assert call("run", run_file, "-o", out)[0] == 2
+    with pytest.raises(ValueError, match="not enough free disk space"):
+        sweep.distributed.run_to_netcdf(streamed, scene, grid, **kwargs)
+    with pytest.raises(TypeError, match="check_space must be True or False, got 'no'"):
+        sweep.distributed.run_to_netcdf(streamed, scene, grid, check_space="no", **kwargs)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.toml"]
+    code, _, stderr = call("run", run_file, "-o", out, "--no-space-check")
+    assert (code, stderr) == (0, ""), stderr
+    sweep.distributed.run_to_netcdf(streamed, scene, grid, check_space=False, **kwargs)
+    for path in (out, streamed):  # the compressed files are well within that free space
+        assert os.path.getsize(path) < free
+        identical(sweep.load(path), sweep.run(scene, grid, **kwargs))
 
 
 def test_a_write_that_fails_on_a_real_full_disk_keeps_the_checkpoint(small_disk, tmp_path,

@@ -1,6 +1,7 @@
 """Package hygiene: a cheap import, one place for JIT flags, a public surface that exists."""
 
 import pathlib
+import re
 import subprocess
 import sys
 
@@ -39,3 +40,18 @@ def test_plot_module_is_reachable_lazily():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == ["True", "False"]
+
+
+def test_no_install_hint_names_the_distribution_sweep():
+    # "sweep" on PyPI is SWeeP, an unrelated project that also installs a package named
+    # sweep (docs/guide/install.md): pip install sweep, or 'sweep[dask]', would replace
+    # this package. The distribution is sweep-pendulum; extras are named by what they hold.
+    hint = re.compile(r"pip install\s+(-e\s+)?[\"']?sweep(\[|[\"'\s)]|$)", re.MULTILINE)
+    repository = ROOT.parent
+    found = []
+    for folder in ("sweep", "docs", "examples", ".ci"):
+        for path in (repository / folder).rglob("*"):
+            if path.suffix in (".py", ".md", ".rst", ".toml", ".sh", "") and path.is_file() \
+                    and "_build" not in path.parts:
+                found += [f"{path}: {m.group(0)!r}" for m in hint.finditer(path.read_text())]
+    assert found == []

@@ -1,7 +1,8 @@
 """Run the chunks of a sweep as tasks on a Dask cluster (`sweep.run(..., client=...)`).
 
-Dask is optional (``pip install "sweep[dask]"``) and imported only here, only when a
-client is given: ``import sweep`` never imports dask.
+Dask is optional (the extra ``dask``: ``pip install -e ".[dask]"`` in a checkout, or
+``pip install "dask[distributed]"``) and imported only here, only when a client is
+given: ``import sweep`` never imports dask.
 
 How a run is distributed
 ------------------------
@@ -83,7 +84,7 @@ def check_client(client) -> None:
         from distributed import Client
     except ImportError:  # pragma: no cover - exercised only without dask
         raise TypeError(f"client={client!r} needs dask.distributed, which is not "
-                        "installed; accepted: client=None, or pip install 'sweep[dask]'") \
+                        "installed; accepted: client=None, or pip install 'dask[distributed]'") \
             from None
     if not isinstance(client, Client):
         raise TypeError(f"client must be None or a dask.distributed.Client, got {client!r}")

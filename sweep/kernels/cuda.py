@@ -61,7 +61,9 @@ def available() -> str | None:
     except Exception as exc:  # noqa: BLE001  # pragma: no cover - broken driver or toolkit
         return f"numba.cuda could not reach a GPU ({exc})"
     return ("no CUDA GPU was found (numba.cuda.is_available() is False: no NVIDIA GPU, "
-            "driver or CUDA toolkit; install with pip install 'sweep[cuda]')")
+            "driver or CUDA toolkit; the extra cuda installs numba's CUDA target: pip "
+            "install -e \".[cuda]\" in a checkout, or pip install 'numba-cuda[cu12]>=0.20' "
+            "'numpy<2.5')")
 
 
 _DEVICE_MATH = '''\
