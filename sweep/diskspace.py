@@ -46,10 +46,18 @@ def layout(scene, grid, **run_kwargs) -> xr.Dataset:
 def _layout(scene, grid, settings, spec, attractors) -> xr.Dataset:
     """`layout` of a run whose arguments `sweep.engine.prepare` has checked."""
     from .execution.local import allocate
+    from .kernels import KernelSpec
 
+    system = not isinstance(spec, KernelSpec)  # sweep.engine_systems
+    if system:
+        from .engine_systems import allocate_system, system_dataset
+
+        allocate = allocate_system
     rows = allocate(spec, settings, 0)  # the kernel's arrays, 0 trajectories long
     full = {name: np.broadcast_to(np.zeros((), array.dtype), (grid.size,) + array.shape[1:])
             for name, array in rows.items()}
+    if system:
+        return system_dataset(scene, grid, settings, spec, full)
     ds = to_dataset(scene=scene, grid=grid, settings=settings, spec=spec, out=full["out"],
                     status=full["status"], saved=full.get("saved"))
     ds.attrs.update(engine._catalogue_attrs(attractors))

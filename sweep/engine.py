@@ -646,6 +646,12 @@ def prepare(scene: Scene, grid: Grid, **run_kwargs):
         The kernel the run would use.
     chunk_size : int
     """
+    if isinstance(scene, System):  # several coordinates: sweep.engine_systems
+        from .engine_systems import prepare_system
+
+        return prepare_system(scene, grid, **{k: v for k, v in run_kwargs.items()
+                                              if k not in ("progress", "client",
+                                                           "keep_checkpoint")})
     bound = inspect.signature(run).bind(scene, grid, **run_kwargs)
     bound.apply_defaults()
     wanted = inspect.signature(_prepare).parameters

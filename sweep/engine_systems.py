@@ -28,7 +28,8 @@ from .physics.system import System, system_parameters
 from .settings import CUDA_CHUNK, _block, _check_device, default_chunk_size, validate_settings
 from .system_observables import resolve_system_observe, variables
 
-__all__ = ["prepare_system", "run_system", "to_network_dataset", "to_system_dataset"]
+__all__ = ["allocate_system", "prepare_system", "run_system", "system_dataset",
+           "to_network_dataset", "to_system_dataset"]
 
 #: `sweep.run`'s arguments that a system run does not take yet, with the value that
 #: means "not used"; any other value is refused before any compute.
@@ -171,13 +172,7 @@ def run_system(system: System, grid: ParameterRows, *, progress=None, client=Non
 
         check_client(client)
     n = grid.size
-    network = isinstance(spec, NetworkSpec)
-    m = spec.n_nodes if network else len(spec.system.coordinates)
-    width = network_outputs(spec) if network else n_outputs(spec)
-    arrays = {"out": np.empty((n, width)), "status": np.empty(n, dtype=np.int8)}
-    if settings.save_every is not None:
-        n_saved = settings.n_steps // settings.save_every + 1
-        arrays["saved"] = np.full((n, 2 * m, n_saved), np.nan)
+    arrays = allocate_system(spec, settings, n)
     todo = list(grid.chunks(chunk_size))
     with progress_bar(progress, n) as bar:
         execute(RunContext(system, grid, spec, settings), todo, arrays,
@@ -185,7 +180,26 @@ def run_system(system: System, grid: ParameterRows, *, progress=None, client=Non
     failures = failure_summary(status_counts(arrays["status"]), n)
     if failures:
         warnings.warn(failures, RuntimeWarning, stacklevel=3)
-    build = to_network_dataset if network else to_system_dataset
+    return system_dataset(system, grid, settings, spec, arrays)
+
+
+def allocate_system(spec, settings, n: int) -> dict[str, np.ndarray]:
+    """The arrays a system's kernel writes for ``n`` trajectories: ``out``, ``status``
+    and, with ``save_every``, ``saved`` (every coordinate, then every velocity)."""
+    network = isinstance(spec, NetworkSpec)
+    m = spec.n_nodes if network else len(spec.system.coordinates)
+    width = network_outputs(spec) if network else n_outputs(spec)
+    arrays = {"out": np.empty((n, width)), "status": np.empty(n, dtype=np.int8)}
+    if settings.save_every is not None:
+        n_saved = settings.n_steps // settings.save_every + 1
+        arrays["saved"] = np.full((n, 2 * m, n_saved), np.nan)
+    return arrays
+
+
+def system_dataset(system, grid, settings, spec, arrays: dict) -> xr.Dataset:
+    """The dataset of a system run from the arrays its kernel wrote
+    (`allocate_system`)."""
+    build = to_network_dataset if isinstance(spec, NetworkSpec) else to_system_dataset
     return build(system=system, grid=grid, settings=settings, spec=spec, out=arrays["out"],
                  status=arrays["status"], saved=arrays.get("saved"))
 

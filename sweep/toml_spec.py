@@ -60,6 +60,19 @@ parameter sets, `sweep.Points`)::
                                  # or a variable of the run ("basins")
     refine_step = 16             # with refine: cells between lattice lines (>= 2; 16)
 
+A system with several coordinates (docs/guide/systems.md) takes ``[system]`` in place
+of ``[scene]``: ``kind`` names it, the other keys are its constructor's arguments, and
+``[system.damping]`` adds `sweep.Damping`; its axes are the system's::
+
+    [system]
+    kind = "DoublePendulum"      # or "CoupledPendula", "SwingNetwork"
+    mass1 = 1.0                  # kg (CoupledPendula: n, mass, length, coupling, kind,
+    length2 = 0.5                # m   topology; SwingNetwork: edges or adjacency, power,
+                                 #     damping, coupling)
+    [grid]
+    theta1_0 = {start = -3, stop = 3, num = 201}
+    theta2_0 = {start = -3, stop = 3, num = 201}
+
 ``units = "deg"`` is accepted for the angle-like axes ``theta0`` (deg),
 ``omega0`` (deg/s), ``forcing_phase`` (deg) and any effect parameter declared as an
 angle; values are converted to radians
@@ -84,11 +97,15 @@ from .kernels.spec import check_device, check_dtype
 from .observables import DEFAULT_OBSERVE, resolve
 from .physics import Scene, parameter_names, parameters
 
-__all__ = ["OPTION_KEYS", "REFINE_MAPS", "RUN_KEYS", "TABLES", "angle_axes", "check_scheduler",
+__all__ = ["OPTION_KEYS", "REFINE_MAPS", "RUN_KEYS", "SYSTEM_KINDS", "TABLES", "angle_axes",
+           "check_scheduler",
            "load_run", "parse_run"]
 
-#: Top-level tables of a run file (one of grid, points and sample).
-TABLES = ("scene", "grid", "run", "points", "sample")
+#: Top-level tables of a run file (one of grid, points and sample; scene or system).
+TABLES = ("scene", "grid", "run", "points", "sample", "system")
+
+#: ``[system] kind`` -> the system's class name in `sweep.physics`.
+SYSTEM_KINDS = ("DoublePendulum", "CoupledPendula", "SwingNetwork")
 
 #: The tables that say which trajectories run (one of them).
 ROWS_TABLES = ("grid", "points", "sample")
@@ -120,9 +137,20 @@ def angle_axes() -> tuple[str, ...]:
     return tuple(p.axis for p in parameters() if p.angle)
 
 
+def _angle_parameter(name: str):
+    """The parameter of axis ``name`` if it is an angle (or an angular velocity): the
+    single pendulum's or a system's; None otherwise."""
+    from .physics.system import system_axis
+
+    found = {p.axis: p for p in parameters()}.get(name) or system_axis(name)
+    return found if found is not None and found.angle else None
+
+
 def _units(name: str) -> dict[str, bool]:
     """Accepted ``units`` of an angle axis; the value says whether it means degrees."""
-    return _RATE_UNITS if name == "omega0" else {"rad": False, "deg": True}
+    found = _angle_parameter(name)
+    rate = name == "omega0" or (found is not None and found.units == "rad s-1")
+    return _RATE_UNITS if rate else {"rad": False, "deg": True}
 
 _RANGE_KEYS = ("start", "stop", "num")
 
@@ -211,16 +239,30 @@ def parse_run(spec: dict[str, Any], source: str = "run file", options: dict | No
         if name not in spec and not (name == "grid" and given):
             raise ValueError(f"{source}: missing table [{name}]; required tables: grid (or "
                              "points, or sample), run (scene is optional)")
+    if "scene" in spec and "system" in spec:
+        raise ValueError(f"{source}: both [scene] and [system]; accepted: one of them (the "
+                         "single pendulum, or a system of several coordinates)")
     tables = {name: _table(source, name, spec.get(name, {})) for name in TABLES}
-    scene = _scene(source, tables["scene"])
+    scene = _system(source, tables["system"]) if "system" in spec else \
+        _scene(source, tables["scene"])
+    names = scene.columns(True) if "system" in spec else parameter_names()
     which = given[0] if given else "grid"
-    grid = (_points(source, tables["points"], folder) if which == "points"
-            else _sample(source, tables["sample"]) if which == "sample"
-            else _grid(source, tables["grid"]))
+    grid = (_points(source, tables["points"], folder, names) if which == "points"
+            else _sample(source, tables["sample"], names) if which == "sample"
+            else _grid(source, tables["grid"], names))
     with _context(source, which):
         grid.check_against(scene)
-    kwargs = _run(source, tables["run"])
+    kwargs = _run(source, tables["run"], system="system" in spec)
     found = {key: kwargs.pop(key) for key in OPTION_KEYS if key in kwargs}
+    if "system" in spec:
+        with _context(source, "run"):
+            for key in ("pilot", "refine"):
+                if key in found:
+                    raise ValueError(f"{key} is for the single pendulum's forced maps "
+                                     "([scene]); accepted: [run] without it for a [system]")
+            from .engine import prepare
+
+            prepare(scene, grid, **kwargs)  # the system's observables and options
     if options is not None:
         options.update(found)
     return scene, grid, kwargs
@@ -276,9 +318,45 @@ def _scene(source: str, table: dict) -> Scene:
         return Scene.from_dict(table)
 
 
-def _grid(source: str, table: dict) -> Grid:
-    """``[grid]`` -> Grid, axes in file order."""
-    names = parameter_names()
+def _system(source: str, table: dict):
+    """``[system]`` -> a `sweep.physics.System`: ``kind`` names its class, the other keys
+    are its constructor's arguments, ``[system.damping]`` a `sweep.Damping`."""
+    import dataclasses
+
+    from . import physics
+
+    with _context(source, "system"):
+        kind = table.get("kind")
+        if kind not in SYSTEM_KINDS:
+            raise ValueError(f"kind = {kind!r}; accepted: "
+                             f"{', '.join(map(repr, SYSTEM_KINDS))}")
+        cls = getattr(physics, kind)
+        fields = [f.name for f in dataclasses.fields(cls) if f.name != "effects"]
+        if kind == "SwingNetwork":
+            fields = ["edges"] + fields
+        accepted = ["kind"] + fields + (["damping"] if kind != "SwingNetwork" else [])
+        unknown = [key for key in table if key not in accepted]
+        if unknown:
+            raise ValueError(f"unknown key {unknown[0]!r}; accepted for {kind}: "
+                             f"{', '.join(accepted)}")
+        arguments = {key: value for key, value in table.items() if key != "kind"}
+        if kind == "SwingNetwork":
+            if ("edges" in arguments) == ("adjacency" in arguments):
+                raise ValueError("a SwingNetwork needs edges = [[i, j], ...] or adjacency "
+                                 "= [[...], ...]; accepted: one of them")
+            arguments["adjacency"] = arguments.pop("edges", arguments.get("adjacency"))
+        elif isinstance(arguments.get("damping"), dict):
+            arguments["effects"] = (physics.Damping(**arguments.pop("damping")),)
+        elif "damping" in arguments:
+            raise TypeError(f"damping must be a table [system.damping] with coefficient "
+                            f"= c (1/s), got {arguments['damping']!r}")
+        return cls(**arguments)
+
+
+def _grid(source: str, table: dict, names=None) -> Grid:
+    """``[grid]`` -> Grid, axes in file order (``names``: the accepted axes, the single
+    pendulum's by default)."""
+    names = parameter_names() if names is None else names
     _check_keys(source, "[grid]", table, names)
     if not table:
         raise ValueError(f"{source}: [grid] has no axes; accepted axis names: "
@@ -288,10 +366,10 @@ def _grid(source: str, table: dict) -> Grid:
         return Grid(**axes)
 
 
-def _points(source: str, table: dict, folder) -> Points:
+def _points(source: str, table: dict, folder, names=None) -> Points:
     """``[points]`` -> Points: columns as ``[grid]`` axes (a number is a constant
     column), and those of ``file`` (a CSV or netCDF of columns)."""
-    names = parameter_names()
+    names = parameter_names() if names is None else tuple(names)
     _check_keys(source, "[points]", table, names + ("file",))
     columns = {}
     if "file" in table:
@@ -316,12 +394,12 @@ def _points(source: str, table: dict, folder) -> Points:
 SAMPLE_KEYS = ("n", "seed", "method")
 
 
-def _sample(source: str, table: dict) -> Points:
+def _sample(source: str, table: dict, names=None) -> Points:
     """``[sample]`` -> `sweep.sample` (``n``, ``seed``, ``method``; per axis a range
     ``[lo, hi]`` or a number, a constant column)."""
     from .grid import sample
 
-    names = parameter_names()
+    names = parameter_names() if names is None else tuple(names)
     _check_keys(source, "[sample]", table, SAMPLE_KEYS + names)
     for key in ("n", "seed"):
         if key not in table:
@@ -427,7 +505,7 @@ def _numbers(source: str, name: str, values: list, table: str = "grid") -> list:
 def _axis_table(source: str, name: str, table: dict, kind: str = "grid") -> np.ndarray:
     """``{start, stop, num[, units]}`` or ``{values[, units]}`` -> axis values; errors
     name the table ``[kind.name]`` as the run file wrote it (``grid`` or ``points``)."""
-    accepted = _RANGE_KEYS + ("values",) + (("units",) if name in angle_axes() else ())
+    accepted = _RANGE_KEYS + ("values",) + (("units",) if _angle_parameter(name) else ())
     _check_keys(source, f"[{kind}.{name}]", table, accepted)
     if "values" in table:
         extra = [key for key in _RANGE_KEYS if key in table]
@@ -470,8 +548,9 @@ def _is_degrees(source: str, name: str, units: Any, table: str = "grid") -> bool
     return accepted[units]
 
 
-def _run(source: str, table: dict) -> dict[str, Any]:
-    """``[run]`` -> validated keyword arguments of `sweep.run`."""
+def _run(source: str, table: dict, system: bool = False) -> dict[str, Any]:
+    """``[run]`` -> validated keyword arguments of `sweep.run` (for a ``system``, its
+    observables are checked by `parse_run` with the system)."""
     _check_keys(source, "[run]", table, RUN_KEYS)
     missing = [key for key in REQUIRED_RUN_KEYS if key not in table]
     if missing:
@@ -492,9 +571,10 @@ def _run(source: str, table: dict) -> dict[str, Any]:
             if not isinstance(observe, (str, list)):
                 raise TypeError(f"observe must be a name or a list of names, "
                                  f"got {observe!r}")
-            resolve(observe)
+            if not system:
+                resolve(observe)
             kwargs["observe"] = (observe,) if isinstance(observe, str) else tuple(observe)
-        if "strobe_samples" in kwargs:
+        if "strobe_samples" in kwargs and not system:
             check_strobe_samples(kwargs["strobe_samples"],
                                  resolve(kwargs.get("observe", DEFAULT_OBSERVE)))
         if "chunk_size" in kwargs:
