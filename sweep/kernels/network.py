@@ -33,7 +33,7 @@ __all__ = ["NETWORK_OBSERVABLES", "NetworkSpec", "network_outputs", "network_sou
 NL = "\n"
 
 #: What a network run can observe: ``final`` (every node's phase and frequency at
-#: t_end) and ``synchrony`` (``frequency_spread``: max |omega_i| at t_end [rad/s], 0 in
+#: t_end) and ``synchrony`` (``frequency_spread``: max abs(omega_i) at t_end [rad/s], 0 in
 #: the synchronous state; ``order_parameter``: Kuramoto's r = |mean exp(i theta)|).
 NETWORK_OBSERVABLES = ("final", "synchrony")
 

@@ -20,7 +20,7 @@ from .._validate import check_count, check_real
 
 __all__ = ["SYNC_TOLERANCE", "basin_stability", "synchronized"]
 
-#: Largest final frequency deviation max |omega_i| [rad/s] of a trajectory counted as
+#: Largest final frequency deviation max abs(omega_i) [rad/s] of a trajectory counted as
 #: back in the synchronous state. A desynchronised node keeps rotating at about
 #: P_i / alpha (10 rad/s for P = 1, alpha = 0.1), and a returning one decays as
 #: exp(-alpha t / 2): 0.1 separates them once t_end is several 2 / alpha.
@@ -76,7 +76,7 @@ def basin_stability(network, n: int, *, seed: int, t_end: float = 200.0, dt: flo
     delta_theta, delta_omega : (float, float)
         The box of perturbations [rad], [rad/s].
     tolerance : float
-        Synchronous at t_end if max |omega_i| <= tolerance [rad/s] (`synchronized`).
+        Synchronous at t_end if max abs(omega_i) <= tolerance [rad/s] (`synchronized`).
     nodes : sequence of int, optional
         The nodes to perturb; default all.
     progress : bool, optional

@@ -120,7 +120,7 @@ class SwingNetwork(System):
         graph's order).
     power : float or array_like, shape (n_nodes,)
         ``P_i`` [1/s^2]: > 0 generators, < 0 consumers. A scalar: that power for every
-        node, which only balances as 0. Must sum to 0 (within 1e-9 of sum |P|): the
+        node, which only balances as 0. Must sum to 0 (within 1e-9 of the sum of the abs(P_i)): the
         frame rotates at the grid frequency.
     damping : float, default 0.1
         ``alpha`` [1/s], >= 0, every node.
