@@ -107,6 +107,7 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
         raise TypeError(f"grid must be a sweep.Grid or sweep.Points, got {grid!r}")
     _check_not_yet(system, not_yet)
     grid.check_against(system)
+    system = system.switched_on(tuple(grid.axes))
     settings = validate_settings(t_end=t_end, dt=dt, t0=t0, t_transient=t_transient,
                                  save_every=save_every, method=method)
     integrator = settings.integrator
@@ -167,6 +168,7 @@ def run_system(system: System, grid: ParameterRows, *, progress=None, client=Non
     keep = kwargs.pop("keep_checkpoint", False)
     check_flag("keep_checkpoint", keep)
     settings, spec, chunk_size = prepare_system(system, grid, **kwargs)
+    system = system.switched_on(tuple(grid.axes))  # as prepare_system: the table's columns
     if client is not None:
         from .execution.dask import check_client
 

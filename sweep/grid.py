@@ -184,7 +184,7 @@ class ParameterRows:
 
     def _check_against_system(self, system: System) -> None:
         """Refuse an axis that names no coordinate or parameter of ``system``."""
-        columns = system.columns(True)
+        columns = system.accepted_axes()
         for name in self._axes:
             if name not in columns:
                 raise ValueError(

@@ -245,7 +245,7 @@ def parse_run(spec: dict[str, Any], source: str = "run file", options: dict | No
     tables = {name: _table(source, name, spec.get(name, {})) for name in TABLES}
     scene = _system(source, tables["system"]) if "system" in spec else \
         _scene(source, tables["scene"])
-    names = scene.columns(True) if "system" in spec else parameter_names()
+    names = scene.accepted_axes() if "system" in spec else parameter_names()
     which = given[0] if given else "grid"
     grid = (_points(source, tables["points"], folder, names) if which == "points"
             else _sample(source, tables["sample"], names) if which == "sample"

@@ -29,7 +29,7 @@ from .. import methods as _methods
 from ..observables import LYAPUNOV_EVERY
 from ..physics.system import DerivedSystem, SystemDeclaration, system_columns
 from ..system_observables import variables
-from .lanes import allocate, blocks_head, indent, lane_loop, scalar_lanes
+from .lanes import IDENTIFIER, allocate, blocks_head, indent, lane_loop, scalar_lanes
 from .spec import Status, check_block
 from .steppers import fused
 
@@ -120,10 +120,19 @@ def _tableau(spec: SystemSpec):
     return method
 
 
+def uses_time(spec: SystemSpec) -> bool:
+    """Whether the derived dynamics read the time ``t`` (a driven pivot): the physics
+    functions then take it as their last argument."""
+    derived = spec.derived
+    return "t" in IDENTIFIER.findall(NL.join(derived.accel_lines + derived.energy_lines
+                                            + derived.jacobian_lines))
+
+
 def _physics(spec: SystemSpec, state: list[str], symbols: list[str]) -> str:
-    """``accel`` (and ``energy`` where observed) as numba functions."""
+    """``accel`` (and ``energy`` where observed) as numba functions (with ``t`` last
+    when the dynamics read it: `uses_time`)."""
     coords = spec.system.coordinates
-    args = ", ".join(state + symbols)
+    args = ", ".join(state + symbols + (["t"] if uses_time(spec) else []))
     accel = [f"acc_{c.symbol}" for c in coords]
     if spec.damping:
         accel = [f"vfma(-damping_c, {c.velocity_symbol}, acc_{c.symbol})" for c in coords]
@@ -173,6 +182,7 @@ def _step(spec: SystemSpec, method, constants: dict[str, str],
     coords = spec.system.coordinates
     state = [c.symbol for c in coords] + [c.velocity_symbol for c in coords]
     tangent = "lyapunov" in spec.observe
+    timed = uses_time(spec)
     lines = []
     for i in range(tableau.stages):
         row = tableau.a[i][:i]
@@ -185,7 +195,8 @@ def _step(spec: SystemSpec, method, constants: dict[str, str],
             positions.append(fused(c.symbol, row, kq, "dt", constants))
         velocities = [f"k{i + 1}_{c.symbol}" for c in coords]
         targets = [f"k{i + 1}_{c.velocity_symbol}" for c in coords]
-        arguments = ", ".join(positions + velocities + symbols)
+        arguments = ", ".join(positions + velocities + symbols +
+                              ([_stage_time(tableau.c[i], constants)] if timed else []))
         if not tangent:
             lines.append(f"{', '.join(targets)} = accel({arguments})")
             continue
@@ -209,6 +220,29 @@ def _step(spec: SystemSpec, method, constants: dict[str, str],
             ks = [f"lk{j + 1}_{x}" for j in range(tableau.stages)]
             lines.append(f"ly_{x} = {fused(f'ly_{x}', tableau.b, ks, 'dt', constants)}")
     return lines
+
+
+#: The time of the state after the last step (the energy at t_end).
+END = "t0 + n_steps * dt"
+
+
+def _stage_time(c, constants: dict[str, str]) -> str:
+    """The time of a stage at node ``c`` of step ``step``: ``t0 + (step + c) dt``, never
+    accumulated (``c dt`` a constant of the call for other nodes than 0 and 1)."""
+    if c == 0:
+        return "t0 + step * dt"
+    if c == 1:
+        return "t0 + (step + 1) * dt"
+    line = f"dt * {float(c)!r}"
+    name = next((k for k, v in constants.items() if v.endswith(f"= {line}")),
+                f"cdt{len(constants)}")
+    constants[name] = f"{name} = {line}"
+    return f"t0 + step * dt + {name}"
+
+
+def _arguments(spec: SystemSpec, state: list[str], symbols: list[str], time: str) -> str:
+    """The physics functions' arguments at ``time`` (when they read it)."""
+    return ", ".join(state + symbols + ([time] if uses_time(spec) else []))
 
 
 def _angles(spec: SystemSpec):
@@ -259,7 +293,7 @@ def _finish(spec: SystemSpec, state: list[str], symbols: list[str],
                 col += 1
         elif name == "energy":
             writes += [f"out[i, {col}] = energy_0",
-                       f"out[i, {col + 1}] = energy({', '.join(state + symbols)})"]
+                       f"out[i, {col + 1}] = energy({_arguments(spec, state, symbols, END)})"]
             col += 2
         elif name == "flip":
             writes.append(f"out[i, {col}] = flip_t if flip_t < math.inf else math.nan")
@@ -326,7 +360,7 @@ def _parts(spec: SystemSpec) -> _Parts:
         first += [f"well_{q} = round({q} / TWO_PI)" for q in angles]
         lane.update({f"well_{q}": "float64" for q in angles})
     if "energy" in spec.observe:
-        first.append(f"energy_0 = energy({', '.join(state + symbols)})")
+        first.append(f"energy_0 = energy({_arguments(spec, state, symbols, 't0')})")
         lane["energy_0"] = "float64"
     if flip:
         first.append("flip_t = math.inf")
@@ -343,7 +377,8 @@ def _parts(spec: SystemSpec) -> _Parts:
     if spec.stop_early:
         first += ["done = False"] + [f"stop_{x} = {x}" for x in state]
         if spec.flip_energy:  # below the lowest flipping energy: it never flips
-            first += [f"if energy({', '.join(state + symbols)}) < {spec.flip_energy}:",
+            first += [f"if energy({_arguments(spec, state, symbols, 't0')}) < "
+                      f"{spec.flip_energy}:",
                       "    done = True", "    n_done += 1"]
         lane.update({"done": "bool_", **{f"stop_{x}": "float64" for x in state}})
         stopped = ["done = True"] + [f"stop_{x} = {x}" for x in state] + ["n_done += 1"]

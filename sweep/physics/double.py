@@ -9,6 +9,7 @@ pendulum's (`sweep.kernels.system`).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from dataclasses import dataclass, field
 
@@ -19,6 +20,7 @@ from .system import (
     System,
     SystemDeclaration,
     register_system,
+    system_columns,
     system_parameters,
 )
 
@@ -26,10 +28,15 @@ __all__ = ["DoublePendulum"]
 
 
 @functools.cache
-def _declaration() -> SystemDeclaration:
+def _declaration(joint_damping: bool = False, pivot: bool = False) -> SystemDeclaration:
     from .systems import double_pendulum
 
-    return double_pendulum()
+    return double_pendulum(damping=joint_damping, pivot=pivot)
+
+
+#: The optional terms: constructor arguments (None: absent) by term.
+_OPTIONAL = {"joint_damping": ("damping1", "damping2"),
+             "pivot": ("pivot_amplitude", "pivot_frequency")}
 
 
 @register_system
@@ -45,6 +52,13 @@ class DoublePendulum(System):
         The rods' lengths [m], finite and > 0.
     gravity : float, default 9.81
         ``g`` [m/s^2], finite and > 0.
+    damping1, damping2 : float, optional
+        Viscous damping at the joints [N m s], >= 0: a torque ``- c1 omega1`` at the
+        pivot and ``- c2 (omega2 - omega1)`` at the middle joint. Either given (or a grid
+        axis ``damping1``/``damping2``) adds both terms (the other 0); neither: none.
+    pivot_amplitude, pivot_frequency : float, optional
+        The pivot driven vertically, ``a cos(nu t)`` [m, rad/s], >= 0 (the double
+        Kapitza pendulum). Either given (or a grid axis) adds the drive (the other 0).
     effects : tuple, default ()
         `sweep.Damping(c)`: mass-proportional damping, every angular acceleration gains
         ``- c theta_i'`` (the generalized force ``- c M(q) q'``; c in 1/s).
@@ -69,29 +83,56 @@ class DoublePendulum(System):
     length1: float = 1.0
     length2: float = 1.0
     gravity: float = 9.81
+    damping1: float | None = None
+    damping2: float | None = None
+    pivot_amplitude: float | None = None
+    pivot_frequency: float | None = None
     effects: tuple = field(default=())
 
     def __post_init__(self) -> None:
+        for names in _OPTIONAL.values():  # a term given by one of its parameters: on
+            if any(getattr(self, name) is not None for name in names):
+                for name in names:
+                    if getattr(self, name) is None:
+                        object.__setattr__(self, name, 0.0)
         for p in self.declaration.parameters:
             object.__setattr__(self, p.axis, check_real(
                 p.axis, getattr(self, p.axis), minimum=p.minimum, strict=p.strict,
                 accepted=p.accepted()))
         object.__setattr__(self, "effects", self._check_effects())
 
-    #: With V = 0 hanging at rest: the first arm upright needs V >= 2 (m1 + m2) g l1
-    #: (second arm down), the second arm upright V >= 2 m2 g l2 (first arm down). Energy
-    #: never grows (damping only removes it), so below the smaller no angle can ever be
-    #: upright.
-    flip_energy = "2.0 * min((m1 + m2) * grav * l1, m2 * grav * l2)"
+    @property
+    def flip_energy(self) -> str | None:
+        """With V = 0 hanging at rest: the first arm upright needs V >= 2 (m1 + m2) g l1
+        (second arm down), the second arm upright V >= 2 m2 g l2 (first arm down).
+        Energy never grows (damping only removes it), so below the smaller no angle can
+        ever be upright; a driven pivot feeds energy in: then None."""
+        if self.pivot_amplitude is not None:
+            return None
+        return "2.0 * min((m1 + m2) * grav * l1, m2 * grav * l2)"
 
     @property
     def declaration(self) -> SystemDeclaration:
-        """The double pendulum's declaration (`sweep.physics.systems.double_pendulum`)."""
-        return _declaration()
+        """The double pendulum's declaration (`sweep.physics.systems.double_pendulum`),
+        with the joint damping and the pivot drive if given."""
+        return _declaration(*(any(getattr(self, name) is not None for name in names)
+                              for names in _OPTIONAL.values()))
+
+    def accepted_axes(self) -> tuple[str, ...]:
+        """Every axis of any double pendulum (a joint damping or pivot axis switches
+        its term on)."""
+        return system_columns(_declaration(True, True), True)
+
+    def switched_on(self, axes) -> DoublePendulum:
+        """With the terms whose parameters are among ``axes`` switched on."""
+        given = {name: 0.0 for names in _OPTIONAL.values() for name in names
+                 if name in axes and getattr(self, name) is None}
+        return dataclasses.replace(self, **given) if given else self
 
     @classmethod
     def axis_parameter(cls, name: str) -> Parameter | None:
-        return {p.axis: p for p in system_parameters(_declaration(), True)}.get(name)
+        return {p.axis: p for p in system_parameters(_declaration(True, True),
+                                                     True)}.get(name)
 
     def derived(self, jacobian: bool = False) -> DerivedSystem:
         """Its equations of motion and energy (with ``jacobian``: and the Jacobian of

@@ -244,6 +244,16 @@ class System:
         """The parameter table's columns (`system_columns`)."""
         return system_columns(self.declaration, damping)
 
+    def accepted_axes(self) -> tuple[str, ...]:
+        """Every grid axis a run of this system accepts (some switch a term on:
+        `switched_on`)."""
+        return self.columns(True)
+
+    def switched_on(self, axes) -> System:
+        """This system with the terms that the grid ``axes`` (names) switch on; itself
+        when they switch nothing on."""
+        return self
+
     def to_dict(self) -> dict:
         """A JSON-able description (dataset attribute ``system``)."""
         return {"system": type(self).__name__,

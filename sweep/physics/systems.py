@@ -25,7 +25,7 @@ def _angle(k: int, what: str) -> Coordinate:
     return Coordinate(f"theta{k}", f"omega{k}", f"th{k}", f"om{k}", long_name=what)
 
 
-def double_pendulum(damping: bool = False) -> SystemDeclaration:
+def double_pendulum(damping: bool = False, pivot: bool = False) -> SystemDeclaration:
     """A double pendulum: two point masses on massless rigid rods in a vertical plane.
 
     The first rod (length ``l1``) hangs from a fixed pivot and carries the mass ``m1``;
@@ -42,6 +42,14 @@ def double_pendulum(damping: bool = False) -> SystemDeclaration:
         the opposite), so that the generalized forces are
         ``Q1 = -c1 omega1 + c2 (omega2 - omega1)`` and ``Q2 = -c2 (omega2 - omega1)``
         and the energy falls as ``dE/dt = -c1 omega1^2 - c2 (omega2 - omega1)^2``.
+    pivot : bool
+        Drive the pivot vertically, ``y_p(t) = a cos(nu t)`` (up): parameters
+        ``pivot_amplitude`` a [m] and ``pivot_frequency`` nu [rad/s] (both >= 0,
+        default 0). The Lagrangian gains ``y_p'(t) [(m1 + m2) l1 sin(theta1) omega1 +
+        m2 l2 sin(theta2) omega2]`` (the terms of ``T`` and ``V`` that depend on time
+        alone change no motion and are left out), so that gravity is effectively
+        ``g + y_p''(t)`` (Kapitza's pendulum, doubled). The energy is then the
+        Lagrangian's Jacobi function, not conserved.
 
     Returns
     -------
@@ -95,12 +103,24 @@ def double_pendulum(damping: bool = False) -> SystemDeclaration:
                       "of the middle joint", **joint),
         ]
         forces = ("-c1*om1 + c2*(om2 - om1)", "-c2*(om2 - om1)")
+    drive = ""
+    if pivot:
+        parameters += [
+            Parameter("pivot_amplitude", "pivot_amplitude", "pa", "m", "m",
+                      "amplitude a of the pivot's vertical motion a cos(nu t)", minimum=0.0,
+                      default=0.0),
+            Parameter("pivot_frequency", "pivot_frequency", "pnu", "rad s-1", "rad/s",
+                      "angular frequency nu of the pivot's vertical motion", minimum=0.0,
+                      default=0.0),
+        ]
+        drive = (" + (-pa*pnu*sin(pnu*t))*((m1 + m2)*l1*sin(th1)*om1"
+                 " + m2*l2*sin(th2)*om2)")
     return SystemDeclaration(
         name="double_pendulum",
         coordinates=(_angle(1, "angle of the first rod from the downward vertical"),
                      _angle(2, "angle of the second rod from the downward vertical")),
         parameters=tuple(parameters),
-        lagrangian=f"{kinetic} - ({potential})",
+        lagrangian=f"{kinetic}{drive} - ({potential})",
         forces=forces,
     )
 
