@@ -11,12 +11,13 @@ import warnings
 import numba
 import numpy as np
 import pytest
+from shared_kernels import EVERY
 
 import sweep
 from sweep import kernels as _kernels
 from sweep.kernels import KernelSpec, Status
 
-ALL_OBSERVE = ("final", "winding", "theta_max", "amplitude", "tension", "energy")
+ALL_OBSERVE = EVERY  # the kernels of test_naive's runs (tests/shared_kernels.py)
 
 
 def _scene(model, damping, forcing):
