@@ -15,6 +15,7 @@ import time
 import numpy as np
 import pytest
 import xarray as xr
+from dask_clusters import DASHBOARD, PORT_TAKEN_ERROR, port_8787_taken
 
 import sweep
 from sweep import Status
@@ -34,10 +35,14 @@ FORCED_OBSERVE = ("final", "winding", "amplitude", "omega_mean", "tension", "ene
 @pytest.fixture(scope="module")
 def client():
     # two processes, one Dask thread each; one numba thread each (this CI machine has
-    # two cores: more threads would only oversubscribe them)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None, env={"NUMBA_NUM_THREADS": "1"},
-                                  ) as cluster, distributed.Client(cluster) as c:
+    # two cores: more threads would only oversubscribe them); the Scheduler on a free
+    # port, not 8787, which another pytest-xdist worker's cluster may be taking
+    # (tests/dask_clusters.py: started while 8787 is held, a cluster asking for it fails)
+    with port_8787_taken():
+        cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                           dashboard_address=DASHBOARD,
+                                           env={"NUMBA_NUM_THREADS": "1"})
+    with cluster, distributed.Client(cluster) as c:
         c.wait_for_workers(2, timeout=TIMEOUT)
         yield c
 
@@ -247,10 +252,14 @@ def test_a_worker_killed_mid_run_still_gives_the_full_identical_result(client):
 
 
 def test_cluster_benchmark_runs_at_a_small_size(tmp_path):
+    """The script's LocalCluster takes a free port: with 8787 held here and the
+    Scheduler's warning about it an error in the script, it still starts."""
     script = os.path.join(os.path.dirname(__file__), "..", "benchmarks", "cluster.py")
-    subprocess.run([sys.executable, script, "--size", "16", "--steps", "50",
-                    "--chunk-sizes", "64,16", "--out", str(tmp_path)],
-                   check=True, capture_output=True, timeout=120)
+    env = dict(os.environ, PYTHONWARNINGS=PORT_TAKEN_ERROR)
+    with port_8787_taken():
+        subprocess.run([sys.executable, script, "--size", "16", "--steps", "50",
+                        "--chunk-sizes", "64,16", "--out", str(tmp_path)],
+                       check=True, capture_output=True, timeout=120, env=env)
     table = (tmp_path / "cluster.md").read_text()
     assert "| Dask, chunk_size = 16 | 8 |" in table and "| NO |" not in table
     assert (tmp_path / "cluster.json").is_file()

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from dask_clusters import DASHBOARD, port_8787_taken
 
 import sweep
 from sweep import maps
@@ -203,9 +204,10 @@ def test_points_on_a_dask_cluster_are_identical(damped_pair, tmp_path):
 
     ds, _, _ = damped_pair
     points = sweep.io.grid_from(ds)
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
+    with port_8787_taken():  # tests/dask_clusters.py: the Scheduler on a free port
+        cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=1,
+                                           processes=False, dashboard_address=DASHBOARD)
+    with cluster, distributed.Client(cluster) as client:
         _same(sweep.run(DAMPED, points, client=client, chunk_size=8, **BASE), ds)
         path = run_to_netcdf(tmp_path / "p.nc", DAMPED, points, client=client,
                              rows_per_task=16, **BASE)
