@@ -125,11 +125,13 @@ def test_every_fixed_step_method_is_the_same_for_any_blocking(method):
     params = _table(30, damping=0.0 if conservative else 0.5)
     if conservative:  # no damping at all, not even row 5's overflowing one
         params[5, sweep.physics.parameter_names().index("damping")] = 0.0
-    # every observable and the one drive frequency of the table shared by the block (of
-    # 16 lanes: test_methods' run of the method; blocks of 8 are tested above and below)
+    # every observable and the table's one drive frequency shared by the block: 16 lanes
+    # (two blocks, the second partial) are test_methods' run of the method, 64 (one
+    # block larger than the table) test_engine's run (RK4) and test_effects' kernel
+    # (Yoshida4); blocks of 8 are tested above and below
     spec = [KernelSpec("nonlinear", () if conservative else ("damping", "forcing"),
                        ALL_OBSERVE, method=method, block=block,
-                       shared_forcing=not conservative) for block in (1, 16, 128)]
+                       shared_forcing=not conservative) for block in (1, 16, 64)]
     first = _call(spec[0], params)
     for other in spec[1:]:
         _assert_same(first, _call(other, params))
