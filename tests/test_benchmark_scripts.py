@@ -186,15 +186,16 @@ def test_forced_basins_script(tmp_path):
 
 
 def test_refine_script(tmp_path):
-    """benchmarks/refine.py at 24 x 24 (forced) and 33 x 33 (wells), with its figure;
-    its 21 x 21 pilot is conftest's Wada pilot (the kernel of the fixture's catalogue)."""
+    """benchmarks/refine.py at 21 x 21 (forced) and 33 x 33 (wells), with its figure;
+    its 21 x 21 pilot (the forced map's own starts) is conftest's Wada pilot, so the
+    kernel of the catalogue is the wada_catalogue fixture's."""
     refine = importlib.import_module("refine")
     figure = tmp_path / "refine.png"
-    assert refine.main(["--size", "24", "--step", "4", "--pilot", "21", "--well-size", "33",
+    assert refine.main(["--size", "21", "--step", "4", "--pilot", "21", "--well-size", "33",
                         "--well-step", "8", "--no-c-limit", "--out", str(tmp_path),
                         "--figure", str(figure)]) == 0
     result = json.loads((tmp_path / "refine.json").read_text())
-    for case, cells in (("forced", 24 * 24), ("well", 33 * 33)):
+    for case, cells in (("forced", 21 * 21), ("well", 33 * 33)):
         run = result[case]
         assert run["cells"] == cells
         assert 0 < run["refine"]["cells_computed"] <= cells
