@@ -98,8 +98,10 @@ def main(argv=None) -> int:
         where = f"existing cluster {client.scheduler.address}"
     else:
         numba_threads = max(1, (os.cpu_count() or 1) // args.workers)
+        # the Scheduler's HTTP server on a free port: 8787, its default even without a
+        # dashboard, may be another cluster's (two at once raced for it)
         cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None,
+                               dashboard_address=":0",
                                env={"NUMBA_NUM_THREADS": str(numba_threads)})
         client = Client(cluster)
         client.wait_for_workers(args.workers, timeout=120)

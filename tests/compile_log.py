@@ -3,8 +3,10 @@
 ``SWEEP_COMPILE_LOG=compile.jsonl python -m pytest ...`` writes one JSON line per numba
 compile (a cache miss: loads from numba's disk cache are not compiles) with the test
 that triggered it, the function (``sweep_kernel_<hash>.blocks`` or ``.grouped`` for a
-generated kernel, with its `KernelSpec`), and the seconds it took, nested compiles (the
-helpers a kernel calls) counted in the outermost one. Under pytest-xdist every worker writes
+generated kernel, with its `KernelSpec`), and the seconds it took, wall clock and CPU
+(the compiling thread's: on a busy machine the wall clock also counts the time others
+held the core), nested compiles (the helpers a kernel calls) counted in the outermost
+one. Under pytest-xdist every worker writes
 ``compile.<worker>.jsonl``. ``python tests/compile_log.py compile*.jsonl`` sums them:
 per test, per spec, and the specs that several tests compiled.
 
@@ -30,11 +32,13 @@ class _Recorder:
         self.test = "<collection>"
         self.depth = 0
         self.started = 0.0
+        self.started_cpu = 0.0
         self.specs = {}  # generated module name -> repr of its KernelSpec
 
     def on_start(self, event):
         if self.depth == 0:
             self.started = time.perf_counter()
+            self.started_cpu = time.thread_time()
         self.depth += 1
 
     def on_end(self, event):
@@ -48,6 +52,7 @@ class _Recorder:
         self.handle.write(json.dumps({
             "test": self.test, "function": name, "spec": self.specs.get(module),
             "seconds": round(time.perf_counter() - self.started, 4),
+            "cpu": round(time.thread_time() - self.started_cpu, 4),
             "args": str(event.data.get("args"))[:200],
         }) + "\n")
         self.handle.flush()
@@ -96,6 +101,7 @@ def _summary(paths):
         with open(path) as handle:
             rows += [json.loads(line) for line in handle]
     total = sum(r["seconds"] for r in rows)
+    cpu = sum(r.get("cpu", 0.0) for r in rows)
     per_test, per_spec, tests_of = defaultdict(float), defaultdict(float), defaultdict(set)
     for r in rows:
         per_test[r["test"]] += r["seconds"]
@@ -103,13 +109,17 @@ def _summary(paths):
         per_spec[key] += r["seconds"]
         tests_of[key].add(r["test"].split("::")[0])
     kernels = {r["spec"] for r in rows if r["spec"]}
-    print(f"{len(rows)} compiles, {total:.0f} s; {len(kernels)} generated kernels")
-    print("\nper test file:")
-    per_file = defaultdict(float)
-    for test, s in per_test.items():
-        per_file[test.split("::")[0]] += s
-    for name, s in sorted(per_file.items(), key=lambda kv: -kv[1])[:40]:
-        print(f"{s:8.1f}  {name}")
+    print(f"{len(rows)} compiles, {total:.0f} s ({cpu:.0f} s CPU); "
+          f"{len(kernels)} generated kernels")
+    print("\nper test file: compiles, seconds, CPU seconds")
+    per_file = defaultdict(lambda: [0, 0.0, 0.0])
+    for r in rows:
+        row = per_file[r["test"].split("::")[0]]
+        row[0] += 1
+        row[1] += r["seconds"]
+        row[2] += r.get("cpu", 0.0)
+    for name, (n, s, c) in sorted(per_file.items(), key=lambda kv: -kv[1][1])[:60]:
+        print(f"{n:4d} {s:8.1f} {c:8.1f}  {name}")
     print("\nper test:")
     for name, s in sorted(per_test.items(), key=lambda kv: -kv[1])[:40]:
         print(f"{s:8.1f}  {name}")

@@ -110,11 +110,14 @@ def test_an_attractor_missing_from_the_catalogue_is_still_found(catalogue, full_
 
 
 def test_refill_gives_the_same_bits_as_waiting_lanes(catalogue):
+    """With the table of the shared drive's sines, as `sweep.run` builds them: the
+    refill kernel is the one the runs above use (test_refill.py tests the per-lane
+    sines against the table)."""
     from test_refill import _call, _table
 
     params = _table(300)
     orbits = sweep.engine.attractor_orbits(catalogue)
-    common = dict(stop_early=True, block=64, attractors=orbits)
+    common = dict(stop_early=True, block=64, attractors=orbits, shared_forcing=True)
     waiting = _call(KernelSpec("nonlinear", ("damping", "forcing"), ("strobe", "attractor"),
                                **common), params)
     refill = _call(KernelSpec("nonlinear", ("damping", "forcing"), ("strobe", "attractor"),

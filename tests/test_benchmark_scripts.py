@@ -167,8 +167,11 @@ def test_stop_early_script(tmp_path):
 
 
 def test_forced_basins_script(tmp_path):
+    """The script's scene, run and pilot are conftest's Wada pilot: --pilot 21 gives the
+    catalogue of the wada_catalogue fixture, so its kernel is the one other tests use
+    (a 21 x 21 pilot runs in milliseconds; compiling a catalogue's kernel takes seconds)."""
     forced_basins = importlib.import_module("forced_basins")
-    assert forced_basins.main(["--size", "8", "--rows", "2", "--pilot", "9", "--no-c-limit",
+    assert forced_basins.main(["--size", "8", "--rows", "2", "--pilot", "21", "--no-c-limit",
                               "--out", str(tmp_path)]) == 0
     result = json.loads((tmp_path / "forced_basins.json").read_text())
     assert result["grid"] == [2, 8] and result["full_grid"] == [8, 8]
@@ -179,18 +182,20 @@ def test_forced_basins_script(tmp_path):
         assert result[name]["labels_differing_where_full_resolves"] == 0
     assert 0.0 < result["catalogue"]["matched_fraction"] <= 1.0
     assert result["catalogue"]["pilot_seconds"] > 0
-    assert "attractor catalogue (9 x 9 pilot)" in (tmp_path / "forced_basins.md").read_text()
+    assert "attractor catalogue (21 x 21 pilot)" in (tmp_path / "forced_basins.md").read_text()
 
 
 def test_refine_script(tmp_path):
-    """benchmarks/refine.py at 24 x 24 (forced) and 33 x 33 (wells), with its figure."""
+    """benchmarks/refine.py at 21 x 21 (forced) and 33 x 33 (wells), with its figure;
+    its 21 x 21 pilot (the forced map's own starts) is conftest's Wada pilot, so the
+    kernel of the catalogue is the wada_catalogue fixture's."""
     refine = importlib.import_module("refine")
     figure = tmp_path / "refine.png"
-    assert refine.main(["--size", "24", "--step", "4", "--pilot", "9", "--well-size", "33",
+    assert refine.main(["--size", "21", "--step", "4", "--pilot", "21", "--well-size", "33",
                         "--well-step", "8", "--no-c-limit", "--out", str(tmp_path),
                         "--figure", str(figure)]) == 0
     result = json.loads((tmp_path / "refine.json").read_text())
-    for case, cells in (("forced", 24 * 24), ("well", 33 * 33)):
+    for case, cells in (("forced", 21 * 21), ("well", 33 * 33)):
         run = result[case]
         assert run["cells"] == cells
         assert 0 < run["refine"]["cells_computed"] <= cells
@@ -198,7 +203,7 @@ def test_refine_script(tmp_path):
         assert run["refine"]["seconds"] > 0 and run["full"]["seconds"] > 0
         assert 0 <= run["labels_differing"] <= cells
     assert result["well"]["labels_differing"] == 0  # smooth boundaries
-    assert result["forced"]["refine"]["pilot_cells"] == 81
+    assert result["forced"]["refine"]["pilot_cells"] == 21 * 21
     assert (tmp_path / "refine.md").read_text().startswith("# Adaptive boundary refinement")
     assert figure.stat().st_size > 0
 

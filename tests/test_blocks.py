@@ -10,6 +10,7 @@ import re
 import numba
 import numpy as np
 import pytest
+from shared_kernels import EVERY, EVERY_ADAPTIVE
 
 import sweep
 from sweep import kernels as _kernels
@@ -19,8 +20,9 @@ from sweep.observables import OBSERVABLES
 
 DT = 0.05
 N_STEPS = 600  # 30 s: the forced scene is chaotic, so a last-bit change would show
-ALL_OBSERVE = ("final", "winding", "theta_max", "amplitude", "omega_mean", "tension",
-               "energy")
+# Every observable: the blocks sweep.run also picks (16, for 4-127 trajectories) are then
+# the kernels of test_naive's and test_methods' runs (tests/shared_kernels.py)
+ALL_OBSERVE = EVERY
 
 
 def _table(n, *, damping=0.5, amplitude=1.2, frequency=2 / 3, phase=0.3):
@@ -67,8 +69,10 @@ def _assert_same(a, b):
 @pytest.mark.parametrize("shared", [False, True])
 def test_forced_run_with_every_observable_and_saving_is_the_same_for_any_blocking(shared):
     params = _table(77)  # not a multiple of any block size: the last block is padded
+    # (128: one block, larger than the table; the kernel the per-lane check of the other
+    # parametrisation uses)
     specs = [KernelSpec("nonlinear", ("damping", "forcing"), ALL_OBSERVE, save=True, block=block,
-                        shared_forcing=shared) for block in (1, 8, 64, 256)]
+                        shared_forcing=shared) for block in (1, 8, 64, 128)]
     reference = _call(specs[0], params, save_every=7)
     out, status, saved = reference
     assert (status[np.arange(77) != 5] == Status.OK).all() and status[5] == Status.NONFINITE
@@ -87,12 +91,13 @@ def test_frequencies_that_differ_per_trajectory_are_each_honoured():
     params = _table(40)
     params[:, sweep.physics.parameter_names().index("forcing_frequency")] = \
         np.linspace(0.5, 1.5, 40)  # forcing_frequency differs per lane
-    spec = KernelSpec("nonlinear", ("damping", "forcing"), ("final", "amplitude"))
-    _assert_same(_call(spec, params), _one_by_one(spec, params))
+    # one block of 64 lanes holds the 40 frequencies (the previous test's kernels)
+    spec = KernelSpec("nonlinear", ("damping", "forcing"), ALL_OBSERVE, save=True, block=64)
+    _assert_same(_call(spec, params, save_every=7), _one_by_one(spec, params, save_every=7))
     # and one frequency per call, with the shared sine, is the same again
-    shared = KernelSpec("nonlinear", ("damping", "forcing"), ("final", "amplitude"),
+    shared = KernelSpec("nonlinear", ("damping", "forcing"), ALL_OBSERVE, save=True, block=64,
                         shared_forcing=True)
-    _assert_same(_one_by_one(shared, params), _call(spec, params))
+    _assert_same(_one_by_one(shared, params, save_every=7), _call(spec, params, save_every=7))
 
 
 @pytest.mark.parametrize("observe,forcing", [(("strobe",), True), (("capture",), False)])
@@ -120,8 +125,13 @@ def test_every_fixed_step_method_is_the_same_for_any_blocking(method):
     params = _table(30, damping=0.0 if conservative else 0.5)
     if conservative:  # no damping at all, not even row 5's overflowing one
         params[5, sweep.physics.parameter_names().index("damping")] = 0.0
+    # every observable and the table's one drive frequency shared by the block: 16 lanes
+    # (two blocks, the second partial) are test_methods' run of the method, 64 (one
+    # block larger than the table) test_engine's run (RK4) and test_effects' kernel
+    # (Yoshida4); blocks of 8 are tested above and below
     spec = [KernelSpec("nonlinear", () if conservative else ("damping", "forcing"),
-                       ("final", "energy"), method=method, block=block) for block in (1, 8, 128)]
+                       ALL_OBSERVE, method=method, block=block,
+                       shared_forcing=not conservative) for block in (1, 16, 64)]
     first = _call(spec[0], params)
     for other in spec[1:]:
         _assert_same(first, _call(other, params))
@@ -146,9 +156,10 @@ def test_adaptive_lanes_are_the_same_for_any_blocking_and_threads():
     params = _table(30)
     params[5, sweep.physics.parameter_names().index("damping")] = 1e300  # stable only
     # for h < ~3e-300: the step underflows
-    observe = ("final", "theta_max", "tension", "energy", "winding")
-    specs = [KernelSpec("nonlinear", ("damping", "forcing"), observe, method="dopri5",
-                        block=block) for block in (1, 8, 64)]
+    # every observable dopri5 takes, and the table's one drive frequency shared: the
+    # block of one is test_methods' run of dopri5
+    specs = [KernelSpec("nonlinear", ("damping", "forcing"), EVERY_ADAPTIVE, method="dopri5",
+                        block=block, shared_forcing=True) for block in (1, 8, 64)]
     first = _adaptive(specs[0], params)
     assert first[1][5] == Status.STEP_UNDERFLOW and (np.delete(first[1], 5) == 0).all()
     assert (first[2].sum(axis=1) > 0).all()  # every lane tried steps
@@ -167,13 +178,14 @@ def test_adaptive_lanes_are_the_same_for_any_blocking_and_threads():
 
 def test_thread_count_does_not_matter_within_a_call():
     params = _table(300)
-    spec = KernelSpec("nonlinear", ("damping", "forcing"), ALL_OBSERVE, block=8)
+    # the saving kernel in blocks of 8 of the forced test above: samples checked too
+    spec = KernelSpec("nonlinear", ("damping", "forcing"), ALL_OBSERVE, save=True, block=8)
     before = numba.get_num_threads()
     try:
         numba.set_num_threads(1)
-        one = _call(spec, params)
+        one = _call(spec, params, save_every=7)
         numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
-        many = _call(spec, params)
+        many = _call(spec, params, save_every=7)
     finally:
         numba.set_num_threads(before)
     _assert_same(one, many)

@@ -8,6 +8,7 @@ import sys
 
 import pytest
 import xarray as xr
+from dask_clusters import DASHBOARD, port_8787_taken
 
 import sweep
 from sweep import cli
@@ -37,10 +38,13 @@ chunk_size = 5
 
 @pytest.fixture(scope="module")
 def scheduler():
-    # in-process workers (threads): the cheapest real cluster, reached over TCP
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
-                                  dashboard_address=None, scheduler_port=0,
-                                  protocol="tcp") as cluster:
+    # in-process workers (threads): the cheapest real cluster, reached over TCP; its
+    # Scheduler on free ports (tests/dask_clusters.py: 8787 races other workers' clusters)
+    with port_8787_taken():
+        cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                           dashboard_address=DASHBOARD, scheduler_port=0,
+                                           protocol="tcp")
+    with cluster:
         yield cluster.scheduler_address
 
 

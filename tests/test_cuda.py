@@ -92,8 +92,8 @@ def test_other_strobe_counts_give_the_cpus_samples(stop_early):
     """``strobe_samples = 5`` (odd, the ring rotated by 26 mod 5 = 1 in the final
     pass): the CUDA kernel's samples, and with ``stop_early`` where its threads stop
     (the early-stop test looks for periods 1 and 2 in the ring of 5), are the CPU's.
-    Eight starts: the CPU runs them in a block of 64 lanes, with the kernels of
-    test_strobe_samples.py's count of 5 (a kernel of their own for fewer than 8)."""
+    Eight starts: the CPU runs them with the kernels of test_strobe_samples.py's count
+    of 5 (its early stop's block of 64 lanes, its resume test's block of 16)."""
     scene = sweep.Scene(gravity=1.0, length=1.0, effects=(
         sweep.Damping(0.3), sweep.Forcing(1.1, 1.3, 0.4)))
     grid = sweep.Grid(theta0=[-1.0, 0.5, 2.0, 3.0], omega0=[0.0, 1.5])

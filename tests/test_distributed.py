@@ -15,6 +15,8 @@ import time
 import numpy as np
 import pytest
 import xarray as xr
+from dask_clusters import DASHBOARD, PORT_TAKEN_ERROR, port_8787_taken
+from shared_kernels import EVERY, EVERY_ADAPTIVE
 
 import sweep
 from sweep import Status
@@ -25,19 +27,24 @@ distributed = pytest.importorskip("distributed")
 TIMEOUT = 60  # s: bound on every wait below (runs here take well under 5 s)
 
 FORCED = sweep.Scene(effects=(sweep.Damping(0.3), sweep.Forcing(1.2, 2 / 3, 0.0)))
-#: The observables of the forced runs below: one set, so that they share a kernel (each
-#: observe set is a kernel of its own, compiled for seconds); which are observed is not
-#: what these tests are about.
-FORCED_OBSERVE = ("final", "winding", "amplitude", "omega_mean", "tension", "energy")
+#: The observables of the runs below: one set, so that they share a kernel (each observe
+#: set is a kernel of its own, compiled for seconds) with each other and with the tests
+#: of the same scene's effects and grid size (test_naive, test_engine, test_blocks:
+#: tests/shared_kernels.py); which are observed is not what these tests are about.
+FORCED_OBSERVE = EVERY
 
 
 @pytest.fixture(scope="module")
 def client():
     # two processes, one Dask thread each; one numba thread each (this CI machine has
-    # two cores: more threads would only oversubscribe them)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None, env={"NUMBA_NUM_THREADS": "1"},
-                                  ) as cluster, distributed.Client(cluster) as c:
+    # two cores: more threads would only oversubscribe them); the Scheduler on a free
+    # port, not 8787, which another pytest-xdist worker's cluster may be taking
+    # (tests/dask_clusters.py: started while 8787 is held, a cluster asking for it fails)
+    with port_8787_taken():
+        cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                           dashboard_address=DASHBOARD,
+                                           env={"NUMBA_NUM_THREADS": "1"})
+    with cluster, distributed.Client(cluster) as c:
         c.wait_for_workers(2, timeout=TIMEOUT)
         yield c
 
@@ -66,7 +73,7 @@ def test_forced_scene_with_several_observables_is_identical(client):
 def test_save_every_is_identical(client):
     grid = sweep.Grid(theta0=np.linspace(-1.0, 1.0, 9), omega0=[0.0, 0.5, 1.0])
     local, remote = _both(client, FORCED, grid, t_end=2.0, dt=0.01, save_every=7,
-                          chunk_size=5)
+                          observe=FORCED_OBSERVE, chunk_size=5)
     assert "time" in remote.dims
     _same(local, remote)
 
@@ -74,7 +81,7 @@ def test_save_every_is_identical(client):
 def test_adaptive_method_step_counts_are_identical(client):
     grid = sweep.Grid(theta0=np.linspace(-3.0, 3.0, 15), omega0=[0.0, 2.0])
     local, remote = _both(client, FORCED, grid, t_end=5.0, dt=0.1, method="dopri5",
-                          chunk_size=8)
+                          observe=EVERY_ADAPTIVE, chunk_size=8)
     assert (remote.steps_accepted > 0).all()
     _same(local, remote)
 
@@ -83,8 +90,8 @@ def test_nonfinite_trajectories_are_flagged_as_locally(client):
     # c = 1e4 with dt = 0.01 is far outside RK4's stability region: those overflow
     scene = sweep.Scene(effects=(sweep.Damping(0.1),))
     grid = sweep.Grid(theta0=np.linspace(-1.0, 1.0, 4), damping=[0.1, 1e4, 0.2])
-    kw = dict(t_end=2.0, dt=0.01, observe=("final", "winding", "amplitude"),
-              check_stability=False, chunk_size=3)
+    kw = dict(t_end=2.0, dt=0.01, observe=FORCED_OBSERVE, check_stability=False,
+              chunk_size=3)
     with pytest.warns(RuntimeWarning, match=r"^4 of 12 trajectories became non-finite"):
         local = sweep.run(scene, grid, **kw)
     with pytest.warns(RuntimeWarning, match=r"^4 of 12 trajectories became non-finite"):
@@ -189,7 +196,7 @@ def test_streamed_to_netcdf_on_the_cluster_is_identical(client, tmp_path):
 def test_streamed_locally_flags_nonfinite_and_validates_first(tmp_path):
     scene = sweep.Scene(effects=(sweep.Damping(0.1),))
     grid = sweep.Grid(damping=[0.1, 1e4, 0.2], theta0=np.linspace(-1.0, 1.0, 4))
-    kw = dict(t_end=2.0, dt=0.01, observe=("final", "winding", "amplitude"),
+    kw = dict(t_end=2.0, dt=0.01, observe=FORCED_OBSERVE,
               check_stability=False)  # test_nonfinite_trajectories_...'s kernel
     with pytest.warns(RuntimeWarning, match=r"^4 of 12 trajectories became non-finite"):
         local = sweep.run(scene, grid, **kw)
@@ -247,10 +254,14 @@ def test_a_worker_killed_mid_run_still_gives_the_full_identical_result(client):
 
 
 def test_cluster_benchmark_runs_at_a_small_size(tmp_path):
+    """The script's LocalCluster takes a free port: with 8787 held here and the
+    Scheduler's warning about it an error in the script, it still starts."""
     script = os.path.join(os.path.dirname(__file__), "..", "benchmarks", "cluster.py")
-    subprocess.run([sys.executable, script, "--size", "16", "--steps", "50",
-                    "--chunk-sizes", "64,16", "--out", str(tmp_path)],
-                   check=True, capture_output=True, timeout=120)
+    env = dict(os.environ, PYTHONWARNINGS=PORT_TAKEN_ERROR)
+    with port_8787_taken():
+        subprocess.run([sys.executable, script, "--size", "16", "--steps", "50",
+                        "--chunk-sizes", "64,16", "--out", str(tmp_path)],
+                       check=True, capture_output=True, timeout=120, env=env)
     table = (tmp_path / "cluster.md").read_text()
     assert "| Dask, chunk_size = 16 | 8 |" in table and "| NO |" not in table
     assert (tmp_path / "cluster.json").is_file()

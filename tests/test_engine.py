@@ -11,12 +11,13 @@ import warnings
 import numba
 import numpy as np
 import pytest
+from shared_kernels import EVERY
 
 import sweep
 from sweep import kernels as _kernels
 from sweep.kernels import KernelSpec, Status
 
-ALL_OBSERVE = ("final", "winding", "theta_max", "amplitude", "tension", "energy")
+ALL_OBSERVE = EVERY  # the kernels of test_naive's runs (tests/shared_kernels.py)
 
 
 def _scene(model, damping, forcing):
@@ -187,7 +188,7 @@ def test_saved_samples_after_failure_are_nan():
     scene = sweep.Scene(effects=(sweep.Damping(1e4),))
     with pytest.warns(RuntimeWarning):
         ds = sweep.run(scene, sweep.Grid(theta0=[1.0]), t_end=1.0, dt=0.01,
-                       observe=("final",), save_every=10,
+                       observe=ALL_OBSERVE, save_every=10,  # (test_oracles' kernel)
                        check_stability=False)  # unstable on purpose
     theta = ds.theta.values[0]
     assert theta[0] == 1.0 and np.isnan(theta[-1])
@@ -208,7 +209,7 @@ def test_time_is_t0_plus_n_dt_not_an_accumulated_sum():
     ~1e5 rounding errors of size ulp(1e4) ~ 2e-12 each, far from the closed form below.
     """
     amplitude, frequency, t0 = 0.8, 1.3, 1.0e4
-    kwargs = dict(dt=0.01, observe=("final",), save_every=10_000)
+    kwargs = dict(dt=0.01, observe=ALL_OBSERVE, save_every=10_000)  # test_oracles' kernel
     shifted = sweep.run(sweep.Scene(effects=(sweep.Forcing(amplitude, frequency, 0.2),)),
                         sweep.Grid(theta0=[0.3]), t0=t0, t_end=t0 + 1000.0, **kwargs)
     phase = (0.2 + frequency * t0) % (2 * np.pi)

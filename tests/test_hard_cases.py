@@ -12,6 +12,7 @@ import warnings
 
 import numpy as np
 import pytest
+from shared_kernels import EVERY
 
 import sweep
 from sweep import accuracy, maps, stability
@@ -53,7 +54,7 @@ def test_near_separatrix_libration_has_the_elliptic_period(k, tolerance):
     m = math.sin(theta0 / 2) ** 2  # k^2 of the rounded start
     period = 4 * special.ellipk(m)  # SciPy's K, independent of sweep.accuracy
     ds = sweep.run(UNIT, sweep.Grid(theta0=[theta0]), t_end=period, dt=period / 40_000,
-                   observe=("final", "winding", "energy"), save_every=4_000)
+                   observe=EVERY, save_every=4_000)  # (test_oracles' kernel)
     # after exactly one period it is back at the turning point, at rest
     assert abs(_one(ds, "theta_final") - theta0) < tolerance
     assert abs(_one(ds, "omega_final")) < tolerance
@@ -91,7 +92,7 @@ def test_separatrix_start_follows_the_closed_form_then_stays_bounded():
     3e-11 exp(w t) holds it to that law with a margin of 3.
     """
     ds = sweep.run(UNIT, sweep.Grid(theta0=[0.0], omega0=[2.0]), t_end=60.0, dt=0.01,
-                   observe=("final", "winding", "energy"), save_every=100)
+                   observe=EVERY, save_every=100)  # (test_oracles' kernel)
     t = ds.time.values
     theta, omega = ds.theta.values[0, 0], ds.omega.values[0, 0]
     exact = 4 * np.arctan(np.exp(t)) - np.pi
@@ -203,7 +204,7 @@ def test_fast_rotation_near_the_limit_stays_close_to_dop853(omega_dt, bound):
     """
     omega0, t_end, w2 = omega_dt / 0.01, 10.0, 9.81
     ds = sweep.run(sweep.Scene(), sweep.Grid(theta0=[0.0], omega0=[omega0]), t_end=t_end,
-                   dt=0.01, observe=("final", "energy"))
+                   dt=0.01, observe=("final", "winding", "energy"))  # (the kernel above)
     ref = _dop853(lambda t, s: [s[1], -w2 * math.sin(s[0])], [0.0, omega0], t_end)
     relative = abs(_one(ds, "energy_final") / _one(ds, "energy_initial") - 1)
     assert relative < bound * w2 / omega0**2
@@ -429,7 +430,7 @@ def test_overflow_in_a_forced_grid_is_flagged_and_neighbours_bit_identical(model
     scene = sweep.Scene(model=model, effects=(sweep.Damping(0.1), sweep.Forcing(0.5, 0.9)))
     theta0 = np.linspace(-1.0, 1.0, 3)
     kwargs = {"t_end": 2.0, "dt": 0.01, "check_stability": False,
-              "observe": ("final", "winding", "energy", "amplitude")}
+              "observe": EVERY}  # test_naive's kernels (tests/shared_kernels.py)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         clean = sweep.run(scene, sweep.Grid(theta0=theta0, damping=[0.1, 0.3],

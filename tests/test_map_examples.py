@@ -50,7 +50,9 @@ if __name__ == "__main__":  # pragma: no cover
 
 
 def test_forced_basins(tmp_path, capsys):
-    assert _load("forced_basins").main(["--size", "31", "--periods", "60",
+    # 21 x 21 starts, 320 periods and a 21 x 21 pilot (the map's own starts): conftest's
+    # Wada pilot, so the kernel of its catalogue is the wada_catalogue fixture's
+    assert _load("forced_basins").main(["--size", "21", "--periods", "320", "--pilot", "21",
                                         "--out", str(tmp_path)]) == 0
     _assert_png(tmp_path / "forced_basins.png")
     out = capsys.readouterr().out

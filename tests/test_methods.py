@@ -14,6 +14,7 @@ from fractions import Fraction
 import numba
 import numpy as np
 import pytest
+from shared_kernels import EVERY, EVERY_ADAPTIVE
 
 import sweep
 from sweep import Status, _config, maps, methods
@@ -22,7 +23,6 @@ from sweep.accuracy import ellipk, exact, state_error
 from sweep.kernels import vecmath as _vecmath
 from sweep.methods import METHODS, ButcherTableau, SplittingMethod
 
-ALL_OBSERVE = ("final", "winding", "theta_max", "amplitude", "tension", "energy")
 TABLEAUX = [m for m in METHODS.values() if isinstance(m, ButcherTableau)]
 SPLITTINGS = [m for m in METHODS.values() if isinstance(m, SplittingMethod)]
 FIXED = [name for name, m in METHODS.items() if not m.adaptive]
@@ -163,7 +163,9 @@ def _scene_for(method, model="nonlinear"):
 def test_every_method_runs_through_the_kernel_builder_with_all_observables(method):
     scene = _scene_for(method)
     grid = sweep.Grid(theta0=np.linspace(-2.0, 2.0, 3), omega0=[0.0, 7.0])
-    kwargs = dict(t_end=4.0, dt=0.01, t_transient=1.0, observe=ALL_OBSERVE, method=method)
+    # every observable the method takes: test_blocks' kernels (tests/shared_kernels.py)
+    observe = EVERY_ADAPTIVE if METHODS[method].adaptive else EVERY
+    kwargs = dict(t_end=4.0, dt=0.01, t_transient=1.0, observe=observe, method=method)
     ds = sweep.run(scene, grid, **kwargs)
     assert ds.attrs["method"] == method
     assert (ds.status == sweep.Status.OK).all()
@@ -183,7 +185,7 @@ def test_every_method_runs_through_the_kernel_builder_with_all_observables(metho
     # (Euler: no accuracy here, but finite), 0.05 (order 2), 1.5e-6 (order >= 4).
     # (Maxima over steps, e.g. tension_max, also carry a sampling error of the step
     # grid, ~1e-2 at dt = 0.01, so they are not compared.)
-    fine = sweep.run(scene, grid, **{**kwargs, "dt": 0.0025, "method": "rk4"})
+    fine = sweep.run(scene, grid, **{**kwargs, "dt": 0.0025, "method": "rk4", "observe": EVERY})
     atol = {1: 20.0, 2: 0.1}.get(METHODS[method].order, 1e-5)
     for name in ("theta_final", "omega_final", "energy_final"):
         np.testing.assert_allclose(ds[name], fine[name], rtol=0, atol=atol, err_msg=name)
@@ -417,7 +419,7 @@ def test_dopri5_meets_its_tolerance_against_the_exact_solution():
     ratios = []
     for tol in (1e-6, 1e-8, 1e-10, 1e-12):
         ds = sweep.run(sweep.Scene(), grid, t_end=t_end, dt=0.5, method="dopri5", rtol=tol,
-                       atol=tol)
+                       atol=tol, observe=EVERY_ADAPTIVE)  # the kernel of the tests below
         err = state_error(sweep.Scene(), ds.theta_final.values.ravel(),
                           ds.omega_final.values.ravel(), theta_ref, omega_ref)
         scale = 1.0 + np.maximum(np.abs(theta_ref), np.abs(omega_ref) / W0)
@@ -437,7 +439,10 @@ def test_dopri5_steps_per_trajectory_and_hits_t_end_exactly():
     scene = sweep.Scene(effects=(sweep.Damping(0.2), sweep.Forcing(1.2, 2 / 3)))
     # 1.2345 is not a whole number of steps 0.1: an adaptive run does not need it to be
     grid = sweep.Grid(theta0=[0.1, 3.0], omega0=[0.0, 9.0], damping=[0.2, 0.4])
-    ds = sweep.run(scene, grid, t_end=1.2345, dt=0.1, method="dopri5", rtol=1e-9, atol=1e-9)
+    # every observable dopri5 takes: the kernel of every method's test above
+    kw = dict(t_end=1.2345, dt=0.1, method="dopri5", rtol=1e-9, atol=1e-9,
+              observe=EVERY_ADAPTIVE)
+    ds = sweep.run(scene, grid, **kw)
     steps = ds.steps_accepted.values
     assert steps.min() >= 12  # at least (t_end - t0) / dt_max steps
     assert len(np.unique(steps)) > 1  # each trajectory chose its own steps
@@ -447,20 +452,19 @@ def test_dopri5_steps_per_trajectory_and_hits_t_end_exactly():
         point = ds.isel(theta0=[idx[0]], omega0=[idx[1]], damping=[idx[2]])
         alone = sweep.run(scene, sweep.Grid(theta0=point.theta0.values,
                                             omega0=point.omega0.values,
-                                            damping=point.damping.values),
-                          t_end=1.2345, dt=0.1, method="dopri5", rtol=1e-9, atol=1e-9)
+                                            damping=point.damping.values), **kw)
         assert alone.drop_attrs().identical(point.drop_attrs())
     # t_end is hit exactly: the final state equals a tight fixed-step RK4 run to t_end
     # (1.2345 = 24690 steps of 5e-5: RK4 error ~1e-16) within the dopri5 tolerance
     # times the ~40 steps taken (global accumulation; measured ~1e-9)
-    fine = sweep.run(scene, grid, t_end=1.2345, dt=5e-5)
+    fine = sweep.run(scene, grid, t_end=1.2345, dt=5e-5, observe=EVERY)  # test_naive's kernel
     np.testing.assert_allclose(ds.theta_final, fine.theta_final, rtol=0, atol=1e-7)
 
 
 def test_dopri5_observables_update_at_accepted_steps():
     ds = sweep.run(sweep.Scene(), sweep.Grid(theta0=[1.0]), t_end=3 * PERIOD / 2 + 0.1,
                    dt=0.05, t_transient=0.5, method="dopri5", rtol=1e-10, atol=1e-10,
-                   observe=("theta_max", "amplitude", "energy"))
+                   observe=EVERY_ADAPTIVE)  # theta_max, amplitude and energy among them
     # libration from rest at 1 rad: the maxima are sampled at accepted steps (no dense
     # output), which never exceed the true amplitude and come within the curvature of
     # theta over half a step of at most 0.05 s: 1.0 * (w0 * 0.025)^2 / 2 ~ 3e-3

@@ -22,16 +22,16 @@ import math
 
 import numpy as np
 import pytest
+from shared_kernels import EVERY
 
 import sweep
 
 import naive
 
-ALL_OBSERVE = ("final", "winding", "theta_max", "amplitude", "omega_mean", "tension",
-               "energy")
+ALL_OBSERVE = EVERY  # every observable; tests/shared_kernels.py shares their kernels
 SCALARS = ("theta_final", "omega_final", "theta_max", "amplitude", "omega_mean",
            "tension_min",
-           "tension_max", "energy_initial", "energy_final")
+           "tension_max", "energy_initial", "energy_final", "top_distance_max")
 COMBINATIONS = list(itertools.product(("nonlinear", "linear"), (False, True), (False, True)))
 COMBO_IDS = [f"{m}-{'damped' if d else 'free'}-{'forced' if f else 'unforced'}"
              for m, d, f in COMBINATIONS]
@@ -98,6 +98,9 @@ def _check_point(ds, index, point, ref, what):
         "tension_max": max(ref["tension_max"], abs(ref["tension_min"])),
         "energy_initial": abs(ref["energy_initial"]),
         "energy_final": max(abs(ref["energy_initial"]), abs(ref["energy_final"])),
+        # |theta mod 2 pi - pi|: the round-off of the angle it is taken of, plus the
+        # reduction's (2 pi and pi are at most ~7 in size)
+        "top_distance_max": np.max(np.abs(ref["theta_all"])) + 2 * math.pi,
     }
     assert int(ds["status"].values[index]) == int(sweep.Status.OK), what
     for name in SCALARS:

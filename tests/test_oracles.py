@@ -25,10 +25,11 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 from scipy.special import ellipj, ellipk, ellipkm1
+from shared_kernels import EVERY
 
 import sweep
 
-ALL_OBSERVE = ("final", "winding", "theta_max", "amplitude", "tension", "energy")
+ALL_OBSERVE = EVERY  # the kernels of test_naive's runs (tests/shared_kernels.py)
 EPS = np.finfo(np.float64).eps
 
 

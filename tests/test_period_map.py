@@ -209,7 +209,7 @@ def test_period_needs_strobe_samples_and_sane_options():
 
 
 def test_orbit_diagram_errors_name_what_is_accepted():
-    ds = _run([1.06], samples=4, transient=5)
+    ds = _run([1.06], samples=16, transient=20)  # the previous test's run (and kernel)
     with pytest.raises(ValueError, match="along = 'damping' is not a grid axis of this "
                                          r"dataset \(it is held fixed in this run: a "
                                          r"dataset attribute\); accepted: "
@@ -246,7 +246,8 @@ def test_sweep_plot_orbit_diagram_from_the_command_line(tmp_path, capsys):
     from sweep import cli
 
     path = tmp_path / "cascade.nc"
-    sweep.save(_run([1.06, 1.072], samples=8, transient=40), path)
+    # 24 samples: the kernel of test_orbit_diagram_draws_every_sample_above_its_gamma
+    sweep.save(_run([1.06, 1.072], samples=24, transient=40), path)
     assert cli.main(["plot", str(path), "--orbit-diagram", "forcing_amplitude",
                      "-o", str(tmp_path / "od.png")]) == 0
     assert (tmp_path / "od.png").stat().st_size > 0

@@ -12,13 +12,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from dask_clusters import DASHBOARD, port_8787_taken
+from shared_kernels import EVERY, EVERY_ADAPTIVE
 
 import sweep
 from sweep import maps
 
 DAMPED = sweep.Scene(effects=(sweep.Damping(0.2),))
 GRID = sweep.Grid(theta0=np.linspace(-3.0, 3.0, 13), omega0=np.linspace(-2.0, 2.0, 7))
-BASE = dict(t_end=5.0, dt=0.01, observe=("final", "winding", "theta_max"), progress=False)
+#: every observable: the damped scene's kernels of test_naive, test_engine and
+#: test_distributed for the same grid sizes (tests/shared_kernels.py)
+BASE = dict(t_end=5.0, dt=0.01, observe=EVERY, progress=False)
 
 FORCED = sweep.Scene(gravity=1.0, length=1.0,
                      effects=(sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, np.pi / 2)))
@@ -136,7 +140,8 @@ def test_a_saved_points_file_says_how_to_rerun_it(damped_pair, tmp_path):
 def test_points_are_bit_identical_for_other_run_settings(case):
     kwargs = {"stop_early": dict(t_end=20.0, dt=0.01, observe=("capture",), stop_early=True),
               "float32": dict(BASE, dtype="float32"),
-              "dopri5": dict(BASE, method="dopri5", rtol=1e-6, atol=1e-9)}[case]
+              "dopri5": dict(BASE, method="dopri5", rtol=1e-6, atol=1e-9,
+                             observe=EVERY_ADAPTIVE)}[case]
     kwargs = dict(kwargs, progress=False)
     points, index = subset(GRID, 30)
     assert_same_as_cells(sweep.run(DAMPED, points, **kwargs),
@@ -203,9 +208,10 @@ def test_points_on_a_dask_cluster_are_identical(damped_pair, tmp_path):
 
     ds, _, _ = damped_pair
     points = sweep.io.grid_from(ds)
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
+    with port_8787_taken():  # tests/dask_clusters.py: the Scheduler on a free port
+        cluster = distributed.LocalCluster(n_workers=1, threads_per_worker=1,
+                                           processes=False, dashboard_address=DASHBOARD)
+    with cluster, distributed.Client(cluster) as client:
         _same(sweep.run(DAMPED, points, client=client, chunk_size=8, **BASE), ds)
         path = run_to_netcdf(tmp_path / "p.nc", DAMPED, points, client=client,
                              rows_per_task=16, **BASE)
@@ -258,8 +264,7 @@ def test_forced_maps_label_points_as_their_grid_cells(forced_pair):
 def test_unforced_maps_label_points_as_their_grid_cells(damped_pair):
     ds, grid_ds, index = damped_pair
     np.testing.assert_array_equal(maps.motion(ds).values, maps.motion(grid_ds).values[index])
-    kwargs = dict(t_end=20.0, dt=0.01, observe=("final", "energy", "top_distance"),
-                  progress=False)
+    kwargs = dict(t_end=20.0, dt=0.01, observe=EVERY, progress=False)  # BASE's kernels
     points = sweep.io.grid_from(ds)
     point_run, grid_run = sweep.run(DAMPED, points, **kwargs), sweep.run(DAMPED, GRID, **kwargs)
     np.testing.assert_array_equal(maps.well(point_run).values,
@@ -279,8 +284,8 @@ coefficient = 0.2
 [run]
 t_end = 5.0
 dt = 0.01
-observe = ["final", "winding", "theta_max"]
-"""
+observe = OBSERVE
+""".replace("OBSERVE", str(list(EVERY)).replace("'", '"'))  # BASE's
 
 
 def _sweep(*argv):

@@ -57,13 +57,14 @@ def test_refill_gives_the_same_bits_as_blocks_that_wait(block, shared):
     assert (waiting[1] == Status.NONFINITE).sum() == 1
 
 
-@pytest.mark.parametrize("samples", [3, 40])
+@pytest.mark.parametrize("samples", [2, 40])
 def test_refill_gives_the_same_bits_with_other_strobe_counts(samples):
-    """``strobe_samples`` != 16 in both kernels: a ring of 3 (only period 1 can settle)
-    and of 40 (full at the 40th of the 41 samples after the transient, so only the last
-    two checks can stop a trajectory). With the shared drive's table of sines (one
-    frequency in the table), as `sweep.run` builds them: the 40-sample refill kernel is
-    test_strobe_samples.py's, so it is compiled once (the drive's two paths are tested
+    """``strobe_samples`` != 16 in both kernels: a ring of 2 (the fewest: only period 1
+    can settle) and of 40 (full at the 40th of the 41 samples after the transient, so
+    only the last two checks can stop a trajectory). With the shared drive's table of
+    sines (one frequency in the table), as `sweep.run` builds them: the refill kernels
+    are test_attractor_catalogue.py's 2-sample pilot's and test_strobe_samples.py's
+    40-sample run's, so each is compiled once (the drive's two paths are tested
     above)."""
     params = _table(300, seed=5)
     kwargs = dict(stop_early=True, block=64, strobe_samples=samples, shared_forcing=True)

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from shared_kernels import EVERY, EVERY_ADAPTIVE
 
 import sweep
 from sweep import cli
@@ -81,11 +82,11 @@ def interrupted(monkeypatch, folder, after, scene=SCENE, grid=GRID, **kwargs):
 # ------------------------------------------------------------------------------- API
 @pytest.mark.parametrize("extra", [
     {},
-    # the observables of kernels that other files compile (test_faults.py's saving one,
-    # test_points.py's dopri5 one): what is resumed, not which observables, is tested
-    {"save_every": 50, "observe": ("final", "winding")},
-    {"method": "dopri5", "rtol": 1e-8, "observe": ("final", "winding", "theta_max")},  # and
-    # step statistics
+    # the observables of kernels that other files compile (tests/shared_kernels.py: the
+    # damped scene's saving kernel of test_naive, the dopri5 one of test_points): what is
+    # resumed, not which observables, is tested
+    {"save_every": 50, "observe": EVERY},
+    {"method": "dopri5", "rtol": 1e-8, "observe": EVERY_ADAPTIVE},  # and step statistics
 ], ids=["observables", "save_every", "adaptive"])
 def test_resumed_run_is_bit_identical_and_skips_finished_chunks(extra, tmp_path,
                                                                  monkeypatch):

@@ -24,9 +24,9 @@ def _forced(c=0.3, amplitude=1.1):
 @pytest.mark.parametrize("samples, taken", [
     (2, 7),    # the smallest count; the ring wrapped three times, rotated by one
     (5, 10),   # odd; a whole number of turns of the ring: no rotation
-    (33, 38),  # odd, larger than the default 16; rotated by 5
-    (33, 20),  # the ring not yet full: the 13 oldest places stay NaN
-])
+    (40, 45),  # larger than the default 16; rotated by 5
+    (40, 20),  # the ring not yet full: the 20 oldest places stay NaN
+])  # (40 samples of 1-3 starts: test_period_map's kernel, compiled once for both files)
 def test_any_count_keeps_the_last_samples_at_the_forcing_phase(samples, taken):
     n_transient = 5 * PERIOD_STEPS + 3
     n_steps = n_transient + (taken - 1) * PERIOD_STEPS + 7  # `taken` sampling steps
@@ -74,18 +74,19 @@ def test_stop_early_with_other_counts_finds_the_full_runs_periods(samples):
 
 def test_resuming_with_another_count_is_refused(tmp_path):
     """The count is part of the kernel, so of the checkpoint's fingerprint; the same
-    count resumes from the checkpoint without computing anything."""
+    count resumes from the checkpoint without computing anything. (5 samples of 4-127
+    starts: the kernel of test_cuda's CPU side.)"""
     grid = sweep.Grid(theta0=np.linspace(-2.0, 2.0, 6), omega0=[0.0])
     kwargs = dict(t_end=30 * PERIOD_STEPS * DT, dt=DT, t_transient=10 * PERIOD_STEPS * DT,
                   observe=("strobe",), chunk_size=4, checkpoint=tmp_path / "ck",
                   keep_checkpoint=True, progress=False)
-    first = sweep.run(_forced(), grid, strobe_samples=8, **kwargs)
+    first = sweep.run(_forced(), grid, strobe_samples=5, **kwargs)
     with pytest.raises(ValueError, match=r"belongs to a different run: "
-                                         r"kernel\.strobe_samples: checkpoint 8, this run 12"):
+                                         r"kernel\.strobe_samples: checkpoint 5, this run 12"):
         sweep.run(_forced(), grid, strobe_samples=12, resume=True, **kwargs)
-    again = sweep.run(_forced(), grid, strobe_samples=8, resume=True, **kwargs)
+    again = sweep.run(_forced(), grid, strobe_samples=5, resume=True, **kwargs)
     assert again.strobe_theta.values.tobytes() == first.strobe_theta.values.tobytes()
-    assert sweep.io.run_arguments(again)["strobe_samples"] == 8
+    assert sweep.io.run_arguments(again)["strobe_samples"] == 5
 
 
 RUN_FILE = """

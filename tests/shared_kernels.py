@@ -1,0 +1,28 @@
+"""Observable sets that many tests share, so that they share compiled kernels.
+
+Every distinct `sweep.kernels.KernelSpec` (model, effects, observables, method, block,
+saving, dtype, ...) is a kernel numba compiles, about a second each from an empty cache;
+a cold run of the suite is mostly that. A test whose subject is not *which* observables
+are computed runs one of these sets, so that the tests of the same scene and grid size
+compile one kernel between them (memoised in a worker process, loaded from numba's disk
+cache by the others). ``SWEEP_COMPILE_LOG`` (tests/compile_log.py) shows what each test
+compiles.
+
+Adding observables never changes a trajectory (only ``stop_early`` reads them), so a
+test that runs more of them than it checks checks the same thing.
+
+`sweep.run` picks the block from the number of trajectories (`sweep.engine._block`):
+one lane for fewer than 4, 16 lanes up to 127, 64 up to 2047, 128 above; tests that
+share a kernel also share that size class.
+"""
+
+#: Every observable of a fixed-step run without a forcing period to sample: the set of
+#: tests/test_naive.py (each one against the pure-Python reference), and of the tests
+#: that need "all of them" or any set at all (test_engine, test_oracles,
+#: test_physics_effects, test_methods, test_blocks).
+EVERY = ("final", "winding", "theta_max", "amplitude", "omega_mean", "tension", "energy",
+         "top_distance")
+
+#: Every observable the adaptive dopri5 takes (`omega_mean` needs a fixed step).
+EVERY_ADAPTIVE = ("final", "winding", "theta_max", "amplitude", "tension", "energy",
+                  "top_distance")
