@@ -313,7 +313,7 @@ class SystemExplorer(Explorer):
         names = [p.axis for p in system.declaration.parameters]
         for name, value in values.items():
             if name == "damping":
-                changes["effects"] = (Damping(value),) if value or system.damping else ()
+                changes["effects"] = (Damping(value),) if value else ()
             elif name in names:
                 changes[name] = value
             else:
@@ -351,7 +351,7 @@ class SystemExplorer(Explorer):
         if "model" in changes:
             raise InvalidInput("model", f"model: {type(self.state.scene).__name__} has no "
                                "model choice; accepted: its parameters, "
-                               f"{', '.join(p.axis for p in self.parameter_controls())}")
+                               f"{', '.join(c.name for c in self.parameter_controls())}")
         return super().update(**changes)
 
     # -- one trajectory -----------------------------------------------------------------
