@@ -168,7 +168,7 @@ def test_the_run_file_and_python_reproduce_the_map(tmp_path):
     np.testing.assert_array_equal(np.log10(plane(ds.flip_time)),
                                   result.values)
     scope = {}
-    exec(e.python_snippet(), scope)  # noqa: S102 - the snippet the page shows
+    exec(e.python_snippet(), scope)  # the snippet the page shows
     np.testing.assert_array_equal(plane(scope["image"]),
                                   result.values)
 
@@ -204,6 +204,9 @@ def test_explore_and_the_command_line_take_a_system(monkeypatch, capsys):
     (lambda: SystemExplorer(sweep.DoublePendulum(), sweep.Grid(
         theta1_0=np.linspace(-1, 1, N), theta3_0=np.linspace(-1, 1, N)), **RUN),
      ["theta3_0", "theta2_0"]),
+    (lambda: SystemExplorer(sweep.DoublePendulum(), sweep.Grid(
+        theta1_0=np.linspace(-1, 1, N), theta2_0=np.linspace(-1, 1, N), theta0=[0.5]),
+        **RUN), ["theta0", "omega1_0", "mass1"]),  # a one-value axis: every axis accepted
 ])
 def test_bad_input_is_refused_naming_the_value_and_what_is_accepted(make, words):
     with pytest.raises(InvalidInput) as info:
