@@ -10,6 +10,7 @@ import pytest
 
 import sweep
 from sweep.explore.model import InvalidInput, centres
+from sweep.explore.networks import NetworkExplorer
 from sweep.explore.systems import SystemExplorer, SystemTrajectory, explorer_for
 from sweep.physics.system import SYSTEM_DAMPING
 from sweep.system_observables import SYSTEM_OBSERVABLES, variables
@@ -177,7 +178,7 @@ def test_explore_and_the_command_line_take_a_system(monkeypatch, capsys):
     pytest.importorskip("panel")
     from sweep.cli import main
     from sweep.explore import app as app_module
-    from sweep.explore.system_app import SystemExplorerApp
+    from sweep.explore.system_app import NetworkExplorerApp, SystemExplorerApp
 
     opened = []
     monkeypatch.setattr(app_module, "main_serve",
@@ -190,6 +191,10 @@ def test_explore_and_the_command_line_take_a_system(monkeypatch, capsys):
     assert isinstance(sweep.explore(sweep.CoupledPendula(2), sweep.Grid(
         theta1_0=np.linspace(-1, 1, N), theta2_0=np.linspace(-1, 1, N)), **RUN),
         SystemExplorerApp)
+    network = sweep.SwingNetwork([(0, 1)], power=[1.0, -1.0], damping=0.1, coupling=4.0)
+    assert isinstance(sweep.explore(network, sweep.Grid(delta_theta=[0.0, 1.0],
+                                                        delta_omega=[0.0, 1.0]), **RUN),
+                      NetworkExplorerApp)
 
 
 @pytest.mark.parametrize("make, words", [
@@ -215,8 +220,79 @@ def test_bad_input_is_refused_naming_the_value_and_what_is_accepted(make, words)
         assert word in str(info.value)
 
 
-def test_a_swing_network_is_refused_before_any_compute():
-    network = sweep.SwingNetwork([(0, 1)], power=[1.0, -1.0], damping=0.1, coupling=4.0)
-    with pytest.raises(TypeError, match="SwingNetwork is not in the explorer yet"):
-        explorer_for(network, sweep.Grid(delta_theta=[0.0, 1.0], delta_omega=[0.0, 1.0]),
-                     **RUN)
+# ------------------------------------------------------------------ swing networks
+def network_explorer(**extra):
+    """The five-node ring with a dead end of docs/guide/systems.md, node 4 perturbed."""
+    network = sweep.SwingNetwork([(0, 1), (1, 2), (2, 3), (3, 0), (0, 4)],
+                                 power=[1, -1, 1, -1, 0], damping=0.1, coupling=8.0)
+    grid = sweep.Grid(perturbed_node=[4], delta_theta=np.linspace(-np.pi, np.pi, N),
+                      delta_omega=np.linspace(-15, 15, N))
+    return explorer_for(network, grid, resolution=N, t_end=20.0, dt=0.01, **extra)
+
+
+def test_a_network_map_is_sweep_run_of_one_node_perturbed(tmp_path):
+    e = network_explorer()
+    assert isinstance(e, NetworkExplorer)
+    # the per-run variables of the network's observables, and the synchronized map
+    assert set(e.quantities()) == {"var:frequency_spread", "var:order_parameter",
+                                   "synchronized"}
+    s = e.state
+    assert (s.view.x, s.view.y, s.quantity) == ("delta_theta", "delta_omega", "synchronized")
+    assert dict(s.start)["perturbed_node"] == 4
+    result = e.compute()
+    ds = reference(e, observe=("synchrony",))
+    expected = plane(sweep.maps.synchronized(ds), "delta_omega", "delta_theta")
+    np.testing.assert_array_equal(result.values, expected)
+    assert set(np.unique(result.values)) == {0, 1}  # this window has both
+    # the run file reproduces it
+    path = tmp_path / "network.toml"
+    path.write_text(e.toml_text())
+    network, grid, kwargs = load_run(path, {})
+    again = sweep.maps.synchronized(sweep.run(network, grid, progress=False, **kwargs))
+    np.testing.assert_array_equal(plane(again, "delta_omega", "delta_theta"), result.values)
+
+
+def test_network_controls_change_the_map_and_a_click_gives_every_node():
+    e = network_explorer()
+    controls = {c.name: c for c in e.parameter_controls()}
+    assert list(controls) == ["damping", "coupling", "perturbed_node"]
+    assert controls["coupling"].label == "coupling [1/s^2]" and controls["coupling"].strict
+    e.update(quantity="var:frequency_spread")
+    before = e.compute().values
+    e.update(perturbed_node=1)
+    assert e.state.scene.coupling == 8.0 and dict(e.state.start)["perturbed_node"] == 1
+    other_node = e.compute().values
+    assert not np.array_equal(other_node, before)
+    e.update(coupling=6.0)
+    assert e.state.scene.coupling == 6.0
+    weaker = e.compute()
+    assert not np.array_equal(weaker.values, other_node)
+    np.testing.assert_array_equal(weaker.values, plane(reference(
+        e, observe=("synchrony",)).frequency_spread, "delta_omega", "delta_theta"))
+    traj = e.trajectory(1.0, 5.0, weaker)
+    row, col = e.value_at(weaker, 1.0, 5.0)
+    assert list(traj.series) == [f"theta_{k}" for k in range(5)] + \
+        [f"omega_{k}" for k in range(5)]
+    ds = sweep.run(e.state.scene, sweep.Grid(perturbed_node=[1], delta_theta=[weaker.x[col]],
+                                             delta_omega=[weaker.y[row]]),
+                   t_end=20.0, dt=0.01, save_every=1,  # the explorer keeps all 2001 samples
+                   observe=("synchrony",), progress=False)
+    for k in range(5):
+        np.testing.assert_array_equal(traj.series[f"theta_{k}"],
+                                      ds.theta.isel(node=k).values.ravel())
+    # the map's value at the pixel is the frequency spread at that run's end
+    assert np.abs([traj.series[f"omega_{k}"][-1] for k in range(5)]).max() == \
+        weaker.values[row, col]
+
+
+@pytest.mark.parametrize("change, words", [
+    (dict(perturbed_node=7), ["perturbed_node", "7", "0 to 4"]),
+    (dict(coupling=-1.0), ["coupling", "-1.0", "> 0"]),
+    (dict(x="theta1_0"), ["theta1_0", "delta_theta"]),
+])
+def test_bad_network_input_is_refused(change, words):
+    e = network_explorer()
+    with pytest.raises(InvalidInput) as info:
+        e.update(**change)
+    for word in words:
+        assert word in str(info.value)

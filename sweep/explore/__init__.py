@@ -24,10 +24,11 @@ def explore(scene, grid, **run_kwargs):
 
     Parameters
     ----------
-    scene : sweep.Scene, sweep.DoublePendulum or sweep.CoupledPendula
+    scene : sweep.Scene, sweep.DoublePendulum, sweep.CoupledPendula or sweep.SwingNetwork
         The single pendulum, or a system with several coordinates
         (`sweep.explore.systems.SystemExplorer`: its observables' variables as maps,
-        its declaration's parameters as controls, every coordinate over time on a click).
+        its declaration's parameters as controls, every coordinate over time on a click;
+        a network's starts are one node's perturbation, `sweep.explore.networks`).
     grid : sweep.Grid
         Its first two axes with more than one value are the map's x and y (for example
         ``theta0`` [rad] and ``omega0`` [rad/s], or a system's ``theta1_0`` and
@@ -45,7 +46,8 @@ def explore(scene, grid, **run_kwargs):
     Returns
     -------
     sweep.explore.app.ExplorerApp
-        (`sweep.explore.system_app.SystemExplorerApp` for a system)
+        (`sweep.explore.system_app.SystemExplorerApp` for a system,
+        `~sweep.explore.system_app.NetworkExplorerApp` for a network)
         Displays in a Jupyter notebook (after ``import panel; panel.extension()``, as
         every Panel object); ``.show()`` opens it in a browser from a local
         server, ``.servable()`` marks it for ``panel serve``, ``.serve(port=...)``
@@ -58,8 +60,13 @@ def explore(scene, grid, **run_kwargs):
     sweep.explore.model.InvalidInput
         A ValueError naming the setting sweep's validators refuse.
     """
+    from ..physics.network import SwingNetwork
     from ..physics.system import System
 
+    if isinstance(scene, SwingNetwork):
+        from .system_app import NetworkExplorerApp
+
+        return NetworkExplorerApp(scene, grid, **run_kwargs)
     if isinstance(scene, System):
         from .system_app import SystemExplorerApp
 

@@ -1234,6 +1234,8 @@ def _meaning(quantity: str, da, value: float) -> str:
         return "no period found" if k < 0 else f"period {k}"
     if quantity == "inverted":
         return "stays up" if k else "falls"
+    if quantity == "synchronized":  # a swing network (sweep.explore.networks)
+        return {1: "back in the synchronous state", 0: "not synchronous"}.get(k, "failed")
     if quantity == "basins":
         if k < 0:
             return "unresolved"

@@ -9,11 +9,11 @@ from __future__ import annotations
 from bokeh.models import ColumnDataSource
 from bokeh.palettes import Category10_10
 
-from ..physics.system import initial_parameters
 from .app import ExplorerApp, _Session
+from .networks import NetworkExplorer
 from .systems import SystemExplorer, SystemTrajectory
 
-__all__ = ["SystemExplorerApp"]
+__all__ = ["NetworkExplorerApp", "SystemExplorerApp"]
 
 
 class _SystemSession(_Session):
@@ -21,8 +21,8 @@ class _SystemSession(_Session):
 
     def _build(self) -> None:
         super()._build()
-        coordinates = self.explorer.state.scene.declaration.coordinates
-        names = [c.name for c in coordinates] + [c.velocity for c in coordinates]
+        positions, velocities = self.explorer.series_names()
+        names = positions + velocities
         self.series_source = ColumnDataSource({"t": [], **{n: [] for n in names}})
         for fig in (self.trajectory, self.phase):
             fig.renderers = []
@@ -32,23 +32,20 @@ class _SystemSession(_Session):
         for k, name in enumerate(names):
             self.trajectory.line("t", name, source=self.series_source, legend_label=name,
                                  color=Category10_10[k % 10],
-                                 line_dash="solid" if k < len(coordinates) else "dashed")
+                                 line_dash="solid" if k < len(positions) else "dashed")
         self.phase.xaxis.axis_label = "theta_i [rad]"
         self.phase.yaxis.axis_label = "omega_i [rad/s]"
-        for k, c in enumerate(coordinates):
-            self.phase.line(c.name, c.velocity, source=self.series_source,
-                            legend_label=f"({c.name}, {c.velocity})",
+        for k, (position, velocity) in enumerate(zip(positions, velocities, strict=True)):
+            self.phase.line(position, velocity, source=self.series_source,
+                            legend_label=f"({position}, {velocity})",
                             color=Category10_10[k % 10])
         self._label_axes()
 
     def _label_axes(self) -> None:
         from ..plot import units_text
 
-        system = self.explorer.state.scene
         v = self.explorer.state.view
-        units = {p.axis: p.units for p in initial_parameters(system.declaration)}
-        units.update({p.axis: p.units for p in system.declaration.parameters})
-        units["damping"] = "s-1"
+        units = self.explorer.axis_units()
         self.map.xaxis.axis_label = f"{v.x} [{units_text(units.get(v.x, '1'))}]"
         self.map.yaxis.axis_label = f"{v.y} [{units_text(units.get(v.y, '1'))}]"
 
@@ -74,4 +71,11 @@ class SystemExplorerApp(ExplorerApp):
     `sweep.explore`)."""
 
     explorer_class = SystemExplorer
+    session_class = _SystemSession
+
+
+class NetworkExplorerApp(ExplorerApp):
+    """`ExplorerApp` of a `sweep.SwingNetwork` (see `sweep.explore`)."""
+
+    explorer_class = NetworkExplorer
     session_class = _SystemSession

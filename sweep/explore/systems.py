@@ -31,6 +31,8 @@ from ..diskspace import layout as run_layout
 from ..grid import Grid
 from ..kernels import Status
 from ..methods import METHODS
+from ..physics.coupled import CoupledPendula
+from ..physics.double import DoublePendulum
 from ..physics.network import SwingNetwork
 from ..physics.system import SYSTEM_DAMPING, System, initial_parameters
 from ..system_observables import SYSTEM_OBSERVABLES, variables
@@ -134,8 +136,9 @@ class SystemTrajectory:
 
 def _constructor(system: System) -> dict:
     """``system``'s constructor arguments except ``effects``."""
-    return {f.name: getattr(system, f.name) for f in dataclasses.fields(system)
-            if f.name != "effects"}
+    return {f.name: (value.tolist() if isinstance(value, np.ndarray) else value)
+            for f in dataclasses.fields(system) if f.name != "effects"
+            for value in (getattr(system, f.name),)}
 
 
 class SystemExplorer(Explorer):
@@ -164,10 +167,11 @@ class SystemExplorer(Explorer):
     def __init__(self, system: System, grid: Grid, *, quantity: str | None = None,
                  resolution: int = 400, cache: OrderedDict | None = None,
                  **run_kwargs) -> None:
-        if isinstance(system, SwingNetwork) or not isinstance(system, System):
-            raise TypeError(f"explore takes a sweep.Scene, sweep.DoublePendulum or "
-                            f"sweep.CoupledPendula; got {type(system).__name__} (the "
-                            "SwingNetwork is not in the explorer yet: sweep.run it)")
+        if not isinstance(system, self.takes):
+            raise TypeError(f"{type(self).__name__} takes a {self.takes.__name__}, got "
+                            f"{type(system).__name__}; sweep.explore takes a sweep.Scene, "
+                            "a sweep.DoublePendulum, a sweep.CoupledPendula or a "
+                            "sweep.SwingNetwork")
         if not isinstance(grid, Grid):
             raise TypeError(f"grid must be a sweep.Grid, got {grid!r}")
         known = ("t_end", "dt", "t_transient", "method", "device") + PASSTHROUGH
@@ -180,16 +184,16 @@ class SystemExplorer(Explorer):
             if key not in run_kwargs:
                 raise TypeError(f"explore: missing run keyword {key!r} (s); accepted: the "
                                 "keywords of sweep.run, t_end and dt required")
-        self._registry = system_quantities(system)
-        initial = [p.axis for p in initial_parameters(system.declaration)]
+        self._registry = self._quantities_of(system)
+        initial = self._start_names(system)
         offered = self._axes_of(system)
         for name in grid.dims:
-            if name not in offered:
+            if name not in offered and name not in initial:
                 raise InvalidInput("grid", f"grid axis {name!r} is not an axis of "
-                                   f"{type(system).__name__}; accepted: {', '.join(offered)}")
+                                   f"{type(system).__name__}; accepted: "
+                                   f"{', '.join(dict.fromkeys((*offered, *initial)))}")
         varying = [name for name in grid.dims if grid.axes[name].size > 1]
-        angles = [f"{c.name}_0" for c in system.declaration.coordinates]
-        names = varying + [n for n in angles + initial if n not in varying]
+        names = varying + [n for n in self._preferred_axes(system) if n not in varying]
         x, y = names[0], names[1]
         ranges = {}
         for name in (x, y):
@@ -227,10 +231,41 @@ class SystemExplorer(Explorer):
 
         self._lock = COMPUTE_LOCK
 
+    #: The systems this explorer takes.
+    takes = (DoublePendulum, CoupledPendula)
+
     # -- what the declaration gives ------------------------------------------------
+    @staticmethod
+    def _quantities_of(system: System) -> dict[str, Quantity]:
+        return system_quantities(system)
+
+    @staticmethod
+    def _start_names(system: System) -> list[str]:
+        """The axes of a start (set by controls where they are not on the map)."""
+        return [p.axis for p in initial_parameters(system.declaration)]
+
+    @staticmethod
+    def _preferred_axes(system: System) -> list[str]:
+        """The map's axes where the grid does not vary two: the first two angles."""
+        angles = [f"{c.name}_0" for c in system.declaration.coordinates]
+        return angles + [p.axis for p in initial_parameters(system.declaration)]
+
     @staticmethod
     def _axes_of(system: System) -> tuple[str, ...]:
         return system.columns(True)
+
+    def series_names(self) -> tuple[list[str], list[str]]:
+        """Names of the positions and of the velocities a click gives over time."""
+        coordinates = self.state.scene.declaration.coordinates
+        return [c.name for c in coordinates], [c.velocity for c in coordinates]
+
+    def axis_units(self) -> dict[str, str]:
+        """UDUNITS units of every axis."""
+        system = self.state.scene
+        units = {p.axis: p.units for p in initial_parameters(system.declaration)}
+        units.update({p.axis: p.units for p in system.declaration.parameters})
+        units["damping"] = SYSTEM_DAMPING.units
+        return units
 
     def axes(self) -> tuple[str, ...]:
         """The system's grid axes: initial values and velocities, its parameters and
@@ -379,7 +414,7 @@ class SystemExplorer(Explorer):
                       method=state.method, **dict(state.extra))
         steps = int(round((state.t_end - kwargs.get("t0", 0.0)) / state.dt))  # noqa: RUF046 - NumPy 1.x
         kwargs["save_every"] = max(1, math.ceil(steps / TRAJECTORY_SAMPLES))
-        kwargs["observe"] = ("final", "winding")
+        kwargs["observe"] = self.trajectory_observe
         if state.device != "cpu":
             kwargs["device"] = state.device
         with self._lock, warnings.catch_warnings():
@@ -388,22 +423,31 @@ class SystemExplorer(Explorer):
         one = {d: 0 for d in ds.status.dims}
         status = Status(int(ds.status.isel(one)))
         status_text = "ok" if status == Status.OK else f"{status.name.lower()}: {status.message}"
-        coordinates = state.scene.declaration.coordinates
-        names = [c.name for c in coordinates] + [c.velocity for c in coordinates]
-        if not label:
-            label = ", ".join(f"winding_{c.name} = {int(ds[f'winding_{c.name}'].isel(one))}"
-                              for c in coordinates if c.angular)
+        series, units = self._series(ds, one)
         grid = Grid(**axes)
         return SystemTrajectory(
             start={n: float(axes[n][0]) for n, _ in state.start}, point={v.x: x, v.y: y},
-            t=np.asarray(ds.time.values),
-            series={n: np.asarray(ds[n].isel(one).values) for n in names},
-            units={n: str(ds[n].attrs.get("units", "")) for n in names},
-            status=status_text, label=label,
+            t=np.asarray(ds.time.values), series=series, units=units,
+            status=status_text, label=label or self._end_label(ds, one),
             python=self._python(state, grid, kwargs, None, trajectory=True),
             toml=self._toml(state, axes, kwargs, pilot=False,
                             comment=f"one trajectory of the explorer's map, from "
                                     f"{v.x} = {x!r}, {v.y} = {y!r}"))
+
+    #: What a click's run observes besides ``save_every`` (`_end_label` reads it).
+    trajectory_observe = ("final", "winding")
+
+    def _series(self, ds, one: dict) -> tuple[dict, dict]:
+        """``(series, units)`` of a click's run: every coordinate, then every velocity."""
+        positions, velocities = self.series_names()
+        names = positions + velocities
+        return ({n: np.asarray(ds[n].isel(one).values) for n in names},
+                {n: str(ds[n].attrs.get("units", "")) for n in names})
+
+    def _end_label(self, ds, one: dict) -> str:
+        """What a click's run ended in, where no map was clicked: the windings."""
+        return ", ".join(f"winding_{c.name} = {int(ds[f'winding_{c.name}'].isel(one))}"
+                         for c in self.state.scene.declaration.coordinates if c.angular)
 
     # -- reproduction -------------------------------------------------------------------
     @staticmethod
@@ -415,14 +459,16 @@ class SystemExplorer(Explorer):
         arguments = ", ".join(f"{k}={v!r}" for k, v in _constructor(system).items())
         if system.effects:
             arguments += f", effects=(sweep.Damping({system.damping!r}),)"
-        lines = ["import numpy as np", "import sweep", "",
+        lines = ["import numpy as np", "import sweep"]
+        if quantity is not None and "maps." in quantity.expression:
+            lines.append("from sweep import maps")
+        lines += ["",
                  f"system = sweep.{type(system).__name__}({arguments})",
                  f"grid = {_grid_text(grid)}",
                  f"kwargs = dict({', '.join(f'{k}={v!r}' for k, v in kwargs.items())})",
                  "ds = sweep.run(system, grid, **kwargs)"]
         if trajectory:
-            names = [c.name for c in system.declaration.coordinates]
-            lines.append(f"# every coordinate over ds.time: {', '.join(names)}")
+            lines.append("# every coordinate and velocity over ds.time (save_every)")
         elif quantity is not None:
             lines.append(f"image = {quantity.expression}")
         return "\n".join(lines) + "\n"
@@ -448,6 +494,10 @@ class SystemExplorer(Explorer):
 def explorer_for(target, grid, **kwargs) -> Explorer:
     """`SystemExplorer` for a system with several coordinates, else `Explorer` (the
     single pendulum's `sweep.Scene`)."""
+    if isinstance(target, SwingNetwork):
+        from .networks import NetworkExplorer
+
+        return NetworkExplorer(target, grid, **kwargs)
     if isinstance(target, System):
         return SystemExplorer(target, grid, **kwargs)
     return Explorer(target, grid, **kwargs)
