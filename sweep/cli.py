@@ -828,11 +828,12 @@ def _command_explore(args: argparse.Namespace) -> int:
     if args.device is not None:
         kwargs["device"] = args.device
     try:
-        from .explore.app import ExplorerApp, main_serve
+        from .explore import explore
+        from .explore.app import main_serve
     except ImportError as exc:
         raise ValueError(str(exc)) from None
     with _warnings_as_lines():  # e.g. the map it opens on
-        app = ExplorerApp(scene, grid, **kwargs)
+        app = explore(scene, grid, **kwargs)
     return main_serve(app, port=args.port, host=args.host, open_browser=not args.no_browser)
 
 

@@ -24,21 +24,30 @@ def explore(scene, grid, **run_kwargs):
 
     Parameters
     ----------
-    scene : sweep.Scene
+    scene : sweep.Scene, sweep.DoublePendulum, sweep.CoupledPendula or sweep.SwingNetwork
+        The single pendulum, or a system with several coordinates
+        (`sweep.explore.systems.SystemExplorer`: its observables' variables as maps,
+        its declaration's parameters as controls, every coordinate over time on a click;
+        a network's starts are one node's perturbation, `sweep.explore.networks`).
     grid : sweep.Grid
         Its first two axes with more than one value are the map's x and y (for example
-        ``theta0`` [rad] and ``omega0`` [rad/s]); their ranges are the home view, and
-        their length the resolution (pixels per axis) unless ``resolution`` is given.
+        ``theta0`` [rad] and ``omega0`` [rad/s], or a system's ``theta1_0`` and
+        ``theta2_0``); their ranges are the home view, and their length the resolution
+        (pixels per axis) unless ``resolution`` is given.
     **run_kwargs
         `sweep.run` arguments: ``t_end`` and ``dt`` [s] (required), ``t_transient``
         [s], ``method``, ``device``, ``t0``, ``dtype``, ``strobe_samples``, ...; and
         ``quantity`` (a key of `sweep.explore.model.QUANTITIES`, default: basins for a
-        forced scene, the final well for damping alone, else motion) and ``resolution``.
+        forced scene, the final well for damping alone, else motion; for a system a key
+        of `sweep.explore.systems.system_quantities`, default ``log10:flip_time``) and
+        ``resolution``.
         ``observe``, ``stop_early`` and ``attractors`` are set per map and ignored.
 
     Returns
     -------
     sweep.explore.app.ExplorerApp
+        (`sweep.explore.system_app.SystemExplorerApp` for a system,
+        `~sweep.explore.system_app.NetworkExplorerApp` for a network)
         Displays in a Jupyter notebook (after ``import panel; panel.extension()``, as
         every Panel object); ``.show()`` opens it in a browser from a local
         server, ``.servable()`` marks it for ``panel serve``, ``.serve(port=...)``
@@ -51,6 +60,17 @@ def explore(scene, grid, **run_kwargs):
     sweep.explore.model.InvalidInput
         A ValueError naming the setting sweep's validators refuse.
     """
+    from ..physics.network import SwingNetwork
+    from ..physics.system import System
+
+    if isinstance(scene, SwingNetwork):
+        from .system_app import NetworkExplorerApp
+
+        return NetworkExplorerApp(scene, grid, **run_kwargs)
+    if isinstance(scene, System):
+        from .system_app import SystemExplorerApp
+
+        return SystemExplorerApp(scene, grid, **run_kwargs)
     from .app import ExplorerApp
 
     return ExplorerApp(scene, grid, **run_kwargs)

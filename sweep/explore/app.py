@@ -23,7 +23,7 @@ from functools import partial
 
 import numpy as np
 
-from .model import QUANTITIES, Explorer, InvalidInput, MapResult, Requests, Trajectory
+from .model import Explorer, InvalidInput, MapResult, Requests, Trajectory
 
 try:
     import panel as pn
@@ -100,7 +100,7 @@ class _Session:
 
     def __init__(self, app: ExplorerApp) -> None:
         self.app = app
-        self.explorer = Explorer(app.scene, app.grid, cache=app.cache, **app.kwargs)
+        self.explorer = app.explorer_class(app.scene, app.grid, cache=app.cache, **app.kwargs)
         self.doc = pn.state.curdoc
         self.latest = 0
         self.result: MapResult | None = None
@@ -323,7 +323,7 @@ class _Session:
         self.forward.disabled = not e.can_go_forward()
         self.latest = self.requests.submit(e.state)
         s = e.state
-        self.status.object = (f"computing {QUANTITIES[s.quantity].label} at "
+        self.status.object = (f"computing {e.quantity_info(s.quantity).label} at "
                               f"{s.resolution} x {s.resolution}…")
         self.map_python.object = f"```python\n{e.python_snippet(s)}```"
         self.map_toml.object = f"```toml\n{e.toml_text(s)}```"
@@ -360,7 +360,7 @@ class _Session:
         self.status.object = (f"**{stage}** {nx} x {ny} in {result.seconds:.2f} s"
                               f"{pilot}{more}")
         self.caption.object = f"*{result.description}*"
-        self.map.title.text = f"{QUANTITIES[s.quantity].label}"
+        self.map.title.text = f"{self.explorer.quantity_info(s.quantity).label}"
 
     def _failed(self, request: int, exc: Exception) -> None:
         if request != self.latest:
@@ -426,10 +426,15 @@ class ExplorerApp:
         validated now.
     """
 
+    #: The model and the page of each session (`sweep.explore.system_app`: systems').
+    explorer_class = Explorer
+    session_class = _Session
+
     def __init__(self, scene, grid, **run_kwargs) -> None:
         self.scene, self.grid, self.kwargs = scene, grid, dict(run_kwargs)
         self.cache: OrderedDict = OrderedDict()
-        self.template = Explorer(scene, grid, cache=self.cache, **run_kwargs)  # validates
+        # validates
+        self.template = self.explorer_class(scene, grid, cache=self.cache, **run_kwargs)
         self.warm_seconds: float | None = None
         self.server = None
 
@@ -452,7 +457,7 @@ class ExplorerApp:
     # -- Panel ------------------------------------------------------------------------
     def session(self):
         """A new page (its own explorer and history): what each browser session gets."""
-        return _Session(self).layout
+        return self.session_class(self).layout
 
     def panel(self):
         """The page as a Panel layout (for notebooks and templates)."""

@@ -521,6 +521,10 @@ class Explorer:
         """``{name: label}`` of the quantities that apply to the current scene."""
         return {q.name: q.label for q in QUANTITIES.values() if q.applies(self.state.scene)}
 
+    def quantity_info(self, name: str) -> Quantity:
+        """The `Quantity` named ``name`` (a key of `QUANTITIES`)."""
+        return QUANTITIES[name]
+
     def parameter_controls(self) -> list[Control]:
         """One control per parameter of the scene (pendulum and each effect), with the
         units, long name and bound of its declaration (`sweep.physics.parameters`)."""
@@ -606,7 +610,7 @@ class Explorer:
     def run_kwargs(self, state: State | None = None) -> dict:
         """`sweep.run` keyword arguments of ``state``'s map (without the catalogue)."""
         state = state or self.state
-        q = QUANTITIES[state.quantity]
+        q = self.quantity_info(state.quantity)
         kwargs = dict(t_end=state.t_end, dt=state.dt, t_transient=state.t_transient,
                       method=state.method, observe=q.observe, **dict(state.extra))
         if q.stop_early:
@@ -618,7 +622,7 @@ class Explorer:
     def uses_pilot(self, state: State | None = None) -> bool:
         """Forced basins over the initial state: the attractors are catalogued first."""
         state = state or self.state
-        return QUANTITIES[state.quantity].pilot and \
+        return self.quantity_info(state.quantity).pilot and \
             {state.view.x, state.view.y} <= set(AXES_INITIAL)
 
     def validate(self, state: State, control: str) -> State:
@@ -707,7 +711,7 @@ class Explorer:
                     else:
                         view = View(v.x, value, v.x_range, self._axis_range(state, value))
                     state = dataclasses.replace(state, view=view)
-                elif name in AXES_INITIAL:
+                elif name in dict(state.start):
                     start = tuple((n, float(value) if n == name else v)
                                   for n, v in state.start)
                     if not math.isfinite(float(value)):
@@ -922,7 +926,7 @@ class Explorer:
                          compat="override", combine_attrs="override")
 
     def _image(self, state: State, ds, preview: bool, catalogue) -> MapResult:
-        q = QUANTITIES[state.quantity]
+        q = self.quantity_info(state.quantity)
         v = state.view
         da = q.compute(ds)
         extra = [d for d in da.dims if d not in (v.x, v.y)]
@@ -1047,13 +1051,13 @@ class Explorer:
         state = state or self.state
         pilot = self.grid(self.pilot_state(state)) if self.uses_pilot(state) else None
         return self._python(state, self.grid(state), self.run_kwargs(state),
-                            QUANTITIES[state.quantity], pilot=pilot)
+                            self.quantity_info(state.quantity), pilot=pilot)
 
     def toml_text(self, state: State | None = None) -> str:
         """A run file (`sweep.toml_spec.load_run`) that recomputes ``state``'s map:
         ``sweep run THIS.toml -o map.nc``, then the map named in its first line."""
         state = state or self.state
-        q = QUANTITIES[state.quantity]
+        q = self.quantity_info(state.quantity)
         v = state.view
         n = state.resolution
         axes = {}
@@ -1151,7 +1155,7 @@ class Explorer:
         FigureCanvasAgg(fig)
         ax = fig.add_subplot()
         da = result.da.transpose(v.x, v.y)
-        title = f"{QUANTITIES[result.state.quantity].label}"
+        title = f"{self.quantity_info(result.state.quantity).label}"
         degrees = False
         if result.state.quantity == "basins":
             plot.basins(da, ax=ax, degrees=degrees, title=title)
@@ -1230,6 +1234,8 @@ def _meaning(quantity: str, da, value: float) -> str:
         return "no period found" if k < 0 else f"period {k}"
     if quantity == "inverted":
         return "stays up" if k else "falls"
+    if quantity == "synchronized":  # a swing network (sweep.explore.networks)
+        return {1: "back in the synchronous state", 0: "not synchronous"}.get(k, "failed")
     if quantity == "basins":
         if k < 0:
             return "unresolved"

@@ -1,0 +1,81 @@
+"""The explorer's page for a system with several coordinates: the single pendulum's page
+(`sweep.explore.app`) with the system's model (`sweep.explore.systems.SystemExplorer`),
+its axes' units on the map, and a clicked start's every coordinate and velocity over
+time (``name="trajectory"``) and each coordinate's phase portrait (``name="phase"``).
+"""
+
+from __future__ import annotations
+
+from bokeh.models import ColumnDataSource
+from bokeh.palettes import Category10_10
+
+from .app import ExplorerApp, _Session
+from .networks import NetworkExplorer
+from .systems import SystemExplorer, SystemTrajectory
+
+__all__ = ["NetworkExplorerApp", "SystemExplorerApp"]
+
+
+class _SystemSession(_Session):
+    """One browser session of a system's explorer."""
+
+    def _build(self) -> None:
+        super()._build()
+        positions, velocities = self.explorer.series_names()
+        names = positions + velocities
+        self.series_source = ColumnDataSource({"t": [], **{n: [] for n in names}})
+        for fig in (self.trajectory, self.phase):
+            fig.renderers = []
+            for legend in fig.legend:
+                legend.items = []
+        self.trajectory.yaxis.axis_label = "coordinates [rad], velocities [rad/s]"
+        for k, name in enumerate(names):
+            self.trajectory.line("t", name, source=self.series_source, legend_label=name,
+                                 color=Category10_10[k % 10],
+                                 line_dash="solid" if k < len(positions) else "dashed")
+        self.phase.xaxis.axis_label = "theta_i [rad]"
+        self.phase.yaxis.axis_label = "omega_i [rad/s]"
+        for k, (position, velocity) in enumerate(zip(positions, velocities, strict=True)):
+            self.phase.line(position, velocity, source=self.series_source,
+                            legend_label=f"({position}, {velocity})",
+                            color=Category10_10[k % 10])
+        self._label_axes()
+
+    def _label_axes(self) -> None:
+        from ..plot import units_text
+
+        v = self.explorer.state.view
+        units = self.explorer.axis_units()
+        self.map.xaxis.axis_label = f"{v.x} [{units_text(units.get(v.x, '1'))}]"
+        self.map.yaxis.axis_label = f"{v.y} [{units_text(units.get(v.y, '1'))}]"
+
+    def _apply_view(self) -> None:
+        super()._apply_view()
+        self._label_axes()
+
+    def show_trajectory(self, traj: SystemTrajectory) -> None:
+        v = self.explorer.state.view
+        self.clicked.data = {"x": [traj.point[v.x]], "y": [traj.point[v.y]]}
+        self.series_source.data = {"t": traj.t, **traj.series}
+        where = ", ".join(f"{k} = {val:.6g}" for k, val in traj.point.items())
+        self.trajectory.title.text = f"trajectory from {where}"
+        start = ", ".join(f"{k} = {val:.6g}" for k, val in traj.start.items())
+        self.info.object = (f"**start** {start}  \n**status** {traj.status}  \n"
+                            f"**label** {traj.label}")
+        self.traj_python.object = f"```python\n{traj.python}```"
+        self.traj_toml.object = f"```toml\n{traj.toml}```"
+
+
+class SystemExplorerApp(ExplorerApp):
+    """`ExplorerApp` of a `sweep.DoublePendulum` or `sweep.CoupledPendula` (see
+    `sweep.explore`)."""
+
+    explorer_class = SystemExplorer
+    session_class = _SystemSession
+
+
+class NetworkExplorerApp(ExplorerApp):
+    """`ExplorerApp` of a `sweep.SwingNetwork` (see `sweep.explore`)."""
+
+    explorer_class = NetworkExplorer
+    session_class = _SystemSession

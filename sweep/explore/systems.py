@@ -1,0 +1,503 @@
+"""The explorer's model for systems with several coordinates (`sweep.DoublePendulum`,
+`sweep.CoupledPendula`): `SystemExplorer`, the single pendulum's `Explorer` with what
+depends on the system read from its declaration.
+
+- the quantities are the variables of the system's observables
+  (`sweep.system_observables`: ``final``, ``winding``, ``energy``, ``flip``,
+  ``lyapunov``; every time in seconds also as its log10), not a list per system;
+- the axes are the system's grid axes (every coordinate's initial value and velocity,
+  its parameters, ``damping``);
+- the controls are its declaration's parameters (units, long names, bounds) and the
+  initial values not on the map's axes;
+- a click runs the start with ``save_every`` and gives every coordinate and velocity
+  over time (`SystemTrajectory`).
+
+Zoom, history, bands, cancellation, caching, exports and validation (`sweep.diskspace.
+layout`, the checks `sweep.run` makes) are the `Explorer`'s own.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+from collections import OrderedDict
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import check_count
+from ..diskspace import layout as run_layout
+from ..grid import Grid
+from ..kernels import Status
+from ..methods import METHODS
+from ..physics.coupled import CoupledPendula
+from ..physics.double import DoublePendulum
+from ..physics.network import SwingNetwork
+from ..physics.system import SYSTEM_DAMPING, System, initial_parameters
+from ..system_observables import SYSTEM_OBSERVABLES, variables
+from .model import (
+    PASSTHROUGH,
+    RESOLUTION_RANGE,
+    SET_BY_EXPLORER,
+    TRAJECTORY_SAMPLES,
+    Control,
+    Explorer,
+    InvalidInput,
+    MapResult,
+    Quantity,
+    State,
+    View,
+    _toml_value,
+)
+
+__all__ = ["SystemExplorer", "SystemTrajectory", "explorer_for", "system_quantities"]
+
+
+def _always(system) -> bool:
+    return True
+
+
+def _log10(ds, name: str):
+    da = np.log10(ds[name].where(ds[name] > 0))
+    da.name = f"log10_{name}"
+    da.attrs = {"units": "1", "long_name": f"log10 of {name} [{ds[name].attrs.get('units', '')}]"
+                f": {ds[name].attrs.get('long_name', '')}"}
+    return da
+
+
+def system_quantities(system: System) -> dict[str, Quantity]:
+    """Every map of ``system``: one per variable of each of its observables
+    (`sweep.system_observables.variables`, in their order), a time [s] also as its
+    log10 (first, as ``log10:<name>``: flip times span decades).
+
+    Returns
+    -------
+    dict of str to sweep.explore.model.Quantity
+        Keys ``var:<variable>`` (``var:theta1_final``) and ``log10:<variable>``.
+    """
+    coordinates = system.declaration.coordinates
+    out: dict[str, Quantity] = {}
+    for observable in SYSTEM_OBSERVABLES.values():
+        for name, units, _ in variables(observable.name, coordinates, system.energy_units):
+            if units == "s":
+                out[f"log10:{name}"] = Quantity(
+                    f"log10:{name}", f"{observable.name}: log10 {name} [s]",
+                    (observable.name,), observable.stops, _always,
+                    lambda ds, name=name: _log10(ds, name), False,
+                    expression=f'np.log10(ds["{name}"])')
+            out[f"var:{name}"] = Quantity(
+                f"var:{name}", f"{observable.name}: {name}", (observable.name,),
+                observable.stops, _always, lambda ds, name=name: ds[name],
+                observable.name == "winding", expression=f'ds["{name}"]')
+    return out
+
+
+def default_system_quantity(quantities: dict[str, Quantity]) -> str:
+    """The time to the first flip (log10) where offered, else the first quantity."""
+    return "log10:flip_time" if "log10:flip_time" in quantities else next(iter(quantities))
+
+
+@dataclass
+class SystemTrajectory:
+    """One start's trajectory of a system.
+
+    Attributes
+    ----------
+    start : dict of str to float
+        Every initial value (``theta1_0`` [rad], ``omega1_0`` [rad/s], ...).
+    point : dict
+        The clicked pixel's axis values (``{x: value, y: value}``).
+    t : ndarray
+        Sampled time [s].
+    series : dict of str to ndarray
+        Every coordinate (unwrapped), then every velocity, over ``t`` (``theta1``,
+        ``theta2``, ``omega1``, ``omega2``).
+    units : dict of str to str
+        UDUNITS units of each series.
+    status : str
+        ``"ok"`` or the failure and its meaning.
+    label : str
+        The map's value at the pixel.
+    python, toml : str
+        Code and run file that reproduce this trajectory.
+    """
+
+    start: dict
+    point: dict
+    t: np.ndarray
+    series: dict
+    units: dict
+    status: str
+    label: str
+    python: str
+    toml: str
+
+
+def _constructor(system: System) -> dict:
+    """``system``'s constructor arguments except ``effects``."""
+    return {f.name: (value.tolist() if isinstance(value, np.ndarray) else value)
+            for f in dataclasses.fields(system) if f.name != "effects"
+            for value in (getattr(system, f.name),)}
+
+
+class SystemExplorer(Explorer):
+    """`Explorer` of a system with several coordinates (see the module docstring).
+
+    Parameters
+    ----------
+    system : sweep.DoublePendulum or sweep.CoupledPendula
+    grid : sweep.Grid
+        Its first two axes with more than one value are the map's x and y (else the
+        first two angles' initial values); every axis must be one of the system's
+        (`axes`). One-value axes set the start or a parameter.
+    quantity : str, optional
+        A key of `system_quantities` (default: ``log10:flip_time``).
+    resolution, cache, **run_kwargs
+        As `Explorer`.
+
+    Raises
+    ------
+    InvalidInput
+        An axis the system does not have, or a value sweep's validators refuse.
+    TypeError
+        Not a system this explorer takes, or a keyword `sweep.run` does not take.
+    """
+
+    def __init__(self, system: System, grid: Grid, *, quantity: str | None = None,
+                 resolution: int = 400, cache: OrderedDict | None = None,
+                 **run_kwargs) -> None:
+        if not isinstance(system, self.takes):
+            raise TypeError(f"{type(self).__name__} takes a {self.takes.__name__}, got "
+                            f"{type(system).__name__}; sweep.explore takes a sweep.Scene, "
+                            "a sweep.DoublePendulum, a sweep.CoupledPendula or a "
+                            "sweep.SwingNetwork")
+        if not isinstance(grid, Grid):
+            raise TypeError(f"grid must be a sweep.Grid, got {grid!r}")
+        known = ("t_end", "dt", "t_transient", "method", "device") + PASSTHROUGH
+        unknown = sorted(set(run_kwargs) - set(known) - set(SET_BY_EXPLORER))
+        if unknown:
+            raise TypeError(f"explore: unknown keyword(s) {', '.join(unknown)}; accepted: "
+                            f"{', '.join(known)} (and sweep.run's {', '.join(SET_BY_EXPLORER)},"
+                            " which the explorer sets per map)")
+        for key in ("t_end", "dt"):
+            if key not in run_kwargs:
+                raise TypeError(f"explore: missing run keyword {key!r} (s); accepted: the "
+                                "keywords of sweep.run, t_end and dt required")
+        self._registry = self._quantities_of(system)
+        initial = self._start_names(system)
+        offered = self._axes_of(system)
+        for name in grid.dims:
+            if name not in offered and name not in initial:
+                raise InvalidInput("grid", f"grid axis {name!r} is not an axis of "
+                                   f"{type(system).__name__}; accepted: "
+                                   f"{', '.join(dict.fromkeys((*offered, *initial)))}")
+        varying = [name for name in grid.dims if grid.axes[name].size > 1]
+        names = varying + [n for n in self._preferred_axes(system) if n not in varying]
+        x, y = names[0], names[1]
+        ranges = {}
+        for name in (x, y):
+            values = np.asarray(grid.axes[name], dtype=float) if name in grid.axes else None
+            if values is None or values.size < 2:
+                ranges[name] = self._default_range(system, name)
+            else:
+                lo, hi = float(values.min()), float(values.max())
+                half = 0.5 * (hi - lo) / (values.size - 1)
+                ranges[name] = (lo - half, hi + half)
+        start = tuple((n, float(grid.axes[n][0]) if n in grid.axes and
+                       grid.axes[n].size == 1 else 0.0) for n in initial)
+        fixed = {n: float(v[0]) for n, v in grid.axes.items()
+                 if n not in (x, y) and n not in initial}
+        try:
+            if fixed:
+                system = self._with_parameters(system, fixed)
+        except (ValueError, TypeError) as exc:
+            raise InvalidInput("grid", " ".join(str(exc).split())) from None
+        chosen = quantity if quantity is not None else default_system_quantity(self._registry)
+        extra = tuple((k, run_kwargs[k]) for k in PASSTHROUGH if k in run_kwargs)
+        state = State(scene=system, view=View(x, y, ranges[x], ranges[y]), quantity=chosen,
+                      t_end=run_kwargs["t_end"], dt=run_kwargs["dt"],
+                      t_transient=run_kwargs.get("t_transient", 0.0),
+                      method=run_kwargs.get("method", "rk4"), resolution=resolution,
+                      start=start, extra=extra, device=run_kwargs.get("device", "cpu"))
+        self.validate(state, "explore")
+        self.state = state
+        self.home = state.view
+        self._history = [state.view]
+        self._position = 0
+        self._cache = OrderedDict() if cache is None else cache
+        self._catalogues = OrderedDict()
+        from .model import COMPUTE_LOCK
+
+        self._lock = COMPUTE_LOCK
+
+    #: The systems this explorer takes.
+    takes = (DoublePendulum, CoupledPendula)
+
+    # -- what the declaration gives ------------------------------------------------
+    @staticmethod
+    def _quantities_of(system: System) -> dict[str, Quantity]:
+        return system_quantities(system)
+
+    @staticmethod
+    def _start_names(system: System) -> list[str]:
+        """The axes of a start (set by controls where they are not on the map)."""
+        return [p.axis for p in initial_parameters(system.declaration)]
+
+    @staticmethod
+    def _preferred_axes(system: System) -> list[str]:
+        """The map's axes where the grid does not vary two: the first two angles."""
+        angles = [f"{c.name}_0" for c in system.declaration.coordinates]
+        return angles + [p.axis for p in initial_parameters(system.declaration)]
+
+    @staticmethod
+    def _axes_of(system: System) -> tuple[str, ...]:
+        return system.columns(True)
+
+    def series_names(self) -> tuple[list[str], list[str]]:
+        """Names of the positions and of the velocities a click gives over time."""
+        coordinates = self.state.scene.declaration.coordinates
+        return [c.name for c in coordinates], [c.velocity for c in coordinates]
+
+    def axis_units(self) -> dict[str, str]:
+        """UDUNITS units of every axis."""
+        system = self.state.scene
+        units = {p.axis: p.units for p in initial_parameters(system.declaration)}
+        units.update({p.axis: p.units for p in system.declaration.parameters})
+        units["damping"] = SYSTEM_DAMPING.units
+        return units
+
+    def axes(self) -> tuple[str, ...]:
+        """The system's grid axes: initial values and velocities, its parameters and
+        the damping rate (`sweep.physics.system.system_columns`)."""
+        return self._axes_of(self.state.scene)
+
+    def quantities(self) -> dict[str, str]:
+        """``{name: label}`` of `system_quantities`."""
+        return {q.name: q.label for q in self._registry.values()}
+
+    def quantity_info(self, name: str) -> Quantity:
+        return self._registry[name]
+
+    @staticmethod
+    def _default_range(system: System, name: str) -> tuple[float, float]:
+        initial = {p.axis: p for p in initial_parameters(system.declaration)}
+        if name in initial:
+            coordinate = next(c for c in system.declaration.coordinates
+                              if name in (f"{c.name}_0", f"{c.velocity}_0"))
+            if name == f"{coordinate.name}_0":
+                return (-math.pi, math.pi) if coordinate.angular else (-1.0, 1.0)
+            gravity = getattr(system, "gravity", None)
+            length = getattr(system, "length1", getattr(system, "length", None))
+            w = math.sqrt(gravity / length) if gravity and length else 1.0
+            return (-2.0 * w, 2.0 * w)
+        value = system.parameters().get(name, 1.0)
+        return (0.5 * value, 1.5 * value) if value else (0.0, 1.0)
+
+    def parameter_controls(self) -> list[Control]:
+        """One control per parameter of the system's declaration and the damping rate
+        (units, long name, bound), then the initial values not on the map's axes."""
+        system, shown = self.state.scene, (self.state.view.x, self.state.view.y)
+        values = system.parameters()
+        out = []
+        for p in tuple(system.declaration.parameters) + (SYSTEM_DAMPING,):
+            bound = ""
+            if p.minimum is not None:
+                bound = f" ({'>' if p.strict else '>='} {p.minimum:g})"
+            note = " (on the map's axis)" if p.axis in shown else ""
+            out.append(Control(p.axis, f"{p.axis} [{p.unit_text}]", "float",
+                               float(values[p.axis]), minimum=p.minimum, strict=p.strict,
+                               help=f"{p.long_name}{bound}{note}", group="scene"))
+        from ..plot import units_text
+
+        info = {p.axis: p for p in initial_parameters(system.declaration)}
+        for name, value in self.state.start:
+            if name in shown:
+                continue
+            p = info[name]
+            out.append(Control(name, f"{name} [{units_text(p.units)}]", "float", float(value),
+                               help=f"{p.long_name} (the start where it is not an axis)",
+                               group="scene"))
+        return out
+
+    def run_controls(self) -> list[Control]:
+        """t_end, dt, t_transient, method (the fixed-step explicit ones a system takes)
+        and resolution."""
+        s = self.state
+        low, high = RESOLUTION_RANGE
+        methods = tuple(n for n, m in METHODS.items() if not m.adaptive and m.kind == "explicit")
+        return [
+            Control("t_end", "t_end [s]", "float", float(s.t_end), minimum=0.0, strict=True,
+                    help="final time; t_end - t0 a whole number of steps dt", group="run"),
+            Control("dt", "dt [s]", "float", float(s.dt), minimum=0.0, strict=True,
+                    help="time step", group="run"),
+            Control("t_transient", "t_transient [s]", "float", float(s.t_transient),
+                    minimum=0.0, help="lyapunov_max starts after it", group="run"),
+            Control("method", "method", "choice", s.method, choices=methods,
+                    help="fixed-step explicit integrator (what a system takes)", group="run"),
+            Control("resolution", "resolution [pixels per axis]", "int", int(s.resolution),
+                    minimum=low, help=f"an integer from {low} to {high}", group="run"),
+        ]
+
+    @staticmethod
+    def _with_parameters(system: System, values: dict[str, float]) -> System:
+        """``system`` with parameter values replaced (validated by its constructor)."""
+        from ..physics.effects import Damping
+
+        changes = {}
+        names = [p.axis for p in system.declaration.parameters]
+        for name, value in values.items():
+            if name == "damping":
+                changes["effects"] = (Damping(value),) if value else ()
+            elif name in names:
+                changes[name] = value
+            else:
+                raise ValueError(f"{name}: not a parameter of {type(system).__name__}; "
+                                 f"accepted: {', '.join(names + ['damping'])}")
+        return dataclasses.replace(system, **changes)
+
+    # -- validation and updates ------------------------------------------------------
+    def validate(self, state: State, control: str) -> State:
+        """As `Explorer.validate`, with the system's quantities."""
+        try:
+            if state.quantity not in self._registry:
+                raise ValueError(f"quantity {state.quantity!r} is not a map of "
+                                 f"{type(state.scene).__name__}; accepted: "
+                                 f"{', '.join(self._registry)}")
+            v = state.view
+            if v.x == v.y:
+                raise ValueError(f"x and y are both {v.x!r}; accepted: two different axes")
+            for name, (lo, hi) in ((v.x, v.x_range), (v.y, v.y_range)):
+                if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                    raise ValueError(f"range of {name} must be finite with start < end, got "
+                                     f"({lo!r}, {hi!r})")
+            low, high = RESOLUTION_RANGE
+            check_count("resolution", state.resolution, minimum=low, maximum=high,
+                        accepted=f"an integer from {low} to {high} (pixels per axis)")
+            run_layout(state.scene, self.grid(state), **self.run_kwargs(state))
+        except InvalidInput:
+            raise
+        except (ValueError, TypeError) as exc:
+            raise InvalidInput(control, " ".join(str(exc).split())) from None
+        return state
+
+    def update(self, **changes) -> State:
+        """`Explorer.update` (``model`` is the single pendulum's and is refused)."""
+        if "model" in changes:
+            raise InvalidInput("model", f"model: {type(self.state.scene).__name__} has no "
+                               "model choice; accepted: its parameters, "
+                               f"{', '.join(c.name for c in self.parameter_controls())}")
+        return super().update(**changes)
+
+    # -- one trajectory -----------------------------------------------------------------
+    def trajectory(self, x: float, y: float, result: MapResult | None = None,
+                   state: State | None = None) -> SystemTrajectory:
+        """The trajectory of the map's start nearest ``(x, y)`` (snapped to the pixel
+        centre of ``result`` when given): every coordinate and velocity over time, from
+        one `sweep.run` of the system with ``save_every`` (at most `TRAJECTORY_SAMPLES`
+        samples)."""
+        state = state or (result.state if result is not None else self.state)
+        v = state.view
+        label = ""
+        try:
+            x, y = float(x), float(y)
+        except (TypeError, ValueError):
+            raise InvalidInput("view", f"a start is two numbers, got ({x!r}, {y!r})") from None
+        if result is not None:
+            row, col = self.value_at(result, x, y)
+            x, y = float(result.x[col]), float(result.y[row])
+            label = self.label_at(result, row, col)
+        axes = {name: np.array([value]) for name, value in state.start}
+        axes[v.x] = np.array([x])
+        axes[v.y] = np.array([y])
+        kwargs = dict(t_end=state.t_end, dt=state.dt, t_transient=state.t_transient,
+                      method=state.method, **dict(state.extra))
+        steps = int(round((state.t_end - kwargs.get("t0", 0.0)) / state.dt))  # noqa: RUF046 - NumPy 1.x
+        kwargs["save_every"] = max(1, math.ceil(steps / TRAJECTORY_SAMPLES))
+        kwargs["observe"] = self.trajectory_observe
+        if state.device != "cpu":
+            kwargs["device"] = state.device
+        with self._lock, warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            ds = self._run(state, Grid(**axes), kwargs)
+        one = {d: 0 for d in ds.status.dims}
+        status = Status(int(ds.status.isel(one)))
+        status_text = "ok" if status == Status.OK else f"{status.name.lower()}: {status.message}"
+        series, units = self._series(ds, one)
+        grid = Grid(**axes)
+        return SystemTrajectory(
+            start={n: float(axes[n][0]) for n, _ in state.start}, point={v.x: x, v.y: y},
+            t=np.asarray(ds.time.values), series=series, units=units,
+            status=status_text, label=label or self._end_label(ds, one),
+            python=self._python(state, grid, kwargs, None, trajectory=True),
+            toml=self._toml(state, axes, kwargs, pilot=False,
+                            comment=f"one trajectory of the explorer's map, from "
+                                    f"{v.x} = {x!r}, {v.y} = {y!r}"))
+
+    #: What a click's run observes besides ``save_every`` (`_end_label` reads it).
+    trajectory_observe = ("final", "winding")
+
+    def _series(self, ds, one: dict) -> tuple[dict, dict]:
+        """``(series, units)`` of a click's run: every coordinate, then every velocity."""
+        positions, velocities = self.series_names()
+        names = positions + velocities
+        return ({n: np.asarray(ds[n].isel(one).values) for n in names},
+                {n: str(ds[n].attrs.get("units", "")) for n in names})
+
+    def _end_label(self, ds, one: dict) -> str:
+        """What a click's run ended in, where no map was clicked: the windings."""
+        return ", ".join(f"winding_{c.name} = {int(ds[f'winding_{c.name}'].isel(one))}"
+                         for c in self.state.scene.declaration.coordinates if c.angular)
+
+    # -- reproduction -------------------------------------------------------------------
+    @staticmethod
+    def _python(state: State, grid: Grid, kwargs: dict, quantity: Quantity | None, *,
+                pilot: Grid | None = None, trajectory: bool = False) -> str:
+        from .model import _grid_text
+
+        system = state.scene
+        arguments = ", ".join(f"{k}={v!r}" for k, v in _constructor(system).items())
+        if system.effects:
+            arguments += f", effects=(sweep.Damping({system.damping!r}),)"
+        lines = ["import numpy as np", "import sweep"]
+        if quantity is not None and "maps." in quantity.expression:
+            lines.append("from sweep import maps")
+        lines += ["",
+                 f"system = sweep.{type(system).__name__}({arguments})",
+                 f"grid = {_grid_text(grid)}",
+                 f"kwargs = dict({', '.join(f'{k}={v!r}' for k, v in kwargs.items())})",
+                 "ds = sweep.run(system, grid, **kwargs)"]
+        if trajectory:
+            lines.append("# every coordinate and velocity over ds.time (save_every)")
+        elif quantity is not None:
+            lines.append(f"image = {quantity.expression}")
+        return "\n".join(lines) + "\n"
+
+    @staticmethod
+    def _toml(state: State, axes: dict, kwargs: dict, *, pilot: bool, comment: str) -> str:
+        system = state.scene
+        out = [f"# {comment}", "# written by sweep explore; run: sweep run THIS.toml -o OUT.nc",
+               "", "[system]", f"kind = {_toml_value(type(system).__name__)}"]
+        out += [f"{k} = {_toml_value(v)}" for k, v in _constructor(system).items()]
+        if system.effects:
+            out += ["", "[system.damping]", f"coefficient = {_toml_value(system.damping)}"]
+        out += ["", "[grid]"]
+        for name, value in axes.items():
+            if isinstance(value, np.ndarray):
+                value = float(value[0]) if value.size == 1 else [float(x) for x in value]
+            out.append(f"{name} = {_toml_value(value)}")
+        out += ["", "[run]"]
+        out += [f"{key} = {_toml_value(value)}" for key, value in kwargs.items()]
+        return "\n".join(out) + "\n"
+
+
+def explorer_for(target, grid, **kwargs) -> Explorer:
+    """`SystemExplorer` for a system with several coordinates, else `Explorer` (the
+    single pendulum's `sweep.Scene`)."""
+    if isinstance(target, SwingNetwork):
+        from .networks import NetworkExplorer
+
+        return NetworkExplorer(target, grid, **kwargs)
+    if isinstance(target, System):
+        return SystemExplorer(target, grid, **kwargs)
+    return Explorer(target, grid, **kwargs)

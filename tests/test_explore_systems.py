@@ -1,0 +1,298 @@
+"""The explorer's model for systems with several coordinates (sweep.explore.systems; no
+browser): quantities from the system's observables, maps equal to sweep.run cell by
+cell, controls from the declaration, clicked trajectories of every coordinate, refused
+input, and the snippets that reproduce a map."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import sweep
+from sweep.explore.model import InvalidInput, centres
+from sweep.explore.networks import NetworkExplorer
+from sweep.explore.systems import SystemExplorer, SystemTrajectory, explorer_for
+from sweep.physics.system import SYSTEM_DAMPING
+from sweep.system_observables import SYSTEM_OBSERVABLES, variables
+from sweep.toml_spec import load_run
+
+N = 12  # pixels per axis: small maps, the code paths are those of 400 x 400
+RUN = dict(t_end=3.0, dt=0.01)  # 300 steps: flips and chaos already differ between starts
+
+
+def double(system=None, **extra):
+    system = system or sweep.DoublePendulum()
+    grid = sweep.Grid(theta1_0=np.linspace(-3, 3, N), theta2_0=np.linspace(-3, 3, N))
+    return SystemExplorer(system, grid, resolution=N, **RUN, **extra)
+
+
+def reference(e, state=None, **kwargs):
+    """`sweep.run` of ``state``'s window, written out by hand (not with the explorer's
+    `grid`): rows y, columns x, the start's other values as one-value axes."""
+    s = state or e.state
+    v = s.view
+    axes = {v.y: centres(*v.y_range, s.resolution), v.x: centres(*v.x_range, s.resolution)}
+    axes.update({n: [value] for n, value in s.start if n not in axes})
+    return sweep.run(s.scene, sweep.Grid(**axes), t_end=s.t_end, dt=s.dt, progress=False,
+                     **kwargs)
+
+
+def plane(da, y="theta2_0", x="theta1_0"):
+    """``da`` as the map's (y, x) array (one-value axes dropped)."""
+    return da.squeeze([d for d in da.dims if d not in (x, y)]).transpose(y, x).values
+
+
+def test_quantities_are_the_variables_of_the_system_observables():
+    e = double()
+    expected = {f"var:{name}" for o in SYSTEM_OBSERVABLES
+                for name, _, _ in variables(o, sweep.DoublePendulum().declaration.coordinates,
+                                            "J")}
+    assert set(e.quantities()) == expected | {"log10:flip_time"}
+    assert {"var:theta1_final", "var:omega2_final", "var:energy_final", "var:lyapunov_max",
+            "var:winding_theta2", "var:flip_time"} <= set(e.quantities())
+    assert e.state.quantity == "log10:flip_time"  # the double pendulum's best known map
+    # three pendula: the third coordinate's variables, from the same observables
+    three = SystemExplorer(sweep.CoupledPendula(3), sweep.Grid(
+        theta1_0=np.linspace(-1, 1, N), theta3_0=np.linspace(-1, 1, N)), resolution=N, **RUN)
+    assert {"var:theta3_final", "var:omega3_final", "var:winding_theta3"} <= \
+        set(three.quantities())
+    assert (three.state.view.x, three.state.view.y) == ("theta1_0", "theta3_0")
+
+
+@pytest.mark.parametrize("quantity, observe, stop_early", [
+    ("log10:flip_time", ("flip",), True),
+    ("var:theta2_final", ("final",), False),
+    ("var:energy_final", ("energy",), False),
+])
+def test_a_zoomed_map_is_sweep_run_of_the_window_cell_by_cell(quantity, observe, stop_early):
+    e = double()
+    e.update(quantity=quantity)
+    e.zoom((-1.0, 2.5), (0.5, 2.9))
+    result = e.compute()
+    ds = reference(e, observe=observe, stop_early=stop_early)
+    name = quantity.split(":")[1]
+    expected = plane(ds[name])
+    if quantity.startswith("log10:"):
+        expected = np.log10(expected)
+    assert result.values.shape == (N, N)
+    np.testing.assert_array_equal(result.x, centres(-1.0, 2.5, N))
+    # the same kernel on the same floats: equal to the bit (NaN where no arm flipped)
+    np.testing.assert_array_equal(result.values, expected)
+    assert np.isfinite(result.values).any()
+
+
+def test_the_map_over_a_parameter_axis():
+    e = double()
+    e.update(x="mass2", quantity="var:theta1_final")
+    v = e.state.view
+    assert (v.x, v.x_range) == ("mass2", (0.5, 1.5))  # the default: value x (1/2, 3/2)
+    result = e.compute()
+    ds = reference(e, observe=("final",))
+    np.testing.assert_array_equal(result.values,
+                                  plane(ds.theta1_final, v.y, "mass2"))
+
+
+def test_controls_are_the_declaration_parameters_with_units_and_bounds():
+    e = double()
+    controls = {c.name: c for c in e.parameter_controls()}
+    declared = sweep.DoublePendulum().declaration.parameters
+    assert [c for c in controls if c not in ("omega1_0", "omega2_0")] == \
+        [p.axis for p in declared] + ["damping"]
+    for p in (*declared, SYSTEM_DAMPING):
+        c = controls[p.axis]
+        assert (c.minimum, c.strict) == (p.minimum, p.strict)
+        assert c.label == f"{p.axis} [{p.unit_text}]"
+    assert controls["mass2"].label == "mass2 [kg]" and controls["mass2"].value == 1.0
+    # the starts not on the map's axes, in their units
+    assert controls["omega1_0"].label == "omega1_0 [rad/s]"
+    assert "theta1_0" not in controls  # on the map's axis
+    assert "model" not in {c.name for c in e.run_controls()}
+
+
+def test_a_parameter_change_recomputes_the_map_of_the_new_system():
+    e = double()
+    e.update(quantity="var:theta1_final")
+    before = e.compute()
+    e.update(mass2=2.5)
+    assert e.state.scene == sweep.DoublePendulum(mass2=2.5)
+    after = e.compute()
+    assert not np.array_equal(after.values, before.values, equal_nan=True)
+    ds = reference(e, observe=("final",))
+    np.testing.assert_array_equal(after.values,
+                                  plane(ds.theta1_final))
+    # damping from its control: the energy falls
+    e.update(quantity="var:energy_final", damping=0.5)
+    assert e.state.scene.damping == 0.5
+    damped = e.compute().values
+    e.update(damping=0.0)
+    assert e.state.scene.effects == ()
+    free = e.compute().values
+    assert (damped < free).all()
+    # a start value from its control
+    e.update(omega1_0=1.5)
+    assert dict(e.state.start)["omega1_0"] == 1.5
+
+
+def test_a_click_gives_every_coordinate_of_that_start_over_time():
+    e = double()
+    e.update(quantity="var:theta2_final")
+    result = e.compute()
+    traj = e.trajectory(0.9, -1.2, result)
+    assert isinstance(traj, SystemTrajectory)
+    row, col = e.value_at(result, 0.9, -1.2)
+    x, y = result.x[col], result.y[row]
+    assert traj.point == {"theta1_0": x, "theta2_0": y}
+    assert traj.start == {"theta1_0": x, "theta2_0": y, "omega1_0": 0.0, "omega2_0": 0.0}
+    assert list(traj.series) == ["theta1", "theta2", "omega1", "omega2"]
+    assert traj.units == {"theta1": "rad", "theta2": "rad", "omega1": "rad s-1",
+                          "omega2": "rad s-1"}
+    ds = sweep.run(sweep.DoublePendulum(), sweep.Grid(theta1_0=[x], theta2_0=[y]),
+                   save_every=1, observe=("final",), progress=False, **RUN)
+    np.testing.assert_array_equal(traj.t, ds.time.values)
+    for name in traj.series:
+        np.testing.assert_array_equal(traj.series[name], ds[name].values.ravel())
+    # the clicked pixel's map value is that trajectory's end
+    assert traj.series["theta2"][-1] == result.values[row, col]
+    assert traj.status == "ok" and "theta2_final" in traj.label
+    assert "sweep.DoublePendulum(" in traj.python and "[system]" in traj.toml
+
+
+def test_the_run_file_and_python_reproduce_the_map(tmp_path):
+    e = double(sweep.DoublePendulum(mass1=2.0, effects=(sweep.Damping(0.1),)))
+    e.zoom((0.0, 2.0), (-2.0, 0.0))
+    result = e.compute()
+    path = tmp_path / "map.toml"
+    path.write_text(e.toml_text())
+    system, grid, kwargs = load_run(path, {})
+    assert system == e.state.scene
+    ds = sweep.run(system, grid, progress=False, **kwargs)
+    np.testing.assert_array_equal(np.log10(plane(ds.flip_time)),
+                                  result.values)
+    scope = {}
+    exec(e.python_snippet(), scope)  # the snippet the page shows
+    np.testing.assert_array_equal(plane(scope["image"]),
+                                  result.values)
+
+
+def test_explore_and_the_command_line_take_a_system(monkeypatch, capsys):
+    pytest.importorskip("panel")
+    from sweep.cli import main
+    from sweep.explore import app as app_module
+    from sweep.explore.system_app import NetworkExplorerApp, SystemExplorerApp
+
+    opened = []
+    monkeypatch.setattr(app_module, "main_serve",
+                        lambda app, **kwargs: opened.append(app) or 0)
+    assert main(["explore", "examples/double_pendulum.toml", "--no-browser"]) == 0
+    (app,) = opened
+    assert isinstance(app, SystemExplorerApp)
+    s = app.template.state
+    assert (s.view.x, s.view.y, s.quantity) == ("theta1_0", "theta2_0", "log10:flip_time")
+    assert isinstance(sweep.explore(sweep.CoupledPendula(2), sweep.Grid(
+        theta1_0=np.linspace(-1, 1, N), theta2_0=np.linspace(-1, 1, N)), **RUN),
+        SystemExplorerApp)
+    network = sweep.SwingNetwork([(0, 1)], power=[1.0, -1.0], damping=0.1, coupling=4.0)
+    assert isinstance(sweep.explore(network, sweep.Grid(delta_theta=[0.0, 1.0],
+                                                        delta_omega=[0.0, 1.0]), **RUN),
+                      NetworkExplorerApp)
+
+
+@pytest.mark.parametrize("make, words", [
+    (lambda: double().update(x="theta0"), ["theta0", "theta1_0"]),
+    (lambda: double().update(mass1=-1.0), ["mass1", "-1.0"]),
+    (lambda: double().update(quantity="well"), ["well", "var:theta1_final"]),
+    (lambda: double().update(model="linear"), ["model", "mass1"]),
+    (lambda: double().update(method="rk45"), ["rk45", "rk4"]),
+    (lambda: SystemExplorer(sweep.DoublePendulum(), sweep.Grid(
+        theta0=np.linspace(-1, 1, N), theta2_0=np.linspace(-1, 1, N)), **RUN),
+     ["theta0", "DoublePendulum", "theta1_0"]),
+    (lambda: SystemExplorer(sweep.DoublePendulum(), sweep.Grid(
+        theta1_0=np.linspace(-1, 1, N), theta3_0=np.linspace(-1, 1, N)), **RUN),
+     ["theta3_0", "theta2_0"]),
+    (lambda: SystemExplorer(sweep.DoublePendulum(), sweep.Grid(
+        theta1_0=np.linspace(-1, 1, N), theta2_0=np.linspace(-1, 1, N), theta0=[0.5]),
+        **RUN), ["theta0", "omega1_0", "mass1"]),  # a one-value axis: every axis accepted
+])
+def test_bad_input_is_refused_naming_the_value_and_what_is_accepted(make, words):
+    with pytest.raises(InvalidInput) as info:
+        make()
+    for word in words:
+        assert word in str(info.value)
+
+
+# ------------------------------------------------------------------ swing networks
+def network_explorer(**extra):
+    """The five-node ring with a dead end of docs/guide/systems.md, node 4 perturbed."""
+    network = sweep.SwingNetwork([(0, 1), (1, 2), (2, 3), (3, 0), (0, 4)],
+                                 power=[1, -1, 1, -1, 0], damping=0.1, coupling=8.0)
+    grid = sweep.Grid(perturbed_node=[4], delta_theta=np.linspace(-np.pi, np.pi, N),
+                      delta_omega=np.linspace(-15, 15, N))
+    return explorer_for(network, grid, resolution=N, t_end=20.0, dt=0.01, **extra)
+
+
+def test_a_network_map_is_sweep_run_of_one_node_perturbed(tmp_path):
+    e = network_explorer()
+    assert isinstance(e, NetworkExplorer)
+    # the per-run variables of the network's observables, and the synchronized map
+    assert set(e.quantities()) == {"var:frequency_spread", "var:order_parameter",
+                                   "synchronized"}
+    s = e.state
+    assert (s.view.x, s.view.y, s.quantity) == ("delta_theta", "delta_omega", "synchronized")
+    assert dict(s.start)["perturbed_node"] == 4
+    result = e.compute()
+    ds = reference(e, observe=("synchrony",))
+    expected = plane(sweep.maps.synchronized(ds), "delta_omega", "delta_theta")
+    np.testing.assert_array_equal(result.values, expected)
+    assert set(np.unique(result.values)) == {0, 1}  # this window has both
+    # the run file reproduces it
+    path = tmp_path / "network.toml"
+    path.write_text(e.toml_text())
+    network, grid, kwargs = load_run(path, {})
+    again = sweep.maps.synchronized(sweep.run(network, grid, progress=False, **kwargs))
+    np.testing.assert_array_equal(plane(again, "delta_omega", "delta_theta"), result.values)
+
+
+def test_network_controls_change_the_map_and_a_click_gives_every_node():
+    e = network_explorer()
+    controls = {c.name: c for c in e.parameter_controls()}
+    assert list(controls) == ["damping", "coupling", "perturbed_node"]
+    assert controls["coupling"].label == "coupling [1/s^2]" and controls["coupling"].strict
+    e.update(quantity="var:frequency_spread")
+    before = e.compute().values
+    e.update(perturbed_node=1)
+    assert e.state.scene.coupling == 8.0 and dict(e.state.start)["perturbed_node"] == 1
+    other_node = e.compute().values
+    assert not np.array_equal(other_node, before)
+    e.update(coupling=6.0)
+    assert e.state.scene.coupling == 6.0
+    weaker = e.compute()
+    assert not np.array_equal(weaker.values, other_node)
+    np.testing.assert_array_equal(weaker.values, plane(reference(
+        e, observe=("synchrony",)).frequency_spread, "delta_omega", "delta_theta"))
+    traj = e.trajectory(1.0, 5.0, weaker)
+    row, col = e.value_at(weaker, 1.0, 5.0)
+    assert list(traj.series) == [f"theta_{k}" for k in range(5)] + \
+        [f"omega_{k}" for k in range(5)]
+    ds = sweep.run(e.state.scene, sweep.Grid(perturbed_node=[1], delta_theta=[weaker.x[col]],
+                                             delta_omega=[weaker.y[row]]),
+                   t_end=20.0, dt=0.01, save_every=1,  # the explorer keeps all 2001 samples
+                   observe=("synchrony",), progress=False)
+    for k in range(5):
+        np.testing.assert_array_equal(traj.series[f"theta_{k}"],
+                                      ds.theta.isel(node=k).values.ravel())
+    # the map's value at the pixel is the frequency spread at that run's end
+    assert np.abs([traj.series[f"omega_{k}"][-1] for k in range(5)]).max() == \
+        weaker.values[row, col]
+
+
+@pytest.mark.parametrize("change, words", [
+    (dict(perturbed_node=7), ["perturbed_node", "7", "0 to 4"]),
+    (dict(coupling=-1.0), ["coupling", "-1.0", "> 0"]),
+    (dict(x="theta1_0"), ["theta1_0", "delta_theta"]),
+])
+def test_bad_network_input_is_refused(change, words):
+    e = network_explorer()
+    with pytest.raises(InvalidInput) as info:
+        e.update(**change)
+    for word in words:
+        assert word in str(info.value)

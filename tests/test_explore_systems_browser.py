@@ -1,0 +1,71 @@
+"""The double pendulum's explorer page in a real browser (Debian's chromium through
+Selenium, as tests/test_explore_browser.py, whose fixtures and page scripts it uses):
+the flip-time map, a click's every coordinate over time, a parameter change."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_explore_browser import (  # the browser fixture and the page scripts
+    _FRAME,
+    _MAP,
+    _TEXTS,
+    _click,
+    _missing,
+    _wait,
+    driver,  # noqa: F401 - a fixture
+)
+
+import sweep
+
+N = 200  # pixels per axis (the map's frame is N screen pixels wide)
+
+#: The trajectory figure: its data source's columns, the first values and its lines.
+_SERIES = """
+const t = Bokeh.documents[0].get_model_by_name('trajectory');
+if (!t) return null;
+const src = t.renderers[0].data_source;
+const n = src.data.t ? src.data.t.length : 0;
+return {names: Object.keys(src.data), n: n, lines: t.renderers.length,
+        theta1: n ? src.data.theta1[0] : null, theta2: n ? src.data.theta2[0] : null};
+"""
+
+
+@pytest.fixture(scope="module")
+def system_app():
+    try:
+        from sweep.explore.system_app import SystemExplorerApp
+    except ImportError as exc:
+        _missing(f"Panel/Bokeh are not importable ({exc})")
+    grid = sweep.Grid(theta1_0=np.linspace(-3, 3, N), theta2_0=np.linspace(-3, 3, N))
+    app = SystemExplorerApp(sweep.DoublePendulum(), grid, t_end=3.0, dt=0.01, resolution=N)
+    app.serve(port=0)
+    yield app
+    app.stop()
+
+
+def test_double_pendulum_in_a_real_browser(system_app, driver):  # noqa: F811 - the fixture
+    driver.get(system_app.url)
+    home = _wait(driver, _MAP, lambda s: s["n"] == N * N and "flip" in s["title"], 60)
+
+    frame = driver.execute_script(_FRAME)
+    (x0, x1), (y0, y1) = frame["xr"], frame["yr"]
+    fx, fy = 0.3, 0.6  # fractions of the frame from its left and its top
+    _click(driver, (int(frame["left"] + fx * frame["width"]),
+                    int(frame["top"] + fy * frame["height"])))
+    traj = _wait(driver, _SERIES, lambda t: t["n"] > 0)
+    assert {"t", "theta1", "theta2", "omega1", "omega2"} <= set(traj["names"])
+    assert traj["lines"] == 4  # every coordinate and velocity over time
+    pixel = (x1 - x0) / N, (y1 - y0) / N
+    # snapped to the pixel centre; the click lands within ~1 screen pixel of the target
+    assert abs(traj["theta1"] - (x0 + fx * (x1 - x0))) <= 2 * pixel[0]
+    assert abs(traj["theta2"] - (y1 - fy * (y1 - y0))) <= 2 * pixel[1]
+    info = [text for text in driver.execute_script(_TEXTS, "omega2_0") if "status" in text]
+    assert len(info) == 1 and "ok" in info[0]  # the info pane: every start value, status
+
+    set_value = ("for (const m of Bokeh.documents[0].all_models) {"
+                 " if (m.title === arguments[0]) { m.value = arguments[1]; return true; } }"
+                 "return false;")
+    assert driver.execute_script(set_value, "mass2 [kg]", 3.0)
+    changed = _wait(driver, _MAP, lambda s: s["n"] == N * N and s["sum"] != home["sum"])
+    assert changed["weighted"] != home["weighted"]
