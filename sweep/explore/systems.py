@@ -135,10 +135,11 @@ class SystemTrajectory:
 
 
 def _constructor(system: System) -> dict:
-    """``system``'s constructor arguments except ``effects``."""
+    """``system``'s constructor arguments except ``effects`` and those left out (None:
+    a term it does not have, such as a double pendulum's joint damping)."""
     return {f.name: (value.tolist() if isinstance(value, np.ndarray) else value)
             for f in dataclasses.fields(system) if f.name != "effects"
-            for value in (getattr(system, f.name),)}
+            for value in (getattr(system, f.name),) if value is not None}
 
 
 class SystemExplorer(Explorer):
