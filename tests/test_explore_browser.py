@@ -114,6 +114,30 @@ if (!theta || !theta.length) return {title: t.title.text, n: 0};
 return {title: t.title.text, n: theta.length, theta0: theta[0], omega0: omega[0]};
 """
 
+#: Each trajectory panel's legends: their labels, and whether a visible one overlaps the
+#: plotting area (the frame, where the curves are), in canvas pixels.
+_LEGENDS = """
+const out = {};
+for (const name of ['trajectory', 'phase']) {
+  const fig = Bokeh.documents[0].get_model_by_name(name);
+  const view = Bokeh.index.find_one(fig);
+  const frame = view.frame.bbox;
+  const legends = [];
+  for (const r of [...fig.above, ...fig.below, ...fig.left, ...fig.right, ...fig.center]) {
+    if (r.items === undefined) continue;  // a Legend has items
+    const lv = view.views.find_one(r);
+    const b = lv.bbox;
+    const labels = r.items.filter((item) => item.visible).map((item) => item.label.value);
+    const overlap = b.width > 0 && b.left < frame.right && frame.left < b.right &&
+                    b.top < frame.bottom && frame.top < b.bottom;
+    legends.push({labels: labels, overlap: overlap,
+                  box: [b.left, b.top, b.width, b.height]});
+  }
+  out[name] = {legends: legends, frame: [frame.left, frame.top, frame.width, frame.height]};
+}
+return out;
+"""
+
 #: Every text shown by a Panel Markdown/Alert model containing a word.
 _TEXTS = """
 const word = arguments[0];
@@ -213,10 +237,18 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
     assert abs(traj["theta0"] - x) <= 2 * pixel[0]
     assert abs(traj["omega0"] - y) <= 2 * pixel[1]
     assert f"theta0 = {traj['theta0']:.6g}" in traj["title"]
-    info = driver.execute_script(_TEXTS, "stroboscopic points")  # Markdown as HTML
+    info = driver.execute_script(_TEXTS, "status&lt;/strong&gt;")  # Markdown as HTML
     assert len(info) == 1 and "ok" in info[0] and "well" in info[0]
     assert f"{traj['theta0']:.6g}" in info[0] and f"{traj['omega0']:.6g}" in info[0]
+    assert "stroboscopic" not in info[0]  # an unforced scene has none
     driver.save_screenshot(str(tmp_path / "4-trajectory.png"))
+    # the legends as drawn: beside the curves, never over them; no stroboscopic entry
+    legends = driver.execute_script(_LEGENDS)
+    assert [g["labels"] for g in legends["trajectory"]["legends"]] == [
+        ["theta [rad]", "omega [rad/s]"]]
+    assert not legends["phase"]["legends"]  # one curve: nothing to tell apart
+    for name in ("trajectory", "phase"):
+        assert not any(g["overlap"] for g in legends[name]["legends"]), legends
 
     # change a parameter: the map changes
     set_value = ("for (const m of Bokeh.documents[0].all_models) {"

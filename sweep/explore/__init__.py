@@ -32,8 +32,8 @@ def explore(scene, grid, **run_kwargs):
     grid : sweep.Grid
         Its first two axes with more than one value are the map's x and y (for example
         ``theta0`` [rad] and ``omega0`` [rad/s], or a system's ``theta1_0`` and
-        ``theta2_0``); their ranges are the home view, and their length the resolution
-        (pixels per axis) unless ``resolution`` is given.
+        ``theta2_0``); their ranges are the home view (the resolution, pixels per axis,
+        is ``resolution``, default 400, not their length).
     **run_kwargs
         `sweep.run` arguments: ``t_end`` and ``dt`` [s] (required), ``t_transient``
         [s], ``method``, ``device``, ``t0``, ``dtype``, ``strobe_samples``, ...; and
@@ -51,7 +51,9 @@ def explore(scene, grid, **run_kwargs):
         Displays in a Jupyter notebook (after ``import panel; panel.extension()``, as
         every Panel object); ``.show()`` opens it in a browser from a local
         server, ``.servable()`` marks it for ``panel serve``, ``.serve(port=...)``
-        starts a server.
+        starts a server (listening once it returns, the warm-up following on a
+        background thread; `sweep.explore.app.AddressUnavailable`, an OSError, when
+        the address or the port cannot be bound).
 
     Raises
     ------

@@ -12,6 +12,7 @@ the preview first, then the final map. A stale result (an older request) is drop
 
 from __future__ import annotations
 
+import errno
 import math
 import socket
 import sys
@@ -33,6 +34,8 @@ try:
         ColorBar,
         ColumnDataSource,
         FixedTicker,
+        Legend,
+        LegendItem,
         LinearColorMapper,
         Range1d,
     )
@@ -43,7 +46,7 @@ except ImportError as exc:  # pragma: no cover - the extra is missing
                       "pip install -e \".[explore]\" (or pip install 'panel>=1.4' "
                       "'bokeh>=3.4')") from None
 
-__all__ = ["ExplorerApp", "free_port"]
+__all__ = ["AddressUnavailable", "ExplorerApp", "free_port"]
 
 #: Seconds after the last range change before the window is recomputed (wheel zoom and
 #: pan send many changes; the newest request cancels the older anyway).
@@ -54,11 +57,52 @@ _MOTION_COLOURS = {-1.0: "#2166ac", 0.0: "#f0f0f0", 1.0: "#b2182b"}
 _NAN_COLOUR = "#404040"
 
 
+#: Seconds `ExplorerApp.serve` waits for its server thread to listen (binding is
+#: immediate; this bounds a server that neither listens nor fails).
+LISTEN_TIMEOUT = 60.0
+
+#: What the page says while the app warms up (`ExplorerApp.warm_up`).
+WARMING_TEXT = ("**starting**: compiling the kernels and computing the first view "
+                "(once per server; seconds)…")
+
+
 def free_port(host: str = "127.0.0.1") -> int:
     """A TCP port nobody listens on at ``host`` now (the OS's choice)."""
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         s.bind((host, 0))
         return s.getsockname()[1]
+
+
+class AddressUnavailable(OSError):
+    """The explorer's server cannot listen on ``host``, ``port``.
+
+    Parameters
+    ----------
+    host : str
+        The address it tried to bind.
+    port : int
+        The TCP port it tried to bind.
+    reason : OSError
+        The operating system's error (``[Errno 98] Address already in use``, ...).
+    way_out : str, default "port=0 picks a free port"
+        The advice at the end of the message (the command line names ``--port 0``).
+    """
+
+    def __init__(self, host: str, port: int, reason: OSError,
+                 way_out: str = "port=0 picks a free port") -> None:
+        self.host, self.port, self.reason, self.way_out = host, port, reason, way_out
+        why = {errno.EADDRINUSE: " (another program listens there)",
+               errno.EACCES: " (ports below 1024 need privileges)",
+               errno.EADDRNOTAVAIL: f" ({host} is not an address of this machine)"}
+        hint = why.get(getattr(reason, "errno", None), "")
+        if isinstance(reason, socket.gaierror):
+            hint = f" ({host} is not an address or a host name this machine resolves)"
+        super().__init__(f"cannot listen on address {host}, port {port}: {reason}{hint}; "
+                         f"{way_out}")
+        self.errno = getattr(reason, "errno", None)
+
+    def __reduce__(self):
+        return type(self), (self.host, self.port, self.reason, self.way_out)
 
 
 def _labelled(cls, text: str, **kwargs):
@@ -95,6 +139,18 @@ def _palette(result: MapResult) -> list[str]:
     return colours
 
 
+def _legend_above(fig, items) -> Legend:
+    """A horizontal legend of ``items`` (label, renderers) above ``fig``'s plotting area
+    (between the title and the frame: it never covers a curve); a click hides a curve."""
+    legend = Legend(items=[LegendItem(label=label, renderers=renderers)
+                           for label, renderers in items],
+                    orientation="horizontal", location="top_left", click_policy="hide",
+                    margin=0, padding=4, spacing=12, label_text_font_size="11px",
+                    border_line_alpha=0, background_fill_alpha=0)
+    fig.add_layout(legend, "above")
+    return legend
+
+
 class _Session:
     """One browser session: widgets, figures and the explorer behind them."""
 
@@ -110,7 +166,16 @@ class _Session:
                                  self._from_worker(self._failed))
         if self.doc is not None and hasattr(self.doc, "on_session_destroyed"):
             self.doc.on_session_destroyed(lambda context: self.requests.close())
-        self._submit()
+        if app.call_when_warm(self._from_worker(self._first_submit)):
+            self.status.object = WARMING_TEXT  # the first map follows from the cache
+        else:
+            self._submit()
+
+    def _first_submit(self) -> None:
+        """The first request, once the app's warm-up ended (unless a control was changed
+        meanwhile, which submitted already)."""
+        if self.latest == 0:
+            self._submit()
 
     # -- threads ------------------------------------------------------------------
     def _from_worker(self, callback):
@@ -129,10 +194,8 @@ class _Session:
         s = e.state
         v = s.view
         self.mapper = LinearColorMapper(palette=Viridis256, nan_color=_NAN_COLOUR)
-        self.source = ColumnDataSource({"image": [np.zeros((1, 1))], "x": [v.x_range[0]],
-                                        "y": [v.y_range[0]],
-                                        "dw": [v.x_range[1] - v.x_range[0]],
-                                        "dh": [v.y_range[1] - v.y_range[0]]})
+        # no image until the first map arrives (a blank frame, not a placeholder colour)
+        self.source = ColumnDataSource({"image": [], "x": [], "y": [], "dw": [], "dh": []})
         n = s.resolution
         self.map = figure(name="map", frame_width=n, frame_height=n,
                           x_range=Range1d(*v.x_range), y_range=Range1d(*v.y_range),
@@ -156,23 +219,27 @@ class _Session:
 
         self.traj_source = ColumnDataSource({"t": [], "theta": [], "omega": []})
         self.strobe_source = ColumnDataSource({"theta": [], "omega": []})
-        self.trajectory = figure(name="trajectory", width=460, height=240,
+        self.trajectory = figure(name="trajectory", width=460, height=260,
                                  x_axis_label="t [s]", y_axis_label="theta [rad], omega [rad/s]",
                                  title="trajectory: click a start on the map",
                                  tools="box_zoom,wheel_zoom,pan,reset,save")
-        self.trajectory.line("t", "theta", source=self.traj_source, legend_label="theta [rad]",
-                             color="#1f77b4")
-        self.trajectory.line("t", "omega", source=self.traj_source,
-                             legend_label="omega [rad/s]", color="#ff7f0e")
-        self.trajectory.legend.location = "top_right"
+        lines = [self.trajectory.line("t", name, source=self.traj_source, color=colour)
+                 for name, colour in (("theta", "#1f77b4"), ("omega", "#ff7f0e"))]
+        _legend_above(self.trajectory, [("theta [rad]", lines[:1]),
+                                        ("omega [rad/s]", lines[1:])])
         self.phase = figure(name="phase", width=460, height=280, x_axis_label="theta [rad]",
                             y_axis_label="omega [rad/s]", title="phase portrait",
                             tools="box_zoom,wheel_zoom,pan,reset,save")
-        self.phase.line("theta", "omega", source=self.traj_source, color="#1f77b4",
-                        legend_label="trajectory")
-        self.phase.scatter("theta", "omega", source=self.strobe_source, size=6, color="#d62728",
-                           legend_label="stroboscopic points")
-        self.phase.legend.location = "top_right"
+        path = self.phase.line("theta", "omega", source=self.traj_source, color="#1f77b4")
+        # stroboscopic points only where the scene is forced (a legend entry of an
+        # unforced scene's always-empty set would only hide the curve)
+        self.strobe = self.strobe_item = None
+        if self.explorer.state.scene.forcing is not None:
+            self.strobe = self.phase.scatter("theta", "omega", source=self.strobe_source,
+                                             size=6, color="#d62728", name="strobe")
+            legend = _legend_above(self.phase, [("trajectory", [path]),
+                                                ("stroboscopic points", [self.strobe])])
+            self.strobe_item = legend.items[1]
 
         # controls from the declarations
         self.errors: dict[str, pn.pane.Alert] = {}
@@ -384,12 +451,19 @@ class _Session:
         self.clicked.data = {"x": [traj.point[v.x]], "y": [traj.point[v.y]]}
         self.traj_source.data = {"t": traj.t, "theta": traj.theta, "omega": traj.omega}
         self.strobe_source.data = {"theta": traj.strobe_theta, "omega": traj.strobe_omega}
+        strobed = traj.strobe_theta.size > 0
+        if self.strobe is not None:  # a forced scene: its entry only with points to show
+            self.strobe.visible = strobed
+            self.strobe_item.visible = strobed
         where = ", ".join(f"{k} = {val:.6g}" for k, val in traj.point.items())
         self.trajectory.title.text = f"trajectory from {where}"
-        self.info.object = (
-            f"**start** theta0 = {traj.theta0:.6g} rad, omega0 = {traj.omega0:.6g} rad/s  \n"
-            f"**status** {traj.status}  \n**label** {traj.label}  \n"
-            f"**stroboscopic points** {traj.strobe_theta.size}")
+        lines = [f"**start** theta0 = {traj.theta0:.6g} rad, omega0 = {traj.omega0:.6g} rad/s",
+                 f"**status** {traj.status}", f"**label** {traj.label}"]
+        if self.strobe is not None:
+            lines.append(f"**stroboscopic points** {traj.strobe_theta.size}"
+                         + ("" if strobed else " (dt does not divide the forcing period, or "
+                            "the forcing frequency is an axis)"))
+        self.info.object = "  \n".join(lines)
         self.traj_python.object = f"```python\n{traj.python}```"
         self.traj_toml.object = f"```toml\n{traj.toml}```"
 
@@ -416,6 +490,80 @@ class _Session:
         return io.BytesIO(self.explorer.toml_text().encode())
 
 
+class _ServerThread(threading.Thread):
+    """A Panel server on its own thread and event loop.
+
+    `listen` starts the thread and returns once the server's socket listens and its
+    event loop runs (so a client that connects is answered), or raises what binding
+    raised; no traceback is printed from the thread and nothing is left running.
+
+    Parameters
+    ----------
+    make : callable
+        ``make(loop)`` builds the server (binding its socket) on the Tornado ``loop``;
+        called on this thread.
+    """
+
+    def __init__(self, make) -> None:
+        super().__init__(name="sweep-explore-server", daemon=True)
+        self._make = make
+        self._ready = threading.Event()
+        self.error: BaseException | None = None
+        self.server = None
+        self.loop = None
+
+    def listen(self, timeout: float = LISTEN_TIMEOUT):
+        """Start; return the server once it listens, or raise the error of binding."""
+        self.start()
+        if not self._ready.wait(timeout):
+            self.stop()
+            raise TimeoutError(f"the explorer's server did not start listening within "
+                               f"{timeout:g} s")
+        if self.error is not None:
+            self.join()
+            raise self.error
+        return self.server
+
+    def run(self) -> None:
+        from tornado.ioloop import IOLoop
+
+        loop = IOLoop(make_current=False)
+        try:
+            server = self._make(loop)
+            server.start()
+        except BaseException as exc:  # noqa: BLE001 - raised again by listen, in the caller
+            self.error = exc
+            loop.close(all_fds=True)
+            self._ready.set()
+            return
+        self.server, self.loop = server, loop
+        loop.add_callback(self._ready.set)  # once the loop runs: clients are answered
+        try:
+            loop.start()
+        finally:
+            server.stop()
+            loop.close(all_fds=True)
+
+    def stop(self, timeout: float = 10.0) -> None:
+        """Stop serving (cancel the loop's tasks, close the socket); wait up to
+        ``timeout`` seconds for the thread."""
+        loop = self.loop
+        if loop is not None and self.is_alive():
+            loop.add_callback(self._shutdown)
+        if self.is_alive() and threading.current_thread() is not self:
+            self.join(timeout)
+
+    async def _shutdown(self) -> None:
+        import asyncio
+
+        current = asyncio.current_task()
+        tasks = [t for t in asyncio.all_tasks() if t is not current]
+        for task in tasks:
+            task.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
+        self.loop.stop()
+
+
 class ExplorerApp:
     """The explorer of a scene's maps, served by Panel (see `sweep.explore`).
 
@@ -437,22 +585,58 @@ class ExplorerApp:
         self.template = self.explorer_class(scene, grid, cache=self.cache, **run_kwargs)
         self.warm_seconds: float | None = None
         self.server = None
+        self.url: str | None = None
+        self._warm_lock = threading.Lock()
+        self._warming = 0  # warm-ups running now
+        self._after_warm: list = []
 
     # -- warm-up ----------------------------------------------------------------------
     def warm_up(self) -> float:
         """Compute the home view's preview, map and one trajectory (compiling, or loading
         from the disk cache, every kernel the first zoom and click need); the map is kept
-        for the first page. Returns the seconds it took."""
-        begin = time.perf_counter()
-        e = self.template
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            e.compute(preview=True)
-            result = e.compute()
-            e.trajectory(float(result.x[len(result.x) // 2]),
-                         float(result.y[len(result.y) // 2]), result)
-        self.warm_seconds = time.perf_counter() - begin
+        for the first page. Returns the seconds it took.
+
+        Pages opened meanwhile say so (`WARMING_TEXT`) and start computing when it ends
+        (the first map is then in the shared cache).
+        """
+        with self._warm_lock:
+            self._warming += 1
+        try:
+            begin = time.perf_counter()
+            e = self.template
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                e.compute(preview=True)
+                result = e.compute()
+                e.trajectory(float(result.x[len(result.x) // 2]),
+                             float(result.y[len(result.y) // 2]), result)
+            self.warm_seconds = time.perf_counter() - begin
+        finally:
+            with self._warm_lock:
+                self._warming -= 1
+                waiting = [] if self._warming else self._after_warm
+                if not self._warming:
+                    self._after_warm = []
+            for callback in waiting:
+                try:
+                    callback()
+                except Exception:  # noqa: BLE001 - a page closed meanwhile
+                    continue
         return self.warm_seconds
+
+    @property
+    def warming(self) -> bool:
+        """True while `warm_up` runs."""
+        return self._warming > 0
+
+    def call_when_warm(self, callback) -> bool:
+        """Call ``callback()`` when the running `warm_up` ends (on its thread) and return
+        True; return False, calling nothing, when no warm-up runs."""
+        with self._warm_lock:
+            if not self._warming:
+                return False
+            self._after_warm.append(callback)
+            return True
 
     # -- Panel ------------------------------------------------------------------------
     def session(self):
@@ -472,30 +656,74 @@ class ExplorerApp:
 
     def serve(self, *, port: int = 0, host: str = "127.0.0.1", show: bool = False,
               threaded: bool = True, warm: bool = True, quiet: bool = True):
-        """Start a server for this app.
+        """Start a server for this app: bind first, then warm up.
 
         Parameters
         ----------
         port : int, default 0
-            0: a free port.
+            TCP port; 0: a free one.
         host : str, default "127.0.0.1"
             The address to bind; websocket connections are accepted only from pages
             served at ``host:port`` (and ``localhost:port`` for 127.0.0.1).
         show : bool, default False
             Open a browser tab.
         threaded : bool, default True
-            Run the server in a thread and return; False blocks until stopped.
+            Run the server in a thread and return once it listens; False blocks until
+            stopped (Ctrl-C).
         warm : bool, default True
-            `warm_up` first (the first page then shows a map at once).
+            `warm_up` on a background thread once the server listens: a page opened
+            meanwhile says it is warming up, then shows the map at once.
+        quiet : bool, default True
+            Do not print Panel's "Launching server" line.
 
         Returns
         -------
-        The server (``.stop()``); its URL is `url`.
+        The server (``.stop()``), listening; its URL is `url`.
+
+        Raises
+        ------
+        AddressUnavailable
+            An OSError: the socket cannot be bound (the port is in use, a privileged
+            port, an address not of this machine); nothing is left running.
         """
+        if self.server is not None:
+            raise RuntimeError(f"this app already serves {self.url}; stop() it first")
+        for attempt in range(5):
+            chosen = port
+            try:
+                chosen = port or free_port(host)
+                thread = _ServerThread(partial(self._make_server, port=chosen, host=host,
+                                               show=show, quiet=quiet))
+                thread.listen()
+                break
+            except OSError as exc:
+                # port 0: another program took the free port first; take another
+                if not port and exc.errno == errno.EADDRINUSE and attempt < 4:
+                    continue
+                raise AddressUnavailable(host, chosen, exc) from None
+        self.server = thread
+        self.url = f"http://{host if ':' not in host else f'[{host}]'}:{chosen}/"
         if warm and self.warm_seconds is None:
+            threading.Thread(target=self._warm_in_background, name="sweep-explore-warm-up",
+                             daemon=True).start()
+        if not threaded:
+            try:
+                while thread.is_alive():
+                    thread.join(0.5)
+            except KeyboardInterrupt:
+                pass
+            finally:
+                self.stop()
+        return thread
+
+    def _warm_in_background(self) -> None:
+        try:
             self.warm_up()
-        if not port:
-            port = free_port(host)
+        except Exception as exc:  # noqa: BLE001 - the page computes again and shows it
+            warnings.warn(f"explore: warm-up failed: {exc}", RuntimeWarning, stacklevel=1)
+
+    def _make_server(self, loop, *, port: int, host: str, show: bool, quiet: bool):
+        """Panel's server for this app on ``loop`` (binds; not started)."""
         origins = [f"{host}:{port}"]
         if host in ("127.0.0.1", "localhost"):
             origins = [f"127.0.0.1:{port}", f"localhost:{port}"]
@@ -506,41 +734,69 @@ class ExplorerApp:
             except OSError:
                 pass
             origins = [f"{name}:{port}" for name in sorted(names)]
-        self.url = f"http://{host if ':' not in host else f'[{host}]'}:{port}/"
-        self.server = pn.serve({"/": self.session}, port=port, address=host,
-                               websocket_origin=origins, show=show, threaded=threaded,
-                               title="sweep explore", verbose=not quiet,
-                               start=True)
-        return self.server
+        return pn.serve({"/": self.session}, port=port, address=host,
+                        websocket_origin=origins, show=show, threaded=False, loop=loop,
+                        title="sweep explore", verbose=not quiet, start=False)
 
     def show(self, **kwargs):
         """Serve and open a browser tab (`serve` with ``show=True``)."""
         return self.serve(show=True, **kwargs)
 
     def stop(self) -> None:
-        """Stop the server `serve` started."""
+        """Stop the server `serve` started (its port is free again)."""
         if self.server is not None:
             self.server.stop()
             self.server = None
 
 
-def main_serve(app: ExplorerApp, *, port: int, host: str, open_browser: bool) -> int:
-    """``sweep explore``: warm up, serve, print the URL, block until Ctrl-C."""
+def main_serve(app: ExplorerApp, *, port: int, host: str, open_browser: bool,
+               stop: threading.Event | None = None) -> int:
+    """``sweep explore``: bind, print the URL, warm up (saying so), serve until Ctrl-C.
+
+    Parameters
+    ----------
+    app : ExplorerApp
+    port : int
+        TCP port (0: a free one).
+    host : str
+        The address to bind.
+    open_browser : bool
+        Open a browser tab on the page (at once; it shows the warm-up).
+    stop : threading.Event, optional
+        Stops serving once set (besides Ctrl-C).
+
+    Returns
+    -------
+    int
+        0 once stopped.
+
+    Raises
+    ------
+    AddressUnavailable
+        The address or the port cannot be bound (the message suggests ``--port 0``).
+    """
     if host not in ("127.0.0.1", "localhost", "::1"):
         print(f"sweep: warning: --host {host}: anyone who can reach port {port or '(chosen)'} "
               "on this address can use this machine's cores through the explorer",
               file=sys.stderr)
-    print("sweep explore: compiling the kernels (warm-up)…", file=sys.stderr, flush=True)
-    seconds = app.warm_up()
-    print(f"sweep explore: kernels warm in {seconds:.1f} s", file=sys.stderr, flush=True)
-    server = app.serve(port=port, host=host, show=open_browser, threaded=True, warm=False)
-    print(f"sweep explore: serving {app.url} (Ctrl-C stops)", flush=True)
-    stop = threading.Event()
     try:
+        app.serve(port=port, host=host, show=open_browser, threaded=True, warm=False)
+    except AddressUnavailable as exc:
+        raise AddressUnavailable(exc.host, exc.port, exc.reason,
+                                 way_out="--port 0 picks a free port") from None
+    stop = stop or threading.Event()
+    try:
+        print(f"sweep explore: serving {app.url} (Ctrl-C stops)", flush=True)
+        print("sweep explore: compiling the kernels and computing the first view "
+              "(the page shows this too)…", file=sys.stderr, flush=True)
+        seconds = app.warm_up()
+        print(f"sweep explore: first view ready in {seconds:.1f} s", file=sys.stderr,
+              flush=True)
         while not stop.wait(0.5):
-            pass
+            if app.server is None or not app.server.is_alive():
+                raise OSError(f"the explorer's server at {app.url} stopped unexpectedly")
     except KeyboardInterrupt:
         pass
     finally:
-        server.stop()
+        app.stop()
     return 0
