@@ -10,8 +10,8 @@ import pytest
 
 import sweep
 from sweep.explore.model import InvalidInput, centres
-from sweep.explore.networks import NetworkExplorer
-from sweep.explore.systems import SystemExplorer, SystemTrajectory, explorer_for
+from sweep.explore.networks import NetworkExplorer, explorer_for
+from sweep.explore.systems import SystemExplorer, SystemTrajectory
 from sweep.physics.system import SYSTEM_DAMPING
 from sweep.system_observables import SYSTEM_OBSERVABLES, variables
 from sweep.toml_spec import load_run

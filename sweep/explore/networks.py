@@ -25,10 +25,11 @@ from ..diskspace import layout as run_layout
 from ..grid import Grid
 from ..kernels.network import NETWORK_OBSERVABLES
 from ..physics.network import NETWORK_PARAMETERS, SwingNetwork
-from .model import Control, Quantity
+from ..physics.system import System
+from .model import Control, Explorer, Quantity
 from .systems import SystemExplorer
 
-__all__ = ["NetworkExplorer", "network_quantities"]
+__all__ = ["NetworkExplorer", "explorer_for", "network_quantities"]
 
 #: Parameters of a network that the controls set (the others are a start's).
 CONTROLLED = ("damping", "coupling")
@@ -166,3 +167,13 @@ class NetworkExplorer(SystemExplorer):
     def _end_label(self, ds, one: dict) -> str:
         return (f"frequency_spread = {float(ds.frequency_spread.isel(one)):.6g} rad/s, "
                 f"order_parameter = {float(ds.order_parameter.isel(one)):.6g}")
+
+
+def explorer_for(target, grid, **kwargs) -> Explorer:
+    """`SystemExplorer` for a system with several coordinates, else `Explorer` (the
+    single pendulum's `sweep.Scene`)."""
+    if isinstance(target, SwingNetwork):
+        return NetworkExplorer(target, grid, **kwargs)
+    if isinstance(target, System):
+        return SystemExplorer(target, grid, **kwargs)
+    return Explorer(target, grid, **kwargs)

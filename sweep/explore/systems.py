@@ -33,7 +33,6 @@ from ..kernels import Status
 from ..methods import METHODS
 from ..physics.coupled import CoupledPendula
 from ..physics.double import DoublePendulum
-from ..physics.network import SwingNetwork
 from ..physics.system import SYSTEM_DAMPING, System, initial_parameters
 from ..system_observables import SYSTEM_OBSERVABLES, variables
 from .model import (
@@ -51,7 +50,7 @@ from .model import (
     _toml_value,
 )
 
-__all__ = ["SystemExplorer", "SystemTrajectory", "explorer_for", "system_quantities"]
+__all__ = ["SystemExplorer", "SystemTrajectory", "system_quantities"]
 
 
 def _always(system) -> bool:
@@ -490,15 +489,3 @@ class SystemExplorer(Explorer):
         out += ["", "[run]"]
         out += [f"{key} = {_toml_value(value)}" for key, value in kwargs.items()]
         return "\n".join(out) + "\n"
-
-
-def explorer_for(target, grid, **kwargs) -> Explorer:
-    """`SystemExplorer` for a system with several coordinates, else `Explorer` (the
-    single pendulum's `sweep.Scene`)."""
-    if isinstance(target, SwingNetwork):
-        from .networks import NetworkExplorer
-
-        return NetworkExplorer(target, grid, **kwargs)
-    if isinstance(target, System):
-        return SystemExplorer(target, grid, **kwargs)
-    return Explorer(target, grid, **kwargs)

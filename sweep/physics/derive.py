@@ -3,7 +3,7 @@
 `derive` reads a `sweep.physics.system.SystemDeclaration` and returns a
 `sweep.physics.system.DerivedSystem` whose strings follow that module's kernel-source
 conventions. It is the only place in sweep that imports SymPy (an optional
-dependency, ``pip install sweep[systems]``), and only when a declaration is derived
+dependency, ``pip install -e ".[systems]"`` in a checkout), and only when a declaration is derived
 for the first time: results are memoised in the process and kept on disk, as JSON
 beside the kernel modules (`sweep._config.kernel_folder`, checked as the kernels are).
 
@@ -309,7 +309,8 @@ def _sympy():
         import sympy
     except ImportError as error:  # pragma: no cover - sympy is in the test extra
         raise ImportError("deriving a system's equations needs SymPy: pip install "
-                          "'sweep[systems]' (or sympy>=1.12)") from error
+                          "'sympy>=1.12' (or, in a checkout of sweep, pip install -e "
+                          "\".[systems]\")") from error
     return sympy
 
 
