@@ -234,7 +234,7 @@ class _Session:
         # stroboscopic points only where the scene is forced (a legend entry of an
         # unforced scene's always-empty set would only hide the curve)
         self.strobe = self.strobe_item = None
-        if self.explorer.state.scene.forcing is not None:
+        if getattr(self.explorer.state.scene, "forcing", None) is not None:  # a system: none
             self.strobe = self.phase.scatter("theta", "omega", source=self.strobe_source,
                                              size=6, color="#d62728", name="strobe")
             legend = _legend_above(self.phase, [("trajectory", [path]),
