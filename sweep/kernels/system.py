@@ -31,6 +31,7 @@ from ..observables import LYAPUNOV_EVERY
 from ..physics.system import DerivedSystem, SystemDeclaration, system_columns
 from ..system_observables import variables
 from .lanes import allocate, indent, lane_loop, scalar_lanes
+from .rewrite import Rewritten, rewrite
 from .spec import Status
 from .steppers import fused
 
@@ -44,6 +45,8 @@ NL = "\n"
 #: the double pendulum ran at 14 M trajectory-steps/s instead of 93 (AMD EPYC Zen 5,
 #: 2 cores).
 _INLINE = "@njit(inline='always', **JIT)"
+#: The kernel's array of the hoisted values (`sweep.kernels.rewrite`), [value, lane].
+_INVARIANT = "hoisted_values"
 
 
 @dataclass(frozen=True)
@@ -122,17 +125,16 @@ def _tableau(spec: SystemSpec):
     return method
 
 
-def _physics(spec: SystemSpec, state: list[str], symbols: list[str]) -> str:
-    """``accel`` (and ``energy`` where observed) as numba functions."""
+def _physics(spec: SystemSpec, state: list[str], symbols: list[str]) -> tuple[str, Rewritten]:
+    """``accel`` (or, for ``lyapunov``, ``accel_jac``: the accelerations and their
+    Jacobian) and ``energy`` where observed, as numba functions; and what of the
+    step's function depends on the parameters alone (`sweep.kernels.rewrite`): the
+    kernel computes it once per trajectory into ``hoisted_values[k, j]`` (lane j), which it
+    passes with ``j`` after ``symbols``."""
     coords = spec.system.coordinates
-    args = ", ".join(state + symbols)
     accel = [f"acc_{c.symbol}" for c in coords]
     if spec.damping:
         accel = [f"vfma(-damping_c, {c.velocity_symbol}, acc_{c.symbol})" for c in coords]
-    text = (f"{_INLINE}\n"
-            f"def accel({args}):\n"
-            + indent(NL.join(spec.derived.accel_lines), 1) + NL
-            + f"    return {', '.join(accel)}\n")
     if "lyapunov" in spec.observe:
         if not spec.derived.jacobian_lines:
             raise ValueError(f"observable 'lyapunov' needs the Jacobian of system "
@@ -145,20 +147,30 @@ def _physics(spec: SystemSpec, state: list[str], symbols: list[str]) -> str:
                 if spec.damping and b == a.velocity_symbol:
                     entry = f"{entry} - damping_c"
                 entries.append(entry)
-        text += (f"\n\n{_INLINE}\n"
-                 f"def accel_jac({args}):\n"
-                 + indent(NL.join(spec.derived.accel_lines + spec.derived.jacobian_lines), 1)
-                 + NL + f"    return {', '.join(accel + entries)}\n")
+        name, lines = "accel_jac", spec.derived.accel_lines + spec.derived.jacobian_lines
+        outputs = accel + entries
+    else:
+        name, lines, outputs = "accel", spec.derived.accel_lines, accel
+    fast = rewrite(lines, symbols, [f"acc_{c.symbol}" for c in coords] +
+                   [f"jac_{a.symbol}_{b}" for a in coords for b in state])
+    # the hoisted values come in one array [k, lane] (as arguments they could pass
+    # CPython's 30 of a call, beyond which numba cannot inline it)
+    reads = [f"{x} = {_INVARIANT}[{k}, j]" for k, x in enumerate(fast.names)]
+    extra = [_INVARIANT, "j"] if fast.names else []
+    text = (f"{_INLINE}\n"
+            f"def {name}({', '.join(state + symbols + extra)}):\n"
+            + indent(NL.join(reads + list(fast.lines)), 1) + NL
+            + f"    return {', '.join(outputs)}\n")
     if "energy" in spec.observe or spec.flip_energy:
         if not spec.derived.energy_lines:
             raise ValueError(f"observable 'energy' needs the energy of system "
                              f"{spec.system.name!r}, which its declaration does not give; "
                              "accepted: observe without 'energy'")
         text += (f"\n\n{_INLINE}\n"
-                 f"def energy({args}):\n"
+                 f"def energy({', '.join(state + symbols)}):\n"
                  + indent(NL.join(spec.derived.energy_lines), 1) + NL
                  + "    return energy_value\n")
-    return text
+    return text, fast
 
 
 def _symbols(spec: SystemSpec) -> list[str]:
@@ -170,7 +182,8 @@ def _step(spec: SystemSpec, method, constants: dict[str, str],
           symbols: list[str]) -> list[str]:
     """One explicit Runge-Kutta step of every coordinate, from the method's tableau:
     the same fused operations as the single pendulum's step (`sweep.kernels.steppers`);
-    with ``lyapunov``, the tangent vector ``ly_<x>`` too."""
+    with ``lyapunov``, the tangent vector ``ly_<x>`` too. ``symbols``: the physics'
+    arguments after the state (the parameters, then the hoisted temporaries)."""
     tableau = method
     coords = spec.system.coordinates
     state = [c.symbol for c in coords] + [c.velocity_symbol for c in coords]
@@ -303,13 +316,19 @@ def system_kernel(spec: SystemSpec) -> str:
     velocities = [c.velocity_symbol for c in coords]
     state = positions + velocities
     symbols = _symbols(spec)
+    physics, fast = _physics(spec, state, symbols)
     constants: dict[str, str] = {}
-    step = _step(spec, method, constants, symbols)
+    step = _step(spec, method, constants,
+                 symbols + ([_INVARIANT, "j"] if fast.names else []))
     flip = "flip" in spec.observe
     angles = [c.symbol for c in _angles(spec)]
     lane = {x: "float64" for x in state + symbols}
     first = ["i = min(base + j, n - 1)  # padding lanes repeat the last trajectory"]
     first += [f"{x} = params[i, {k}]" for k, x in enumerate(state + symbols)]
+    # what the step's physics reads of the parameters alone, once per trajectory
+    first += [*fast.hoisted, *(f"{_INVARIANT}[{k}, j] = {x}"
+                               for k, x in enumerate(fast.names))]
+    invariant = f"{_INVARIANT} = np.empty(({len(fast.names)}, BLOCK))" if fast.names else ""
     if "winding" in spec.observe or flip:
         first += [f"well_{q} = math.floor({q} / TWO_PI + 0.5)" for q in angles]
         lane.update({f"well_{q}": "float64" for q in angles})
@@ -382,7 +401,7 @@ def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
     for b in range(b_first, b_stop):
         base = b * BLOCK
         n_real = min(BLOCK, n - base)
-{indent(NL.join(allocate(lane)), 2)}
+{indent(NL.join(allocate(lane) + ([invariant] if invariant else [])), 2)}
         n_done = 0
 {init_loop}
         for step in range(n_steps):
@@ -393,8 +412,7 @@ def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
 {indent(save, 3)}
 {finish}
 '''
-    return (scalar_lanes(kernel, lane) if spec.block == 1 else kernel), \
-        _physics(spec, state, symbols)
+    return (scalar_lanes(kernel, lane) if spec.block == 1 else kernel), physics
 
 
 def system_source(spec: SystemSpec, header: str) -> str:
