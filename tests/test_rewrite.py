@@ -6,7 +6,6 @@ depends on the parameters alone."""
 from __future__ import annotations
 
 import ast
-import types
 
 import numpy as np
 import pytest
@@ -20,6 +19,8 @@ from sweep.kernels.source import source
 from sweep.physics.derive import derive
 from sweep.physics.systems import coupled_pendula, double_pendulum
 
+from test_systems_derive import run_lines, sample
+
 DECLARATIONS = [double_pendulum(damping=True), coupled_pendula(3, "spring", "ring", True),
                 coupled_pendula(2, "torsion", "chain")]
 
@@ -27,23 +28,7 @@ DECLARATIONS = [double_pendulum(damping=True), coupled_pendula(3, "spring", "rin
 def run(lines, values):
     """Execute lines with NumPy standing in for the kernel functions (``vfma`` as a
     product and a sum, rounded twice); the namespace after them."""
-    names = dict(values, vsin=np.sin, vcos=np.cos,
-                 vsincos=lambda x: (np.sin(x), np.cos(x)), vfma=lambda a, b, c: a * b + c,
-                 math=types.SimpleNamespace(sqrt=np.sqrt))
-    exec("\n".join(lines), names)
-    return names
-
-
-def sample(declaration, n=200, seed=35):
-    rng = np.random.default_rng(seed)
-    values = {"t": rng.uniform(0.0, 10.0, n)}
-    for c in declaration.coordinates:
-        values[c.symbol] = rng.uniform(-np.pi, np.pi, n)
-        values[c.velocity_symbol] = rng.uniform(-2.0, 2.0, n)
-    for p in declaration.parameters:
-        values[p.symbol] = (p.default * rng.uniform(0.5, 2.0, n) if p.default
-                            else rng.uniform(0.0, 1.0, n))
-    return values
+    return run_lines(lines, dict(values, vfma=lambda a, b, c: a * b + c))
 
 
 @pytest.mark.parametrize("declaration", DECLARATIONS, ids=lambda d: d.name)

@@ -142,13 +142,18 @@ class _State:
                 self.seen[text] = name = self.fresh()
                 self.hoisted.append(f"{name} = {text}")
             return ast.Name(self.seen[text], ast.Load())
-        for field, value in ast.iter_fields(node):
-            if isinstance(value, ast.AST) and not isinstance(value, (ast.operator,
-                                                                     ast.unaryop)):
-                setattr(node, field, self.hoist(value))
-            elif isinstance(value, list):
-                setattr(node, field, [self.hoist(v) for v in value])
-        return node
+        return _map_children(node, self.hoist)
+
+
+def _map_children(node, fn):
+    """``node`` with each child expression replaced by ``fn(child)``."""
+    for field, value in ast.iter_fields(node):
+        if isinstance(value, ast.AST) and not isinstance(value, (ast.operator, ast.unaryop,
+                                                                 ast.expr_context)):
+            setattr(node, field, fn(value))
+        elif isinstance(value, list):
+            setattr(node, field, [fn(v) for v in value])
+    return node
 
 
 def _literal(node) -> bool:
@@ -182,11 +187,7 @@ def _product(factors):
 
 def _regroup(node, state: _State):
     """Rewrite 1 on ``node`` and everything below it."""
-    for field, value in ast.iter_fields(node):
-        if isinstance(value, ast.AST) and not isinstance(value, (ast.operator, ast.unaryop)):
-            setattr(node, field, _regroup(value, state))
-        elif isinstance(value, list):
-            setattr(node, field, [_regroup(v, state) for v in value])
+    _map_children(node, lambda child: _regroup(child, state))
     if not (isinstance(node, ast.BinOp) and isinstance(node.op, ast.Mult)):
         return node
     fixed, varying, negative = [], [], False
@@ -208,11 +209,7 @@ def _regroup(node, state: _State):
 
 def _fuse(node, state: _State):
     """Rewrite 2 on ``node`` and everything below it."""
-    for field, value in ast.iter_fields(node):
-        if isinstance(value, ast.AST) and not isinstance(value, (ast.operator, ast.unaryop)):
-            setattr(node, field, _fuse(value, state))
-        elif isinstance(value, list):
-            setattr(node, field, [_fuse(v, state) for v in value])
+    _map_children(node, lambda child: _fuse(child, state))
     if not (isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Add, ast.Sub))) \
             or state.invariant(node):
         return node
