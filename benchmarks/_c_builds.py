@@ -169,7 +169,7 @@ def build_c_one(build_dir: Path, key: str, flags: list[str]):
     fn.restype = None
     p = ctypes.POINTER(ctypes.c_double)
     fn.argtypes = [ctypes.c_int64, p, p, *[ctypes.c_double] * 7, ctypes.c_int64, p, p]
-    fn.sine = loaded.pendulum_sin  # the build's sine on an array (`sine_accuracy`)
+    fn.sine = loaded.sines_sin  # the build's sine on an array (`sine_accuracy`)
     fn.sine.restype = None
     fn.sine.argtypes = [ctypes.c_int64, p, p]
     return fn
@@ -264,7 +264,7 @@ def contract_accuracy(evaluate, points) -> dict:
 
 
 def sine_accuracy(fn) -> dict:
-    """A C build's sine (its ``pendulum_sin``) against np.sin on `sine_points`: max
+    """A C build's sine (sines.h's ``sines_sin``) against np.sin on `sine_points`: max
     abs error per range, and whether it meets SINE_CONTRACT on both."""
     p = ctypes.POINTER(ctypes.c_double)
 

@@ -12,7 +12,8 @@
    (512-bit vectors where /proc/cpuinfo has ``avx512f``), then, at the best block, one
    option changed at a time (no FMA contraction, 256-bit vectors, glibc's vector sin),
    then the one-reduction-by-pi sines of run_all.py's search, the fastest of them again
-   over the block sizes. Every build is checked against sweep's final state after
+   over the block sizes; the fastest few eligible builds are timed again in turns, and
+   the fastest of them is the limit. Every build is checked against sweep's final state after
    ``CHECK_STEPS`` steps (``CHECK_TOL``) and its sine and cosine against NumPy's on the
    sine contract's arguments (``_c_builds.SINE_CONTRACT``: 2**-52 absolute up to
    |x| = 1e12); only a build passing both may be the limit. The limit and ``sweep.run``
@@ -29,9 +30,10 @@
    the same flip times to the bit.
 3. **A swing network's cost per step against its edges**: 100 nodes (half generators
    P = +1, half consumers P = -1, at random), a random spanning tree plus random extra
-   lines, 100, 200 and 400 edges; 2048 single-node perturbations x 1000 steps of
-   dt = 0.01 s each; ns per edge-step and a straight-line fit of the time per
-   trajectory-step against the edges.
+   lines, 100, 200 and 400 edges; single-node perturbations (16 nodes x 11 x 11 =
+   1936) x 1000 steps of dt = 0.01 s each, the three networks timed in turns (best of
+   3); ns per edge-step and a straight-line fit of the time per trajectory-step against
+   the edges.
 
 Writes ``benchmarks/results/double_pendulum.json`` and ``.md`` (``--quick``: small sizes,
 ``double_pendulum_quick.*``, a smoke test).
@@ -94,6 +96,7 @@ CHECK_STEPS = 100  # the agreement check's horizon (t = 1 s)
 #: algorithm (a term missing, a sine of 1e-12 accuracy, another step) moves the state
 #: after 100 steps by far more.
 CHECK_TOL = 1e-11
+FINALISTS, FINAL_ROUNDS = 4, 3  # the fastest eligible builds, timed again in turns
 
 
 def system() -> sweep.DoublePendulum:
@@ -174,7 +177,7 @@ def build_double(build_dir: Path, flags: list[str]):
     fn.restype = None
     fn.argtypes = [ctypes.c_int64, p, p, p, p, *[ctypes.c_double] * 6, ctypes.c_int64,
                    p, p, p, p]
-    fn.sine, fn.sincos = loaded.dp_sin, loaded.dp_sincos
+    fn.sine, fn.sincos = loaded.sines_sin, loaded.dp_sincos
     fn.sine.restype = fn.sincos.restype = None
     fn.sine.argtypes = [ctypes.c_int64, p, p]
     fn.sincos.argtypes = [ctypes.c_int64, p, p, p]
@@ -299,7 +302,15 @@ def search_c_limit(state, reference, n_steps: int, blocks, avx512: bool, build_d
                 if [f for f in v if not f.startswith("-DBLOCK=")] == same}
         designs += eligible(search(more))
     found += designs
-    return rows, max(found, key=lambda r: r["traj_steps_per_s"])
+    # one timing per build is at the mercy of the machine's other work: the fastest
+    # few are timed again in turns, and the best of those is the limit
+    finalists = sorted(found, key=lambda r: -r["traj_steps_per_s"])[:FINALISTS]
+    best = best_alternating({id(r): lambda f=r["fn"]: call_double(f, state, n_steps)
+                             for r in finalists}, FINAL_ROUNDS)
+    for r in finalists:
+        r["final_traj_steps_per_s"] = state[0].size * n_steps / best[id(r)]
+        log(f"  finalist: {r['name']:52s} {r['final_traj_steps_per_s'] / 1e6:8.1f} M/s")
+    return rows, max(finalists, key=lambda r: r["final_traj_steps_per_s"])
 
 
 # ------------------------------------------------------------------ flip-time map
@@ -380,12 +391,15 @@ def network_scaling(n_nodes: int, edge_counts, n_traj: int, steps: int, repeats:
     side = max(1, math.isqrt(per))
     grid = sweep.Grid(perturbed_node=nodes, delta_theta=np.linspace(-1.0, 1.0, side),
                       delta_omega=np.linspace(-2.0, 2.0, max(1, per // side)))
-    rows = []
-    for n_edges, (edges, power) in graphs.items():
-        network = sweep.SwingNetwork(edges, power=power, damping=0.1, coupling=coupling)
-        kw = dict(t_end=steps * DT, dt=DT, observe=("synchrony",), progress=False)
+    kw = dict(t_end=steps * DT, dt=DT, observe=("synchrony",), progress=False)
+    networks = {e: sweep.SwingNetwork(edges, power=power, damping=0.1, coupling=coupling)
+                for e, (edges, power) in graphs.items()}
+    for network in networks.values():
         sweep.run(network, grid, **dict(kw, t_end=DT))  # compile: not timed
-        took = best_of(lambda n=network, k=kw: sweep.run(n, grid, **k), repeats)
+    best = best_alternating({e: lambda n=network: sweep.run(n, grid, **kw)
+                             for e, network in networks.items()}, repeats)
+    rows = []
+    for n_edges, took in best.items():
         per_step = took / (grid.size * steps)
         rows.append({"edges": n_edges, "seconds": took, "ns_per_traj_step": per_step * 1e9,
                      "ns_per_edge_step": per_step * 1e9 / n_edges})
@@ -533,26 +547,28 @@ def markdown(r: dict) -> str:
             f"{w['steps']} steps by {c['full_horizon_max_abs_diff']:.1e} (the motion is "
             "chaotic: rounding differences grow). NumPy after "
             f"{CHECK_STEPS} steps: {r['numpy']['check_max_abs_diff']:.1e}.", "",
-            "The search (each build timed once; differences under ~5 % are noise on this "
-            "machine). Sine contract: within "
+            "The search (each build timed once: on a shared machine a single timing can be "
+            f"off by 2x either way; the {FINALISTS} fastest eligible builds were timed again "
+            f"in turns, best of {FINAL_ROUNDS}, last column). Sine contract: within "
             f"{SINE_CONTRACT:.3g} of NumPy's sin (and cos) for "
             + " and ".join(SINE_RANGES) + "; errors shown as the largest of the build's "
             "sin, and the sin and cos of its one-reduction pair, over both ranges.", "",
             "| build | flags beyond `" + " ".join(C_BASE_FLAGS) + "` | M traj-steps/s | "
-            f"check after {CHECK_STEPS} steps | sin/cos max abs err | eligible |",
-            "|---|---|---|---|---|---|"]
+            f"check after {CHECK_STEPS} steps | sin/cos max abs err | eligible | "
+            "again, in turns |", "|---|---|---|---|---|---|---|"]
         for row in r["c_search"]:
             if "error" in row:
                 lines.append(f"| {row['name']} | `{' '.join(row['flags'])}` | "
-                             f"{row['error']} | | | no |")
+                             f"{row['error']} | | | no | |")
                 continue
             extra = " ".join(f for f in row["flags"] if f not in C_BASE_FLAGS)
             worst = max(e for part in row["trig"].values() for e in part.values())
+            again = row.get("final_traj_steps_per_s")
             lines.append(f"| {row['name']} | `{extra}` | {row['traj_steps_per_s'] / 1e6:.1f}"
                          f" | {row['check_max_abs_diff']:.1e}"
                          f"{'' if row['check_ok'] else ' FAILS'} | {worst:.1e} | "
                          f"{'yes' if row['check_ok'] and row['trig_eligible'] else '**no**'}"
-                         " |")
+                         f" | {'' if again is None else f'{again / 1e6:.1f}'} |")
     else:
         lines += [f"C limit: {r.get('c_note', 'no eligible build')}; `sweep.run`: "
                   f"{r['sweep']['traj_steps_per_s'] / 1e6:.1f} M/s; NumPy: "
@@ -588,11 +604,15 @@ def markdown(r: dict) -> str:
             f"damping 0.1, coupling {net['coupling']:g}; {net['trajectories']} "
             f"perturbations x {net['steps']} RK4 steps of dt = {DT} s, "
             "`observe=(\"synchrony\",)`.", "",
-            "| edges | seconds | ns per trajectory-step | ns per edge-step |",
-            "|---|---|---|---|"]
+            "| edges | seconds | ns per trajectory-step | ns per edge-step | ns per "
+            "edge-step, the nodes' part (the fit's constant) taken off |",
+            "|---|---|---|---|---|"]
         for row in net["rows"]:
+            edge_part = (row["ns_per_traj_step"] - net["fit_ns_per_traj_step_at_0_edges"]) \
+                / row["edges"]
             lines.append(f"| {row['edges']} | {row['seconds']:.2f} | "
-                         f"{row['ns_per_traj_step']:.0f} | {row['ns_per_edge_step']:.2f} |")
+                         f"{row['ns_per_traj_step']:.0f} | {row['ns_per_edge_step']:.2f} | "
+                         f"{edge_part:.2f} |")
         lines += ["", f"Straight-line fit: {net['fit_ns_per_traj_step_at_0_edges']:.0f} ns "
                   f"per trajectory-step + {net['fit_ns_per_edge_step']:.2f} ns per edge "
                   f"(largest residual {net['fit_max_relative_residual']:.1%}): the cost "

@@ -865,7 +865,7 @@ def markdown(r) -> str:
             "below. **The sine contract**: sweep's sine is within "
             f"{SINE_CONTRACT:.3g} (2**-52, two ulps of values in [0.5, 1)) of np.sin for "
             "|x| <= 1e4 and up to |x| = 1e12 (`tests/test_vecmath.py`; it measures "
-            "1.1e-16); each build's own sine (`pendulum_sin`, the same inlined code) is "
+            "1.1e-16); each build's own sine (`sines_sin`, the same inlined code) is "
             "measured against np.sin on the tests' kinds of arguments (random, every "
             "magnitude, next to multiples of pi/2 and pi/4, dyadic steps; beyond 1e4 "
             "random to 1e12 and multiples of pi/2 to 1e6), and a build that misses the "

@@ -118,14 +118,8 @@ void dp_rk4(int64_t n, const double *th1_0, const double *th2_0, const double *o
     }
 }
 
-/* The build's sine and sine-cosine pair on arrays (their accuracy is measured by
- * double_pendulum.py): the same inlined code as in the kernel's lanes. */
-void dp_sin(int64_t n, const double *x, double *out) {
-#pragma omp simd
-    for (int64_t i = 0; i < n; i++)
-        out[i] = SIN(x[i]);
-}
-
+/* The build's sine-cosine pair on arrays (double_pendulum.py measures its accuracy;
+ * sines.h's sines_sin gives the sine): the same inlined code as in the kernel's lanes. */
 void dp_sincos(int64_t n, const double *x, double *s_out, double *c_out) {
 #pragma omp simd
     for (int64_t i = 0; i < n; i++) {

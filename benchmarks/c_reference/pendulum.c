@@ -43,14 +43,6 @@
 
 #include "sines.h"
 
-/* The build's sine on an array (its accuracy is measured by run_all.py): the same
- * inlined code as in the kernel's lanes. */
-void pendulum_sin(int64_t n, const double *x, double *out) {
-#pragma omp simd
-    for (int64_t i = 0; i < n; i++)
-        out[i] = SIN(x[i]);
-}
-
 #ifdef LINEAR
 #define RESTORING(th) (th)
 #else
