@@ -14,12 +14,12 @@ import math
 import shutil
 import subprocess
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
 from _machine import C_SOURCE, cpu_flags
+from _timing import best_of
 
 #: run_all.py's full scene: g/L, damping, forcing amplitude, frequency and phase; step
 G_OVER_L, DAMPING, AMPLITUDE, FREQUENCY, PHASE = 1.0, 0.5, 1.2, 2.0 / 3.0, 0.0
@@ -96,23 +96,27 @@ PI_SINES = {
 }
 
 
-def c_limit_sine_designs(best_flags: list[str], avx512: bool,
-                         blocks=None) -> dict[str, list[str]]:
+def c_limit_sine_designs(best_flags: list[str], avx512: bool, blocks=None,
+                         forcing_table: bool = True) -> dict[str, list[str]]:
     """Third phase (issue 29): the sine's design, at the best block (or at each of
     ``blocks``): one reduction by pi and one odd polynomial, Taylor or minimax, by
-    Horner or Estrin; each must also pass the sine contract (`sine_accuracy`)."""
+    Horner or Estrin; each must also pass the sine contract (`sine_accuracy`).
+    ``forcing_table``: pendulum.c's -DFORCING_TABLE (a system without forcing, as
+    double_pendulum.c, has none)."""
     width = [WIDE] if avx512 else []
     label = "512-bit" if avx512 else "-march=native"
+    table = ["-DFORCING_TABLE"] if forcing_table else []
     if blocks is None:
         blocks = [next(f for f in best_flags if f.startswith("-DBLOCK="))[8:]]
     out = {}
     for n in blocks:
         for (poly, scheme), words in PI_SINES.items():
             out[f"C limit search: {label}, sin by one reduction by pi, {words} odd "
-                f"polynomial, {scheme}, FMA, forcing table, block {n}"] = [
+                f"polynomial, {scheme}, FMA{', forcing table' if table else ''}, "
+                f"block {n}"] = [
                 *width, "-DSIN_VARIANT=5", f"-DSIN_POLY={poly}",
                 *(["-DESTRIN"] if scheme == "Estrin" else []), "-ffp-contract=fast",
-                "-DFORCING_TABLE", f"-DBLOCK={n}"]
+                *table, f"-DBLOCK={n}"]
     return out
 
 
@@ -140,23 +144,32 @@ def c_limit_variations(best_flags: list[str], avx512: bool) -> dict[str, list[st
 _LIB_NUMBER = itertools.count()
 
 
-def build_c_one(build_dir: Path, key: str, flags: list[str]):
-    """Compile pendulum.c with ``flags``; a ctypes function, or an error string, or
-    None if gcc is absent."""
+def compile_library(build_dir: Path, source: Path, flags: list[str]):
+    """Compile a C reference ``source`` with gcc, C_BASE_FLAGS and ``flags`` into a
+    shared library in ``build_dir``; the loaded library (ctypes), or an error string,
+    or None if gcc is absent."""
     gcc = shutil.which("gcc")
     if gcc is None:
         return None
-    lib = build_dir / f"pendulum_{next(_LIB_NUMBER)}.so"
-    cmd = [gcc, *C_BASE_FLAGS, *flags, str(C_SOURCE), "-o", str(lib), "-lm"]
+    lib = build_dir / f"{source.stem}_{next(_LIB_NUMBER)}.so"
+    cmd = [gcc, *C_BASE_FLAGS, *flags, str(source), "-o", str(lib), "-lm"]
     proc = subprocess.run(cmd, check=False, capture_output=True, text=True)
     if proc.returncode != 0:
         return "build failed: " + (proc.stderr.strip().splitlines() or ["?"])[-1]
-    loaded = ctypes.CDLL(str(lib))
+    return ctypes.CDLL(str(lib))
+
+
+def build_c_one(build_dir: Path, key: str, flags: list[str]):
+    """Compile pendulum.c with ``flags``; a ctypes function, or an error string, or
+    None if gcc is absent."""
+    loaded = compile_library(build_dir, C_SOURCE, flags)
+    if loaded is None or isinstance(loaded, str):
+        return loaded
     fn = loaded.pendulum_rk4
     fn.restype = None
     p = ctypes.POINTER(ctypes.c_double)
     fn.argtypes = [ctypes.c_int64, p, p, *[ctypes.c_double] * 7, ctypes.c_int64, p, p]
-    fn.sine = loaded.pendulum_sin  # the build's sine on an array (`sine_accuracy`)
+    fn.sine = loaded.sines_sin  # the build's sine on an array (`sine_accuracy`)
     fn.sine.restype = None
     fn.sine.argtypes = [ctypes.c_int64, p, p]
     return fn
@@ -205,15 +218,16 @@ def _neighbours(x, n):
 
 
 @functools.cache
-def sine_points() -> tuple[tuple[np.ndarray, np.ndarray], ...]:
-    """(x, np.sin(x)) for each of SINE_RANGES: the arguments of tests/test_vecmath.py
-    (uniform, every magnitude down to 1e-300, multiples of pi/2 and pi/4 and their 4
-    neighbours each side, dyadic steps; beyond 1e4: uniform to 1e6 and 1e8,
-    log-uniform to 1e12, multiples of pi/2 up to 1e6 and 2 neighbours each side), and
-    for the one-reduction-by-pi sines, whose rounding errors are largest where
-    |sin x| ~ 1 (|r| near pi/2, where the polynomial's r**3 P is ~ -0.57): 4e6 arguments
-    k pi + r with 0.9 <= |r| <= pi/2, and HARD_SINE_ARGUMENTS. A maximum over a sample:
-    an error that one argument in 1e8 reaches may be missed."""
+def contract_arguments() -> tuple[np.ndarray, np.ndarray]:
+    """The arguments of the sine contract's check, one array for each of SINE_RANGES:
+    those of tests/test_vecmath.py (uniform, every magnitude down to 1e-300, multiples
+    of pi/2 and pi/4 and their 4 neighbours each side, dyadic steps; beyond 1e4:
+    uniform to 1e6 and 1e8, log-uniform to 1e12, multiples of pi/2 up to 1e6 and 2
+    neighbours each side), and for the one-reduction-by-pi sines, whose rounding
+    errors are largest where |sin x| ~ 1 (|r| near pi/2, where the polynomial's r**3 P
+    is ~ -0.57): 4e6 arguments k pi + r with 0.9 <= |r| <= pi/2, and
+    HARD_SINE_ARGUMENTS. A maximum over a sample: an error that one argument in 1e8
+    reaches may be missed."""
     rng = np.random.default_rng(29)
     sign = rng.choice([-1.0, 1.0], 4_000_000)
     small = np.concatenate([
@@ -231,20 +245,42 @@ def sine_points() -> tuple[tuple[np.ndarray, np.ndarray], ...]:
         10.0 ** rng.uniform(8, 12, 1_000_000) * sign[:1_000_000],
         _neighbours(np.arange(6367, 636620, 7) * (np.pi / 2), 2)])
     large = large[np.abs(large) > 1e4]
-    return (small, np.sin(small)), (large, np.sin(large))
+    return small, large
+
+
+@functools.cache
+def sine_points() -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+    """(x, np.sin(x)) for each of SINE_RANGES (`contract_arguments`)."""
+    return tuple((x, np.sin(x)) for x in contract_arguments())
+
+
+def contract_accuracy(evaluate, points) -> dict:
+    """``evaluate(x)`` (a C build's sine or cosine on an array) against the reference
+    values of ``points`` (`sine_points`, or the same arguments with np.cos): max abs
+    error per range, and whether it meets SINE_CONTRACT on both."""
+    errors = [float(np.max(np.abs(evaluate(x) - want))) for x, want in points]
+    return {"max_abs_error": dict(zip(SINE_RANGES, errors)), "contract": SINE_CONTRACT,
+            "eligible": all(e <= SINE_CONTRACT for e in errors)}
 
 
 def sine_accuracy(fn) -> dict:
-    """A C build's sine (its ``pendulum_sin``) against np.sin on `sine_points`: max
+    """A C build's sine (sines.h's ``sines_sin``) against np.sin on `sine_points`: max
     abs error per range, and whether it meets SINE_CONTRACT on both."""
     p = ctypes.POINTER(ctypes.c_double)
-    errors = []
-    for x, want in sine_points():
+
+    def evaluate(x):
         got = np.empty_like(x)
         fn.sine(x.size, x.ctypes.data_as(p), got.ctypes.data_as(p))
-        errors.append(float(np.max(np.abs(got - want))))
-    return {"max_abs_error": dict(zip(SINE_RANGES, errors)), "contract": SINE_CONTRACT,
-            "eligible": all(e <= SINE_CONTRACT for e in errors)}
+        return got
+
+    return contract_accuracy(evaluate, sine_points())
+
+
+def sine_text(sine) -> str:
+    """A C build's sine accuracy in one phrase (`sine_accuracy`'s result)."""
+    errors = ", ".join(f"{e:.1e} for {r}" for r, e in sine["max_abs_error"].items())
+    return f"max |err| {errors}: " + ("meets the contract" if sine["eligible"]
+                                      else f"NOT eligible (> {SINE_CONTRACT:.2g})")
 
 
 def c_limit(repeats: int = 3) -> dict | None:
@@ -266,12 +302,6 @@ def c_limit(repeats: int = 3) -> dict | None:
         if not callable(fn):
             return None
         call_c(fn, th0[:64], om0[:64], 10)  # load the library, warm the threads
-        best = min(_seconds(lambda: call_c(fn, th0, om0, steps))
-                   for _ in range(repeats))
+        best = best_of(lambda: call_c(fn, th0, om0, steps), repeats)
     return {"flags": " ".join(flags), "traj_steps_per_s": th0.size * steps / best}
 
-
-def _seconds(fn) -> float:
-    start = time.perf_counter()
-    fn()
-    return time.perf_counter() - start

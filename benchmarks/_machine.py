@@ -110,6 +110,21 @@ def machine_details() -> dict:
     return info
 
 
+def machine_lines(r) -> list[str]:
+    """Markdown bullet lines on the machine of a results dict (its ``machine_details``,
+    or ``details`` as `stamp` writes it): CPU, compiler, numba."""
+    d = r.get("machine_details") or r.get("details")
+    if not d:
+        return []
+    return [f"- CPU: {d.get('cpu_model')} ({d.get('Vendor ID', '?')}, family "
+            f"{d.get('CPU family', '?')} model {d.get('Model', '?')}), {d['cores']} cores; "
+            f"SIMD: {d['simd']}; hypervisor: {d.get('Hypervisor vendor', 'none')}",
+            f"- compiler: {d.get('compiler')}; `-march=native` means "
+            f"`{d.get('march_native')}` to it, and its code for the polynomial-sine kernel "
+            f"uses {d.get('march_native_vector_registers')} vector registers",
+            f"- numba {d['numba']} (llvmlite {d['llvmlite']}), {d['numba_threads']} threads"]
+
+
 def stamp() -> dict:
     """When and where a benchmark ran: ``date`` (local time), ``machine`` (one line)
     and ``details`` (`machine_details`), to open a results dict with."""

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +40,7 @@ from sweep import _config  # noqa: E402
 
 from _c_builds import AMPLITUDE, DAMPING, DT, FREQUENCY, G_OVER_L, PHASE  # noqa: E402
 from _machine import stamp, write_results  # noqa: E402
+from _timing import best_of  # noqa: E402
 
 SCENE = sweep.Scene(gravity=G_OVER_L, length=1.0, model="nonlinear",
                     effects=(sweep.Damping(DAMPING), sweep.Forcing(AMPLITUDE, FREQUENCY, PHASE)))
@@ -77,18 +77,11 @@ def timed_run(grid, block, adaptive, t_end, repeats):
                                                      if k != "progress"})[1]
         assert spec.block == block, (spec.block, block)
         sweep.run(SCENE, grid, **{**options, "t_end": options["dt"] * 4})  # compile
-        best = min(_seconds(lambda: sweep.run(SCENE, grid, **options))
-                   for _ in range(repeats))
+        best = best_of(lambda: sweep.run(SCENE, grid, **options), repeats)
     finally:
         for name, value in saved.items():
             setattr(_config, name, value)
     return best
-
-
-def _seconds(fn) -> float:
-    start = time.perf_counter()
-    fn()
-    return time.perf_counter() - start
 
 
 def fixed_crossover(sizes, work, repeats, blocks=FIXED_BLOCKS):

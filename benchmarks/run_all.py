@@ -106,8 +106,16 @@ from _c_builds import (  # noqa: F401
     grid_axes,
     initial_states,
     sine_accuracy,
+    sine_text,
 )
-from _machine import cpu_flags, gcc_info, machine, machine_details, native_vector_registers  # noqa: F401
+from _machine import (  # noqa: F401
+    cpu_flags,
+    gcc_info,
+    machine,
+    machine_details,
+    machine_lines,
+    native_vector_registers,
+)
 
 REPEATS = 1  # best of at least this many calls (--repeats)
 MIN_SECONDS = 0.0  # every timing repeats until this much wall time (--quick: 0.3 s)
@@ -305,13 +313,6 @@ def loop_math_sin(x, out):
 def loop_vsin_strict(x, out):
     for i in range(x.size):
         out[i] = _vecmath.sin(x[i])
-
-
-def sine_text(sine) -> str:
-    """A C build's sine accuracy in one phrase (`sine_accuracy`'s result)."""
-    errors = ", ".join(f"{e:.1e} for {r}" for r, e in sine["max_abs_error"].items())
-    return f"max |err| {errors}: " + ("meets the contract" if sine["eligible"]
-                                      else f"NOT eligible (> {SINE_CONTRACT:.2g})")
 
 
 def vectorised(fn) -> bool:
@@ -798,19 +799,6 @@ def load_warning(r) -> list[str]:
             "with `--repeats 3` to be sure.", ""]
 
 
-def machine_lines(r) -> list[str]:
-    d = r.get("machine_details")
-    if not d:
-        return []
-    return [f"- CPU: {d.get('cpu_model')} ({d.get('Vendor ID', '?')}, family "
-            f"{d.get('CPU family', '?')} model {d.get('Model', '?')}), {d['cores']} cores; "
-            f"SIMD: {d['simd']}; hypervisor: {d.get('Hypervisor vendor', 'none')}",
-            f"- compiler: {d.get('compiler')}; `-march=native` means "
-            f"`{d.get('march_native')}` to it, and its code for the polynomial-sine kernel "
-            f"uses {d.get('march_native_vector_registers')} vector registers",
-            f"- numba {d['numba']} (llvmlite {d['llvmlite']}), {d['numba_threads']} threads"]
-
-
 def markdown(r) -> str:
     w = r["workload"]
     lines = [f"# sweep benchmark suite ({r['mode']}, best of {r['repeats']})", "",
@@ -877,7 +865,7 @@ def markdown(r) -> str:
             "below. **The sine contract**: sweep's sine is within "
             f"{SINE_CONTRACT:.3g} (2**-52, two ulps of values in [0.5, 1)) of np.sin for "
             "|x| <= 1e4 and up to |x| = 1e12 (`tests/test_vecmath.py`; it measures "
-            "1.1e-16); each build's own sine (`pendulum_sin`, the same inlined code) is "
+            "1.1e-16); each build's own sine (`sines_sin`, the same inlined code) is "
             "measured against np.sin on the tests' kinds of arguments (random, every "
             "magnitude, next to multiples of pi/2 and pi/4, dyadic steps; beyond 1e4 "
             "random to 1e12 and multiples of pi/2 to 1e6), and a build that misses the "

@@ -55,7 +55,6 @@ import re
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -67,6 +66,8 @@ sys.path.insert(0, str(HERE.parent))
 from sweep import _config  # noqa: E402
 from sweep.kernels import vecmath  # noqa: E402
 from sweep.kernels.vecmath import fma  # noqa: E402
+
+from _timing import best_alternating  # noqa: E402
 
 _JIT = _config.jit_options()
 _bits_of = vecmath._bits_of  # the IEEE bits of a float64 (a bitcast)
@@ -255,17 +256,6 @@ def forcing(steps, amplitude=1.2, frequency=2.0 / 3.0, dt=0.01):
 def vectorised(fn) -> bool:
     asm = "".join(fn.inspect_asm().values())
     return re.search(r"\bv(?:mul|add|sub|fmadd\w*)pd\s+%?[yz]mm", asm) is not None
-
-
-def best_alternating(calls: dict, rounds: int) -> dict:
-    """{name: best seconds}, the calls alternating in each round."""
-    best = dict.fromkeys(calls, math.inf)
-    for _ in range(rounds):
-        for name, call in calls.items():
-            start = time.perf_counter()
-            call()
-            best[name] = min(best[name], time.perf_counter() - start)
-    return best
 
 
 # ------------------------------------------------------------- sweep.run with each sine

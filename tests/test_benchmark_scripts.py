@@ -330,3 +330,43 @@ def test_compile_time_script(tmp_path):
         assert row["threads"]["compile_s"] > 0 and row["prange"]["compile_s"] > 0
     assert "| RK4, one trajectory (one lane) |" in \
         (tmp_path / "compile_time_quick.md").read_text()
+
+
+def test_double_pendulum_script(tmp_path):
+    """benchmarks/double_pendulum.py --quick: sweep, NumPy and (with gcc) every C build
+    checked against sweep after 100 steps, the flip map's band the same with and
+    without stop_early, the network's three graphs timed; both files written."""
+    double = importlib.import_module("double_pendulum")
+    assert double.main(["--quick", "--out", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "double_pendulum_quick.json").read_text())
+    assert result["numpy"]["check_max_abs_diff"] <= double.CHECK_TOL
+    if shutil.which("gcc") is not None:
+        built = [row for row in result["c_search"] if "error" not in row]
+        assert built and all(row["check_ok"] for row in built)
+        # sweep's own sine design meets the contract in C too
+        assert all(row["trig_eligible"] for row in built if "-DSIN_VARIANT=4" in row["flags"])
+        limit = result["c_limit"]
+        assert limit["sweep_over_c_limit"] > 0 and limit["check_max_abs_diff"] <= double.CHECK_TOL
+    flip = result["flip"]
+    assert flip["band_same_bits"] and flip["stop_early_seconds"] > 0
+    assert [row["edges"] for row in result["network"]["rows"]] == [10, 20, 40]
+    assert all(row["ns_per_edge_step"] > 0 for row in result["network"]["rows"])
+    text = (tmp_path / "double_pendulum_quick.md").read_text()
+    assert text.startswith("# Systems: the double pendulum and swing networks")
+
+
+def test_double_pendulum_c_agrees_with_sweep(tmp_path):
+    """double_pendulum.c, each sine design, on a grid with a padded partial block:
+    sweep's final state to rounding after 100 steps (the script's check)."""
+    if shutil.which("gcc") is None:
+        pytest.skip("gcc not found: the C reference is not built")
+    double = importlib.import_module("double_pendulum")
+    theta1, theta2 = np.linspace(-3.0, 3.0, 20), np.linspace(-3.0, 3.0, 5)
+    state = double.starts(theta1, theta2)
+    ref = double.final_state(double.run_sweep(theta1, theta2, double.CHECK_STEPS))
+    for flags in (["-DSIN_VARIANT=4", "-DBLOCK=64"], ["-DSIN_VARIANT=0", "-DBLOCK=8"],
+                  ["-DSIN_VARIANT=5", "-DSIN_POLY=2", "-ffp-contract=off", "-DBLOCK=16"]):
+        fn = double.build_double(tmp_path, flags)
+        assert not isinstance(fn, str), fn
+        got = double.call_double(fn, state, double.CHECK_STEPS)
+        assert double.max_diff(got, ref) <= double.CHECK_TOL, flags

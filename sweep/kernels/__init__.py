@@ -8,7 +8,10 @@ a method, from `sweep.methods`), `snippets` (observables), `lanes` (per-lane cod
 block), `fixed` and `adaptive` (the two kernel bodies), `source` (the module text),
 `cache` (build, memo, disk cache), `threads` (a kernel's blocks on threads), `vecmath`
 (vectorisable sin/cos, float64 and float32), `precision` (a module made float32),
-`cuda` (the same pieces as one CUDA thread per trajectory).
+`cuda` (the same pieces as one CUDA thread per trajectory), `system` and `network` (the
+kernels of systems with several coordinates and of swing networks), `rewrite` (a
+system's derived source made fast for the lanes: parameter-only work hoisted, sums of
+products fused).
 
 Reads `sweep.physics`, `sweep.methods` and `sweep.observables`; nothing here imports
 the engine, the execution back ends or the maps.

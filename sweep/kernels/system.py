@@ -30,6 +30,7 @@ from ..observables import LYAPUNOV_EVERY
 from ..physics.system import DerivedSystem, SystemDeclaration, system_columns
 from ..system_observables import variables
 from .lanes import IDENTIFIER, allocate, blocks_head, indent, lane_loop, scalar_lanes
+from .rewrite import Rewritten, rewrite
 from .spec import Status, check_block
 from .steppers import fused
 
@@ -43,6 +44,8 @@ NL = "\n"
 #: the double pendulum ran at 14 M trajectory-steps/s instead of 93 (AMD EPYC Zen 5,
 #: 2 cores).
 _INLINE = "@njit(inline='always', **JIT)"
+#: The kernel's array of the hoisted values (`sweep.kernels.rewrite`), [value, lane].
+_INVARIANT = "hoisted_values"
 
 
 @dataclass(frozen=True)
@@ -128,18 +131,19 @@ def uses_time(spec: SystemSpec) -> bool:
                                             + derived.jacobian_lines))
 
 
-def _physics(spec: SystemSpec, state: list[str], symbols: list[str]) -> str:
-    """``accel`` (and ``energy`` where observed) as numba functions (with ``t`` last
-    when the dynamics read it: `uses_time`)."""
+def _physics(spec: SystemSpec, state: list[str],
+             symbols: list[str]) -> tuple[str, Rewritten]:
+    """``accel`` (or, for ``lyapunov``, ``accel_jac``: the accelerations and their
+    Jacobian) and ``energy`` where observed, as numba functions (with ``t`` last when
+    the dynamics read it: `uses_time`); and what of the step's function depends on the
+    parameters alone (`sweep.kernels.rewrite`): the kernel computes it once per
+    trajectory into ``hoisted_values[k, j]`` (lane j), which it passes with ``j`` after
+    ``symbols``."""
     coords = spec.system.coordinates
-    args = ", ".join(state + symbols + (["t"] if uses_time(spec) else []))
+    time = ["t"] if uses_time(spec) else []
     accel = [f"acc_{c.symbol}" for c in coords]
     if spec.damping:
         accel = [f"vfma(-damping_c, {c.velocity_symbol}, acc_{c.symbol})" for c in coords]
-    text = (f"{_INLINE}\n"
-            f"def accel({args}):\n"
-            + indent(NL.join(spec.derived.accel_lines), 1) + NL
-            + f"    return {', '.join(accel)}\n")
     if "lyapunov" in spec.observe:
         if not spec.derived.jacobian_lines:
             raise ValueError(f"observable 'lyapunov' needs the Jacobian of system "
@@ -152,20 +156,30 @@ def _physics(spec: SystemSpec, state: list[str], symbols: list[str]) -> str:
                 if spec.damping and b == a.velocity_symbol:
                     entry = f"{entry} - damping_c"
                 entries.append(entry)
-        text += (f"\n\n{_INLINE}\n"
-                 f"def accel_jac({args}):\n"
-                 + indent(NL.join(spec.derived.accel_lines + spec.derived.jacobian_lines), 1)
-                 + NL + f"    return {', '.join(accel + entries)}\n")
+        name, lines = "accel_jac", spec.derived.accel_lines + spec.derived.jacobian_lines
+        outputs = accel + entries
+    else:
+        name, lines, outputs = "accel", spec.derived.accel_lines, accel
+    fast = rewrite(lines, symbols, [f"acc_{c.symbol}" for c in coords] +
+                   [f"jac_{a.symbol}_{b}" for a in coords for b in state])
+    # the hoisted values come in one array [k, lane] (as arguments they could pass
+    # CPython's 30 of a call, beyond which numba cannot inline it)
+    reads = [f"{x} = {_INVARIANT}[{k}, j]" for k, x in enumerate(fast.names)]
+    extra = [_INVARIANT, "j"] if fast.names else []
+    text = (f"{_INLINE}\n"
+            f"def {name}({', '.join(state + symbols + extra + time)}):\n"
+            + indent(NL.join(reads + list(fast.lines)), 1) + NL
+            + f"    return {', '.join(outputs)}\n")
     if "energy" in spec.observe or spec.flip_energy:
         if not spec.derived.energy_lines:
             raise ValueError(f"observable 'energy' needs the energy of system "
                              f"{spec.system.name!r}, which its declaration does not give; "
                              "accepted: observe without 'energy'")
         text += (f"\n\n{_INLINE}\n"
-                 f"def energy({args}):\n"
+                 f"def energy({', '.join(state + symbols + time)}):\n"
                  + indent(NL.join(spec.derived.energy_lines), 1) + NL
                  + "    return energy_value\n")
-    return text
+    return text, fast
 
 
 def _symbols(spec: SystemSpec) -> list[str]:
@@ -177,7 +191,8 @@ def _step(spec: SystemSpec, method, constants: dict[str, str],
           symbols: list[str]) -> list[str]:
     """One explicit Runge-Kutta step of every coordinate, from the method's tableau:
     the same fused operations as the single pendulum's step (`sweep.kernels.steppers`);
-    with ``lyapunov``, the tangent vector ``ly_<x>`` too."""
+    with ``lyapunov``, the tangent vector ``ly_<x>`` too. ``symbols``: the physics'
+    arguments after the state (the parameters, then the hoisted temporaries)."""
     tableau = method
     coords = spec.system.coordinates
     state = [c.symbol for c in coords] + [c.velocity_symbol for c in coords]
@@ -338,6 +353,9 @@ class _Parts:
     stopped: list[str]      # with stop_early: the lines when a trajectory flips
     renormalise: str        # the tangent vector's renormalisation (with lyapunov)
     stores: list[str]       # variables a step changes
+    physics: str            # the physics functions' source (`_physics`)
+    hoisted: list[str]      # after the loads: the parameters' part, into hoisted_values
+    n_hoisted: int          # rows of hoisted_values (0: none)
 
 
 def _parts(spec: SystemSpec) -> _Parts:
@@ -350,8 +368,13 @@ def _parts(spec: SystemSpec) -> _Parts:
     coords = spec.system.coordinates
     state = [c.symbol for c in coords] + [c.velocity_symbol for c in coords]
     symbols = _symbols(spec)
+    physics, fast = _physics(spec, state, symbols)
     constants: dict[str, str] = {}
-    step = _step(spec, method, constants, symbols)
+    step = _step(spec, method, constants,
+                 symbols + ([_INVARIANT, "j"] if fast.names else []))
+    # what the step's physics reads of the parameters alone, once per trajectory
+    hoisted = [*fast.hoisted, *(f"{_INVARIANT}[{k}, j] = {x}"
+                                for k, x in enumerate(fast.names))]
     flip = "flip" in spec.observe
     angles = [c.symbol for c in _angles(spec)]
     lane = {x: "float64" for x in state + symbols}
@@ -388,7 +411,8 @@ def _parts(spec: SystemSpec) -> _Parts:
     stores = [x for x in state] + (["flip_t"] if flip else []) + \
         ([f"ly_{x}" for x in state] if "lyapunov" in spec.observe else []) + \
         (["done"] + [f"stop_{x}" for x in state] if spec.stop_early else [])
-    return _Parts(state, symbols, lane, constants, first, body, stopped, renormalise, stores)
+    return _Parts(state, symbols, lane, constants, first, body, stopped, renormalise, stores,
+                  physics, hoisted, len(fast.names))
 
 
 _RENORMALISE_HEAD = (f"if k_state % {LYAPUNOV_EVERY} == 0 or k_state == n_transient or "
@@ -401,7 +425,10 @@ def system_kernel(spec: SystemSpec) -> str:
     state, symbols, lane = parts.state, parts.symbols, parts.lane
     constants = parts.constants
     first = ["i = min(base + j, n - 1)  # padding lanes repeat the last trajectory"]
-    first += [f"{x} = params[i, {k}]" for k, x in enumerate(state + symbols)] + parts.first
+    first += [f"{x} = params[i, {k}]" for k, x in enumerate(state + symbols)]
+    first += parts.hoisted + parts.first
+    invariant = ([f"{_INVARIANT} = np.empty(({parts.n_hoisted}, BLOCK))"]
+                 if parts.n_hoisted else [])
     if spec.save:
         first += ["if base + j < n:"] + [f"    saved[base + j, {k}, 0] = {x}"
                                          for k, x in enumerate(state)]
@@ -433,7 +460,7 @@ def system_kernel(spec: SystemSpec) -> str:
     for b in range(b_first, b_stop):
         base = b * BLOCK
         n_real = min(BLOCK, n - base)
-{indent(NL.join(allocate(lane)), 2)}
+{indent(NL.join(allocate(lane) + invariant), 2)}
         n_done = 0
 {init_loop}
         for step in range(n_steps):
@@ -444,8 +471,7 @@ def system_kernel(spec: SystemSpec) -> str:
 {indent(save, 3)}
 {finish}
 '''
-    return (scalar_lanes(kernel, lane) if spec.block == 1 else kernel), \
-        _physics(spec, state, symbols)
+    return (scalar_lanes(kernel, lane) if spec.block == 1 else kernel), parts.physics
 
 
 def system_cuda_kernel(spec: SystemSpec) -> tuple[str, str]:
@@ -471,10 +497,12 @@ def system_cuda_kernel(spec: SystemSpec) -> tuple[str, str]:
             [f"    saved[i, {k}, (step + 1) // save_every] = {x}" for k, x in enumerate(state)]
     body = NL.join(["i = cuda.grid(1)", "if i >= out.shape[0]:", "    return",
                     "flat = first + i", "TWO_PI = 2.0 * math.pi", "k_state = 0",
-                    "n_done = 0"] + list(parts.constants.values()) + loads + parts.first
+                    "n_done = 0"] + list(parts.constants.values()) + loads
+                   + ([f"{_INVARIANT} = cuda.local.array(({parts.n_hoisted}, 1), np.float64)",
+                       "j = 0"] if parts.n_hoisted else []) + parts.hoisted + parts.first
                    + save_first + ["for step in range(n_steps):", indent(NL.join(loop), 1),
                                    _finish(spec, state, symbols, index="")])
-    physics = _physics(spec, state, symbols).replace(_INLINE, "@njit(**JIT)")
+    physics = parts.physics.replace(_INLINE, "@njit(**JIT)")
     return cuda_module(body), device_functions(physics, spec.dtype)
 
 
