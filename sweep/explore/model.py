@@ -625,19 +625,24 @@ class Explorer:
         return self.quantity_info(state.quantity).pilot and \
             {state.view.x, state.view.y} <= set(AXES_INITIAL)
 
+    def _check_quantity(self, state: State) -> None:
+        """Refuse a quantity that is unknown or does not apply to the state's scene
+        (a ValueError; `validate` names the control)."""
+        if state.quantity not in QUANTITIES:
+            raise ValueError(f"quantity {state.quantity!r} is unknown; accepted: "
+                             f"{', '.join(QUANTITIES)}")
+        if not QUANTITIES[state.quantity].applies(state.scene):
+            names = [q.name for q in QUANTITIES.values() if q.applies(state.scene)]
+            raise ValueError(f"quantity {state.quantity!r} does not apply to this scene "
+                             f"(effects: {', '.join(sorted(_effects(state.scene))) or 'none'}"
+                             f"); accepted: {', '.join(names)}")
+
     def validate(self, state: State, control: str) -> State:
         """Check ``state`` as `sweep.run` would (`sweep.diskspace.layout`: scene, grid, settings,
         stability, strobe period, ...) without computing; raise `InvalidInput` naming
         ``control`` with the validator's message."""
         try:
-            if state.quantity not in QUANTITIES:
-                raise ValueError(f"quantity {state.quantity!r} is unknown; accepted: "
-                                 f"{', '.join(QUANTITIES)}")
-            if not QUANTITIES[state.quantity].applies(state.scene):
-                names = [q.name for q in QUANTITIES.values() if q.applies(state.scene)]
-                raise ValueError(f"quantity {state.quantity!r} does not apply to this scene "
-                                 f"(effects: {', '.join(sorted(_effects(state.scene))) or 'none'}"
-                                 f"); accepted: {', '.join(names)}")
+            self._check_quantity(state)
             v = state.view
             if v.x == v.y:
                 raise ValueError(f"x and y are both {v.x!r}; accepted: two different axes")

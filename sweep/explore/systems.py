@@ -26,8 +26,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import check_count
-from ..diskspace import layout as run_layout
 from ..grid import Grid
 from ..kernels import Status
 from ..methods import METHODS
@@ -357,29 +355,12 @@ class SystemExplorer(Explorer):
         return dataclasses.replace(system, **changes)
 
     # -- validation and updates ------------------------------------------------------
-    def validate(self, state: State, control: str) -> State:
-        """As `Explorer.validate`, with the system's quantities."""
-        try:
-            if state.quantity not in self._registry:
-                raise ValueError(f"quantity {state.quantity!r} is not a map of "
-                                 f"{type(state.scene).__name__}; accepted: "
-                                 f"{', '.join(self._registry)}")
-            v = state.view
-            if v.x == v.y:
-                raise ValueError(f"x and y are both {v.x!r}; accepted: two different axes")
-            for name, (lo, hi) in ((v.x, v.x_range), (v.y, v.y_range)):
-                if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-                    raise ValueError(f"range of {name} must be finite with start < end, got "
-                                     f"({lo!r}, {hi!r})")
-            low, high = RESOLUTION_RANGE
-            check_count("resolution", state.resolution, minimum=low, maximum=high,
-                        accepted=f"an integer from {low} to {high} (pixels per axis)")
-            run_layout(state.scene, self.grid(state), **self.run_kwargs(state))
-        except InvalidInput:
-            raise
-        except (ValueError, TypeError) as exc:
-            raise InvalidInput(control, " ".join(str(exc).split())) from None
-        return state
+    def _check_quantity(self, state: State) -> None:
+        """Refuse a quantity that is not a map of the system (`Explorer.validate`)."""
+        if state.quantity not in self._registry:
+            raise ValueError(f"quantity {state.quantity!r} is not a map of "
+                             f"{type(state.scene).__name__}; accepted: "
+                             f"{', '.join(self._registry)}")
 
     def update(self, **changes) -> State:
         """`Explorer.update` (``model`` is the single pendulum's and is refused)."""

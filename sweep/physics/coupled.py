@@ -9,7 +9,6 @@ import functools
 import re
 from dataclasses import dataclass, field
 
-from .._validate import check_real
 from .effect import Parameter
 from .system import (
     DerivedSystem,
@@ -75,11 +74,7 @@ class CoupledPendula(System):
 
     def __post_init__(self) -> None:
         _declaration(self.n, self.kind, self.topology)  # checks n, kind and topology
-        for p in self.declaration.parameters:
-            object.__setattr__(self, p.axis, check_real(
-                p.axis, getattr(self, p.axis), minimum=p.minimum, strict=p.strict,
-                accepted=p.accepted()))
-        object.__setattr__(self, "effects", self._check_effects())
+        self._check_parameters()
 
     @property
     def declaration(self) -> SystemDeclaration:

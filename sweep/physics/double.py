@@ -13,7 +13,6 @@ import dataclasses
 import functools
 from dataclasses import dataclass, field
 
-from .._validate import check_real
 from .effect import Parameter
 from .system import (
     DerivedSystem,
@@ -95,11 +94,7 @@ class DoublePendulum(System):
                 for name in names:
                     if getattr(self, name) is None:
                         object.__setattr__(self, name, 0.0)
-        for p in self.declaration.parameters:
-            object.__setattr__(self, p.axis, check_real(
-                p.axis, getattr(self, p.axis), minimum=p.minimum, strict=p.strict,
-                accepted=p.accepted()))
-        object.__setattr__(self, "effects", self._check_effects())
+        self._check_parameters()
 
     @property
     def flip_energy(self) -> str | None:

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .._validate import check_real
 from .effect import Parameter
 
 __all__ = ["Coordinate", "DerivedSystem", "SYSTEMS", "SYSTEM_DAMPING", "System",
@@ -206,6 +207,15 @@ class System:
     def axis_parameter(cls, name: str) -> Parameter | None:  # pragma: no cover
         """The parameter of any instance of this class whose grid axis is ``name``."""
         raise NotImplementedError
+
+    def _check_parameters(self) -> None:
+        """Each parameter of the declaration checked against its bounds (set back as a
+        float), and the effects (`_check_effects`): the subclasses' ``__post_init__``."""
+        for p in self.declaration.parameters:
+            object.__setattr__(self, p.axis, check_real(
+                p.axis, getattr(self, p.axis), minimum=p.minimum, strict=p.strict,
+                accepted=p.accepted()))
+        object.__setattr__(self, "effects", self._check_effects())
 
     def _check_effects(self) -> tuple:
         """``effects`` as a tuple, each accepted, at most one of each kind."""
