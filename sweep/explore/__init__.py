@@ -33,7 +33,8 @@ def explore(scene, grid, **run_kwargs):
         Its first two axes with more than one value are the map's x and y (for example
         ``theta0`` [rad] and ``omega0`` [rad/s], or a system's ``theta1_0`` and
         ``theta2_0``); their ranges are the home view (the resolution, pixels per axis,
-        is ``resolution``, default 400, not their length).
+        is ``resolution``, default 400 for a Scene and 200 for a system, not their
+        length).
     **run_kwargs
         `sweep.run` arguments: ``t_end`` and ``dt`` [s] (required), ``t_transient``
         [s], ``method``, ``device``, ``t0``, ``dtype``, ``strobe_samples``, ...; and
