@@ -406,6 +406,29 @@ def _fmt(value: float) -> str:
     return repr(float(value))
 
 
+def check_arguments(grid, run_kwargs: dict) -> None:
+    """Refuse an explorer's grid that is not a `sweep.Grid`, and run keywords it does not
+    take or lacks (``t_end`` and ``dt`` are required).
+
+    Raises
+    ------
+    TypeError
+        Naming the argument and what is accepted.
+    """
+    if not isinstance(grid, Grid):
+        raise TypeError(f"grid must be a sweep.Grid, got {grid!r}")
+    known = ("t_end", "dt", "t_transient", "method", "device") + PASSTHROUGH
+    unknown = sorted(set(run_kwargs) - set(known) - set(SET_BY_EXPLORER))
+    if unknown:
+        raise TypeError(f"explore: unknown keyword(s) {', '.join(unknown)}; accepted: "
+                        f"{', '.join(known)} (and sweep.run's {', '.join(SET_BY_EXPLORER)},"
+                        " which the explorer sets per map)")
+    for key in ("t_end", "dt"):
+        if key not in run_kwargs:
+            raise TypeError(f"explore: missing run keyword {key!r} (s); accepted: the "
+                            "keywords of sweep.run, t_end and dt required")
+
+
 class Explorer:
     """State, validation, history and computation of the browser explorer.
 
@@ -440,18 +463,7 @@ class Explorer:
                  **run_kwargs) -> None:
         if not isinstance(scene, Scene):
             raise TypeError(f"scene must be a sweep.Scene, got {scene!r}")
-        if not isinstance(grid, Grid):
-            raise TypeError(f"grid must be a sweep.Grid, got {grid!r}")
-        known = ("t_end", "dt", "t_transient", "method", "device") + PASSTHROUGH
-        unknown = sorted(set(run_kwargs) - set(known) - set(SET_BY_EXPLORER))
-        if unknown:
-            raise TypeError(f"explore: unknown keyword(s) {', '.join(unknown)}; accepted: "
-                            f"{', '.join(known)} (and sweep.run's {', '.join(SET_BY_EXPLORER)},"
-                            " which the explorer sets per map)")
-        for key in ("t_end", "dt"):
-            if key not in run_kwargs:
-                raise TypeError(f"explore: missing run keyword {key!r} (s); accepted: the "
-                                "keywords of sweep.run, t_end and dt required")
+        check_arguments(grid, run_kwargs)
         varying = [name for name in grid.dims if grid.axes[name].size > 1]
         names = list(varying) + [n for n in AXES_INITIAL if n not in varying]
         x, y = names[0], names[1]

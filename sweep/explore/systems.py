@@ -36,7 +36,6 @@ from ..system_observables import SYSTEM_OBSERVABLES, variables
 from .model import (
     PASSTHROUGH,
     RESOLUTION_RANGE,
-    SET_BY_EXPLORER,
     TRAJECTORY_SAMPLES,
     Control,
     Explorer,
@@ -46,6 +45,7 @@ from .model import (
     State,
     View,
     _toml_value,
+    check_arguments,
 )
 
 __all__ = ["SYSTEM_RESOLUTION", "SystemExplorer", "SystemTrajectory", "system_quantities"]
@@ -179,18 +179,7 @@ class SystemExplorer(Explorer):
                             f"{type(system).__name__}; sweep.explore takes a sweep.Scene, "
                             "a sweep.DoublePendulum, a sweep.CoupledPendula or a "
                             "sweep.SwingNetwork")
-        if not isinstance(grid, Grid):
-            raise TypeError(f"grid must be a sweep.Grid, got {grid!r}")
-        known = ("t_end", "dt", "t_transient", "method", "device") + PASSTHROUGH
-        unknown = sorted(set(run_kwargs) - set(known) - set(SET_BY_EXPLORER))
-        if unknown:
-            raise TypeError(f"explore: unknown keyword(s) {', '.join(unknown)}; accepted: "
-                            f"{', '.join(known)} (and sweep.run's {', '.join(SET_BY_EXPLORER)},"
-                            " which the explorer sets per map)")
-        for key in ("t_end", "dt"):
-            if key not in run_kwargs:
-                raise TypeError(f"explore: missing run keyword {key!r} (s); accepted: the "
-                                "keywords of sweep.run, t_end and dt required")
+        check_arguments(grid, run_kwargs)
         self._registry = self._quantities_of(system)
         initial = self._start_names(system)
         offered = self._axes_of(system)
