@@ -7,20 +7,17 @@ Dask through `sweep.execution`); `sweep.engine.run` hands a system here.
 
 from __future__ import annotations
 
-import datetime
 import json
 import warnings
 
 import numpy as np
 import xarray as xr
 
-from . import _config
-from ._version import __version__
 from .execution import RunContext, execute
 from .execution.progress import progress_bar
 from .grid import ParameterRows
-from .io import status_variable
-from .kernels import failure_summary, status_counts, vectors
+from .io import device_attributes, origin_attributes, run_attributes, status_variable
+from .kernels import failure_summary, status_counts
 from .kernels.network import NETWORK_OBSERVABLES, NetworkSpec, network_outputs
 from .kernels.system import SystemSpec, n_outputs
 from .physics.network import NETWORK_PARAMETERS, SwingNetwork
@@ -250,9 +247,6 @@ def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
                  effects="damping" if spec.damping else "none")
     if spec.stop_early:
         attrs["stop_early"] = "at the first flip"
-    if spec.device != "cpu":  # where it ran (the SIMD width means nothing there)
-        attrs["device"] = spec.device
-        attrs.pop("vector_width")
     return xr.Dataset(data_vars, coords, attrs)
 
 
@@ -264,28 +258,14 @@ def _time(settings, n_saved: int) -> xr.Variable:
 
 def _attributes(system, grid, settings, spec, fixed: dict) -> dict:
     """The attributes every system dataset has: provenance and how to reproduce it."""
-    attrs = {
-        "Conventions": "CF-1.10",
-        "title": f"{type(system).__name__} parameter sweep",
-        "source": f"sweep {__version__}",
-        "history": f"{datetime.datetime.now(datetime.UTC).isoformat(timespec='seconds')}"
-                   f" created by sweep {__version__}",
-        "sweep_version": __version__,
+    return {
+        **origin_attributes(f"{type(system).__name__} parameter sweep"),
         **{name: float(value) for name, value in fixed.items()},
         "system": json.dumps(system.to_dict(), sort_keys=True),
         **grid.provenance(),
-        "method": settings.method,
-        "t0": settings.t0,
-        "t_end": settings.t_end,
-        "dt": settings.dt,
-        "t_transient": settings.t_transient,
-        "n_steps": settings.n_steps,
-        "observe": " ".join(spec.observe),
-        "vector_width": vectors.describe(_config.vector_width()),
+        **run_attributes(settings, spec),
+        **device_attributes(spec),
     }
-    if settings.save_every is not None:
-        attrs["save_every"] = settings.save_every
-    return attrs
 
 
 def to_network_dataset(*, system: SwingNetwork, grid, settings, spec: NetworkSpec, out,

@@ -22,7 +22,8 @@ from .kernels import Status, vectors
 from .observables import OBSERVABLES
 from .physics import EFFECTS, Scene, parameter_info
 
-__all__ = ["to_dataset", "status_variable", "save", "load", "scene_from", "grid_from",
+__all__ = ["device_attributes", "origin_attributes", "run_attributes", "to_dataset",
+           "status_variable", "save", "load", "scene_from", "grid_from",
            "run_arguments", "netcdf_encoding",
            "file_size_bound"]
 
@@ -116,18 +117,40 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     fixed = {k: v for k, v in scene.parameters().items()
              if k not in grid.axes and (k in ("length", "gravity") or k in present)}
     attrs = {
-        "Conventions": "CF-1.10",
-        "title": "pendulum parameter sweep",
-        "source": f"sweep {__version__}",
-        "history": f"{datetime.datetime.now(datetime.UTC).isoformat(timespec='seconds')}"
-                   f" created by sweep {__version__}",
-        "sweep_version": __version__,
+        **origin_attributes("pendulum parameter sweep"),
         "equation": equation(),
         "model": scene.model,
         "effects": " ".join(simulated) if simulated else "none",
         **{name: float(value) for name, value in fixed.items()},
         "scene": json.dumps(scene.to_dict(), sort_keys=True),
         **grid.provenance(),  # grid_axes (a Grid) or point_axes (Points): grid_from
+        **run_attributes(settings, spec),
+    }
+    if "strobe" in spec.observe:
+        attrs["strobe_samples"] = spec.strobe_samples
+    attrs.update(device_attributes(spec))
+    if spec.dtype != "float64":  # its working precision, when not the default
+        attrs["dtype"] = spec.dtype
+    return xr.Dataset(data_vars, coords, attrs)
+
+
+def origin_attributes(title: str) -> dict:
+    """A dataset's first attributes: CF convention, ``title``, and which sweep made it
+    when."""
+    return {
+        "Conventions": "CF-1.10",
+        "title": title,
+        "source": f"sweep {__version__}",
+        "history": f"{datetime.datetime.now(datetime.UTC).isoformat(timespec='seconds')}"
+                   f" created by sweep {__version__}",
+        "sweep_version": __version__,
+    }
+
+
+def run_attributes(settings, spec) -> dict:
+    """The time settings and observables of a run (`sweep.engine.RunSettings` and its
+    kernel spec's ``observe``): what, with the physics and the grid, reproduces it."""
+    attrs = {
         "method": settings.method,
         "t0": settings.t0,
         "t_end": settings.t_end,
@@ -138,15 +161,15 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     }
     if settings.save_every is not None:
         attrs["save_every"] = settings.save_every
-    if "strobe" in spec.observe:
-        attrs["strobe_samples"] = spec.strobe_samples
-    if spec.device != "cpu":  # where it ran, when not the default
-        attrs["device"] = spec.device
-    else:  # the SIMD width the CPU kernels were compiled for (sweep.kernels.vectors)
-        attrs["vector_width"] = vectors.describe(_config.vector_width())
-    if spec.dtype != "float64":  # its working precision, when not the default
-        attrs["dtype"] = spec.dtype
-    return xr.Dataset(data_vars, coords, attrs)
+    return attrs
+
+
+def device_attributes(spec) -> dict:
+    """Where the run's kernel ran: ``device`` when not the CPU, else the SIMD width the
+    CPU kernels were compiled for (``vector_width``, `sweep.kernels.vectors`)."""
+    if spec.device != "cpu":
+        return {"device": spec.device}
+    return {"vector_width": vectors.describe(_config.vector_width())}
 
 
 def status_variable(grid, status) -> xr.Variable:
