@@ -981,6 +981,28 @@ class Explorer:
         return f"{_number(value)} ({result.title})"
 
     # -- one trajectory ---------------------------------------------------------
+    def clicked(self, x, y, result: MapResult | None, state: State | None):
+        """A click at ``(x, y)``: the state it belongs to, the start (snapped to the pixel
+        centre of ``result`` when given, so it is one of the map's starts) and the map's
+        label there ("" without ``result``).
+
+        Raises
+        ------
+        InvalidInput
+            When ``x`` or ``y`` is not a number.
+        """
+        state = state or (result.state if result is not None else self.state)
+        label = ""
+        try:
+            x, y = float(x), float(y)
+        except (TypeError, ValueError):
+            raise InvalidInput("view", f"a start is two numbers, got ({x!r}, {y!r})") from None
+        if result is not None:
+            row, col = self.value_at(result, x, y)
+            x, y = float(result.x[col]), float(result.y[row])
+            label = self.label_at(result, row, col)
+        return state, x, y, label
+
     def trajectory(self, x: float, y: float, result: MapResult | None = None,
                    state: State | None = None) -> Trajectory:
         """The trajectory of the map's start nearest ``(x, y)`` (snapped to the pixel
@@ -993,17 +1015,8 @@ class Explorer:
             `TRAJECTORY_SAMPLES`), stroboscopic points (forced scenes), status, the map's
             label at that pixel, and the code and run file that reproduce it.
         """
-        state = state or (result.state if result is not None else self.state)
+        state, x, y, label = self.clicked(x, y, result, state)
         v = state.view
-        label = ""
-        try:
-            x, y = float(x), float(y)
-        except (TypeError, ValueError):
-            raise InvalidInput("view", f"a start is two numbers, got ({x!r}, {y!r})") from None
-        if result is not None:
-            row, col = self.value_at(result, x, y)
-            x, y = float(result.x[col]), float(result.y[row])
-            label = self.label_at(result, row, col)
         axes, kwargs = self._trajectory_inputs(state, x, y)
         with self._lock:
             ds = self._run(state, Grid(**axes), kwargs)

@@ -375,17 +375,8 @@ class SystemExplorer(Explorer):
         centre of ``result`` when given): every coordinate and velocity over time, from
         one `sweep.run` of the system with ``save_every`` (at most `TRAJECTORY_SAMPLES`
         samples)."""
-        state = state or (result.state if result is not None else self.state)
+        state, x, y, label = self.clicked(x, y, result, state)
         v = state.view
-        label = ""
-        try:
-            x, y = float(x), float(y)
-        except (TypeError, ValueError):
-            raise InvalidInput("view", f"a start is two numbers, got ({x!r}, {y!r})") from None
-        if result is not None:
-            row, col = self.value_at(result, x, y)
-            x, y = float(result.x[col]), float(result.y[row])
-            label = self.label_at(result, row, col)
         axes = {name: np.array([value]) for name, value in state.start}
         axes[v.x] = np.array([x])
         axes[v.y] = np.array([y])
