@@ -64,7 +64,7 @@ DEMO = {
     "omega0": (-10.0, 10.0),  # rad/s; about 3 full turns at the edges
     "t_end": 40.0,            # s
     "dt": 0.04,               # s
-    "observe": ("final", "winding", "energy"),
+    "observe": ("final", "winding", "capture", "energy"),
     "size": 301,              # grid points per axis
 }
 
@@ -658,28 +658,9 @@ def demo_inputs(size: int):
                          "observe": DEMO["observe"]}
 
 
-def final_well(ds):
-    """Index of the potential well the pendulum ends in: round(theta_final / 2 pi).
-
-    Parameters
-    ----------
-    ds : xarray.Dataset
-        With ``theta_final`` [rad] (observe "final").
-
-    Returns
-    -------
-    xarray.DataArray
-        Integer-valued floats (NaN where the trajectory failed), named ``well``.
-    """
-    well = np.round(ds.theta_final / (2.0 * np.pi)) + 0.0  # + 0.0 turns -0.0 into 0.0
-    return well.rename("well").assign_attrs(
-        units="1",
-        long_name="final potential well: round(theta_final / 2 pi)",
-    )
-
-
 def _command_demo(args: argparse.Namespace) -> int:
-    """``sweep demo``: run the demo sweep; write demo.nc and two PNG maps."""
+    """``sweep demo``: run the demo sweep; write demo.nc and two PNG maps (well,
+    capture time)."""
     from . import plot
     from .io import check_output_path, save
 
@@ -691,7 +672,6 @@ def _command_demo(args: argparse.Namespace) -> int:
     folder.mkdir(parents=True, exist_ok=True)
     netcdf = check_output_path(folder / "demo.nc")
     ds, seconds = _run_quietly(scene, grid, progress=args.progress, **kwargs)
-    ds["well"] = final_well(ds)
     save(ds, netcdf)
     written = [netcdf, *_demo_maps(ds, folder, plot)]
     print(f"demo: {_summary(ds, grid, seconds)}")
@@ -701,17 +681,18 @@ def _command_demo(args: argparse.Namespace) -> int:
 
 
 def _demo_maps(ds, folder: Path, plot) -> list[Path]:
-    """Winding and final-well maps of the demo dataset, as PNG files in ``folder``."""
+    """The demo dataset's maps as PNG files in ``folder``: the well each start is
+    captured in, and the time it takes (``capture``); the winding map would repeat the
+    well map, since every start of the window lies in well 0."""
     _use_agg()
     setting = (f"damped pendulum, c = {DEMO['damping']:g} 1/s, "
                f"g/L = {DEMO['gravity'] / DEMO['length']:g} 1/s²")
     maps = {
-        "winding.png": (ds.winding.assign_attrs(long_name="passes over the top before "
-                                                          "capture (wells crossed)"),
-                        f"Passes over the top ({setting})"),
-        "well.png": (ds.well.assign_attrs(long_name="final potential well index, "
-                                          "round(θ_final / 2π)"),
-                     f"Final well ({setting})"),
+        "well.png": (ds.well.assign_attrs(long_name="well k captured in (rest at θ = 2πk)"),
+                     f"Well captured in ({setting})"),
+        "capture_time.png": (ds.capture_time.assign_attrs(
+                                 long_name="time until captured in a well"),
+                             f"Time until capture ({setting})"),
     }
     written = []
     for name, (da, title) in maps.items():

@@ -112,32 +112,39 @@ def test_run_writes_the_dataset_the_api_makes(tmp_path):
 # ---------------------------------------------------------------------------- demo
 def test_demo_writes_the_dataset_and_two_maps(demo):
     folder, out = demo
-    written = {"demo.nc", "winding.png", "well.png"}
+    written = {"demo.nc", "well.png", "capture_time.png"}
     assert {p.name for p in folder.iterdir()} == written
     for name in written:
         assert str(folder / name) in out
-    assert_png(folder / "winding.png")
     assert_png(folder / "well.png")
+    assert_png(folder / "capture_time.png")
 
     ds = sweep.load(folder / "demo.nc")
     assert dict(ds.sizes) == {"theta0": 21, "omega0": 21}
     assert float(ds.theta0.min()) == pytest.approx(-np.pi)
     assert float(ds.theta0.max()) == pytest.approx(np.pi)
     assert float(ds.omega0.max()) == pytest.approx(10.0)
-    assert {"theta_final", "winding", "energy_final", "well"} <= set(ds.data_vars)
+    assert {"theta_final", "winding", "energy_final", "well", "capture_time"} <= set(
+        ds.data_vars)
     assert ds.attrs["effects"] == "damping" and "forcing" not in ds.attrs["scene"]
     # every trajectory is captured in a well (except those started exactly at the
-    # upright equilibrium theta0 = +-pi, omega0 = 0), and some made several turns first
+    # upright equilibrium theta0 = +-pi, omega0 = 0, on the separatrix: never below
+    # it, so no well and no capture time), and some made several turns first
     upright = (abs(abs(ds.theta0) - np.pi) < 1e-12) & (ds.omega0 == 0)
     assert float(ds.energy_final.where(~upright).max()) < 2 * 9.81
-    np.testing.assert_array_equal(ds.well, np.round(ds.theta_final / (2 * np.pi)))
-    assert ds.well.attrs["units"] == "1" and "round" in ds.well.attrs["long_name"]
+    assert bool(ds.well.where(upright).isnull().all())
+    assert bool(ds.capture_time.where(upright).isnull().all())
+    # once captured (energy below 2 g/L, decreasing under damping) the pendulum stays
+    # in that well: the captured well is the final one, exactly
+    np.testing.assert_array_equal(ds.well.where(~upright),
+                                  np.round(ds.theta_final / (2 * np.pi)).where(~upright))
     assert int(abs(ds.winding).max()) >= 2
-    # every start lies in well 0 (the edges theta0 = +-pi too: the well index rounds
-    # half to even), so the passes over the top are the final well, with no cut along
-    # theta0 = 0 (the former net-turn count had one); the upright starts stay at 0
-    np.testing.assert_array_equal(ds.winding.where(~upright), ds.well.where(~upright))
-    np.testing.assert_array_equal(ds.winding.where(upright, 0), 0)
+    # the two maps differ: more turns before capture take longer (starts with the
+    # most turns are captured last), which the well map cannot show
+    captured = ds.capture_time.where(~upright)
+    assert float(captured.where(abs(ds.winding) >= 2).min()) > float(
+        captured.where(ds.winding == 0).min())
+    assert float(captured.max()) < 40.0  # all captured within t_end
 
 
 def test_demo_refuses_a_bad_size_before_creating_anything(tmp_path):
@@ -151,7 +158,7 @@ def test_demo_refuses_a_bad_size_before_creating_anything(tmp_path):
 # ---------------------------------------------------------------------------- plot
 def test_plot_draws_a_map_of_a_variable(demo, tmp_path):
     folder, _ = demo
-    for name in ("winding", "theta_final", "status"):
+    for name in ("winding", "capture_time", "status"):
         output = tmp_path / f"{name}.png"
         code, _out, err = call("plot", folder / "demo.nc", "--var", name, "-o", output)
         assert (code, err) == (0, ""), name
