@@ -3,8 +3,8 @@
 # (which imports the checkout's files, so it hides a file missing from the wheel):
 #   1. python -m build: the sdist, then the wheel built FROM the sdist (so the sdist
 #      must hold what a build needs);
-#   2. both archives hold every tracked file of sweep/ (and the sdist pyproject.toml
-#      and README.md), the wheel the `sweep` command;
+#   2. both archives hold every tracked file of sweep/ (and the sdist pyproject.toml,
+#      README.md and LICENSE), the wheel LICENSE and the `sweep` command;
 #   3. the wheel is installed into a fresh virtual environment (python -m venv, no
 #      system site-packages; its dependencies at the versions this environment has,
 #      from PyPI or pip's cache), and run from a folder outside the checkout:
@@ -56,8 +56,12 @@ with zipfile.ZipFile(wheel) as archive:
     in_wheel = set(archive.namelist())
     entry_points = next((archive.read(n).decode() for n in in_wheel
                          if n.endswith(".dist-info/entry_points.txt")), "")
-missing = {"sdist": sorted(set(package + ["pyproject.toml", "README.md"]) - in_sdist),
+missing = {"sdist": sorted(set(package + ["pyproject.toml", "README.md", "LICENSE"])
+                           - in_sdist),
            "wheel": sorted(set(package) - in_wheel)}
+if not any(n.endswith(".dist-info/licenses/LICENSE") or n.endswith(".dist-info/LICENSE")
+           for n in in_wheel):
+    missing["wheel"].append("the LICENSE file in its .dist-info")
 if "sweep = sweep.cli:main" not in entry_points:
     missing["wheel"].append("the console script sweep = sweep.cli:main")
 bad = False
