@@ -110,11 +110,15 @@ def derive(declaration: SystemDeclaration, *, jacobian: bool = False) -> Derived
     TypeError
         If ``declaration`` is not a `SystemDeclaration`.
     ImportError
-        If SymPy is not installed and the declaration is not in the disk cache.
+        If SymPy is not installed and the declaration is neither shipped nor in the disk
+        cache.
 
     Notes
     -----
-    Memoised in the process (``derive.cache_clear()`` empties it) and cached on disk:
+    The built-in systems' common declarations are shipped derived
+    (`sweep.physics.shipped`: the double pendulum, coupled pendula of 2 to 4), so they
+    need no SymPy. Memoised in the process (``derive.cache_clear()`` empties it) and
+    cached on disk:
     ``<kernel folder>/system_<hash>.json``, keyed by the declaration's ``repr``, the
     ``jacobian`` flag and `DERIVE_VERSION`, written atomically. The disk cache is not
     used when the kernel folder could be changed by another user (the kernels then warn).
@@ -128,8 +132,13 @@ def derive(declaration: SystemDeclaration, *, jacobian: bool = False) -> Derived
 
 @functools.cache
 def _derive(declaration: SystemDeclaration, jacobian: bool) -> DerivedSystem:
-    """`derive` after the structure checks: from the disk cache, or derived and stored."""
+    """`derive` after the structure checks: shipped with sweep (`sweep.physics.shipped`),
+    from the disk cache, or derived and stored."""
     key = _key(declaration, jacobian)
+    shipped = _read(Path(__file__).parent / "derived" / f"system_{key}.json", declaration,
+                    jacobian)
+    if shipped is not None:
+        return shipped
     folder = _folder()
     if folder is not None:
         found = _read(folder / f"system_{key}.json", declaration, jacobian)
