@@ -14,6 +14,7 @@ from .io import save as save
 from .kernels import Status as Status
 from .physics import CoupledPendula as CoupledPendula
 from .physics import Damping as Damping
+from .physics import DeclaredSystem as DeclaredSystem
 from .physics import DoublePendulum as DoublePendulum
 from .physics import Forcing as Forcing
 from .physics import PivotDrive as PivotDrive
@@ -49,6 +50,7 @@ def __getattr__(name):
 __all__ = [
     "CoupledPendula",
     "Damping",
+    "DeclaredSystem",
     "DoublePendulum",
     "Forcing",
     "Grid",

@@ -259,7 +259,7 @@ def _time(settings, n_saved: int) -> xr.Variable:
 def _attributes(system, grid, settings, spec, fixed: dict) -> dict:
     """The attributes every system dataset has: provenance and how to reproduce it."""
     return {
-        **origin_attributes(f"{type(system).__name__} parameter sweep"),
+        **origin_attributes(f"{system.title} parameter sweep"),
         **{name: float(value) for name, value in fixed.items()},
         "system": json.dumps(system.to_dict(), sort_keys=True),
         **grid.provenance(),

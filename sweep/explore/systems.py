@@ -175,10 +175,12 @@ class SystemExplorer(Explorer):
                  resolution: int = SYSTEM_RESOLUTION, cache: OrderedDict | None = None,
                  **run_kwargs) -> None:
         if not isinstance(system, self.takes):
-            raise TypeError(f"{type(self).__name__} takes a {self.takes.__name__}, got "
+            takes = self.takes if isinstance(self.takes, tuple) else (self.takes,)
+            raise TypeError(f"{type(self).__name__} takes a "
+                            f"{' or a '.join(t.__name__ for t in takes)}, got "
                             f"{type(system).__name__}; sweep.explore takes a sweep.Scene, "
                             "a sweep.DoublePendulum, a sweep.CoupledPendula or a "
-                            "sweep.SwingNetwork")
+                            "sweep.SwingNetwork (a sweep.DeclaredSystem runs in sweep.run)")
         check_arguments(grid, run_kwargs)
         self._registry = self._quantities_of(system)
         initial = self._start_names(system)

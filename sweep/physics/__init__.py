@@ -6,6 +6,7 @@ later adds its parameters); code inside sweep calls `parameter_names` and
 """
 
 from .coupled import CoupledPendula
+from .declared import DeclaredSystem
 from .double import DoublePendulum
 from .effect import EFFECTS, Drive, Effect, EffectDeclaration, Parameter, register, unregister
 from .effects import Damping, Forcing, PivotDrive, QuadraticDrag, Torque
@@ -19,11 +20,14 @@ from .scene import (
     parameter_table,
     parameters,
 )
+from .system import Coordinate, SystemDeclaration
 
-__all__ = ["BASE_PARAMETERS", "CoupledPendula", "Damping", "DoublePendulum", "Drive",
+__all__ = ["BASE_PARAMETERS", "Coordinate", "CoupledPendula", "Damping", "DeclaredSystem",
+           "DoublePendulum", "Drive",
            "EFFECTS", "Effect", "EffectDeclaration",
            "Forcing", "MODELS", "PARAMETERS", "PARAMETER_INFO", "Parameter", "PivotDrive",
-           "QuadraticDrag", "Scene", "SwingNetwork", "Torque", "parameter_info", "parameter_names",
+           "QuadraticDrag", "Scene", "SwingNetwork", "SystemDeclaration", "Torque",
+           "parameter_info", "parameter_names",
            "parameter_table", "parameters", "register", "unregister"]
 
 

@@ -200,6 +200,11 @@ class System:
     flip_energy: str | None = None
 
     @property
+    def title(self) -> str:
+        """What a dataset's title calls it (its class name)."""
+        return type(self).__name__
+
+    @property
     def declaration(self) -> SystemDeclaration:  # pragma: no cover - abstract
         raise NotImplementedError
 

@@ -1,0 +1,179 @@
+"""A system of the user's own: any `SystemDeclaration` (a Lagrangian with generalized
+forces, or accelerations), run by `sweep.run` like the built-in systems.
+
+The built-ins (`sweep.DoublePendulum`, `sweep.CoupledPendula`) are classes with a field
+per parameter; `DeclaredSystem` takes the declaration itself and the parameters' values
+as keywords. Its grid axes (``<coordinate>_0``, ``<velocity>_0``, the parameters' axes)
+are known to `sweep.Grid`, `sweep.Points` and `sweep.sample` once a `DeclaredSystem` of
+that declaration exists in the process (create the system before its grid).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+from .effect import Parameter
+from .system import (
+    DerivedSystem,
+    System,
+    SystemDeclaration,
+    register_system,
+    system_parameters,
+)
+
+__all__ = ["DeclaredSystem"]
+
+#: Declarations of the DeclaredSystems made in this process, by name: their axes.
+_DECLARED: dict[str, SystemDeclaration] = {}
+
+
+@register_system
+class DeclaredSystem(System):
+    """A system declared by the user: coordinates, parameters and a Lagrangian (or
+    accelerations), with the parameters' values.
+
+    Parameters
+    ----------
+    declaration : sweep.physics.SystemDeclaration
+        Checked and derived at once (`sweep.physics.derive.derive`: SymPy, extra
+        ``systems``, unless derived before on this machine): a bad declaration raises
+        here, before any grid or compile.
+    effects : tuple, default ()
+        `sweep.Damping(c)`: every acceleration gains ``- c v_i`` (c in 1/s).
+    **values : float
+        A value for each of the declaration's parameters, by its axis name, in the
+        parameter's units; a parameter left out takes its ``default`` (an error if it
+        has none).
+
+    Raises
+    ------
+    ValueError
+        A bad declaration; a value missing, unknown or outside the parameter's
+        accepted range; another declaration already registered under the same name.
+    TypeError
+        If ``declaration`` is not a `SystemDeclaration`.
+
+    Notes
+    -----
+    Every coordinate is integrated; ``winding`` and ``flip`` read the angular ones
+    (`sweep.physics.Coordinate.angular`). ``energy`` is the Lagrangian's Jacobi function
+    (kinetic plus potential energy for a time-independent one), in the declaration's
+    units (``energy_units``, default "J"). Run files and the dataset's reload
+    (`sweep.io.scene_from`) do not take a declared system: it lives in Python.
+
+    Examples
+    --------
+    A pendulum on a cart held by a spring, the cart's position ``x`` not an angle:
+
+    >>> import sweep
+    >>> from sweep.physics import Coordinate, Parameter, SystemDeclaration
+    >>> cart = SystemDeclaration(
+    ...     name="pendulum_on_cart",
+    ...     coordinates=(Coordinate("theta", "omega", "q", "w"),
+    ...                  Coordinate("x", "v", "xc", "vc", units="m", velocity_units="m s-1",
+    ...                             angular=False)),
+    ...     parameters=(Parameter("stiffness", "stiffness", "kc", "kg s-2", "N/m",
+    ...                           "spring constant", minimum=0.0, default=10.0),),
+    ...     lagrangian="(2*vc**2 + 2*vc*w*cos(q) + w**2)/2 - kc*xc**2/2 + 9.81*cos(q)")
+    >>> system = sweep.DeclaredSystem(cart, stiffness=5.0)       # doctest: +SKIP
+    """
+
+    def __init__(self, declaration: SystemDeclaration, effects=(), **values) -> None:
+        if not isinstance(declaration, SystemDeclaration):
+            raise TypeError(f"DeclaredSystem takes a sweep.physics.SystemDeclaration, got "
+                            f"{type(declaration).__name__}")
+        from .derive import derive
+
+        derive(declaration)  # refuses a bad declaration now, before any grid or compile
+        known = _DECLARED.get(declaration.name)
+        if known is not None and known != declaration:
+            raise ValueError(f"DeclaredSystem: another declaration named "
+                             f"{declaration.name!r} exists in this process; accepted: a "
+                             "distinct name per declaration (their grid axes differ)")
+        axes = [p.axis for p in declaration.parameters]
+        unknown = sorted(set(values) - set(axes))
+        if unknown:
+            raise ValueError(f"DeclaredSystem {declaration.name!r}: unknown parameter "
+                             f"{unknown[0]!r}; accepted: {', '.join(axes) or 'none'}")
+        object.__setattr__(self, "_declaration", declaration)
+        for p in declaration.parameters:
+            value = values.get(p.axis, p.default)
+            if value is None:
+                raise ValueError(f"DeclaredSystem {declaration.name!r}: parameter "
+                                 f"{p.axis!r} has no default and was not given; accepted: "
+                                 f"{p.accepted()}")
+            object.__setattr__(self, p.axis, value)
+        object.__setattr__(self, "effects", effects)
+        self._check_parameters()
+        _DECLARED[declaration.name] = declaration
+
+    def __setattr__(self, name, value):
+        raise dataclasses.FrozenInstanceError(f"cannot assign to field {name!r}")
+
+    def _values(self) -> tuple:
+        return tuple(getattr(self, p.axis) for p in self._declaration.parameters)
+
+    def __eq__(self, other) -> bool:
+        return (type(other) is DeclaredSystem and other._declaration == self._declaration
+                and other._values() == self._values() and other.effects == self.effects)
+
+    def __hash__(self) -> int:
+        return hash((self._declaration, self._values(), self.effects))
+
+    def __repr__(self) -> str:
+        values = ", ".join(f"{p.axis}={getattr(self, p.axis)!r}"
+                           for p in self._declaration.parameters)
+        effects = f", effects={self.effects!r}" if self.effects else ""
+        return (f"DeclaredSystem({self._declaration.name!r}"
+                f"{', ' + values if values else ''}{effects})")
+
+    def __reduce__(self):  # pickling (Dask): the declaration, the values, the effects
+        return (_rebuild, (self._declaration, self.effects,
+                           {p.axis: getattr(self, p.axis)
+                            for p in self._declaration.parameters}))
+
+    @property
+    def declaration(self) -> SystemDeclaration:
+        """The declaration it was made with."""
+        return self._declaration
+
+    @property
+    def title(self) -> str:
+        """What a dataset's title calls it: the declaration's name."""
+        return self._declaration.name
+
+    @classmethod
+    def axis_parameter(cls, name: str) -> Parameter | None:
+        """The parameter whose axis is ``name`` in any declaration a DeclaredSystem was
+        made with in this process, or None."""
+        for declaration in _DECLARED.values():
+            found = {p.axis: p for p in system_parameters(declaration, True)}.get(name)
+            if found is not None:
+                return found
+        return None
+
+    def derived(self, jacobian: bool = False) -> DerivedSystem:
+        """Its equations of motion and energy as kernel source (`sweep.physics.derive`)."""
+        from .derive import derive
+
+        return derive(self._declaration, jacobian=jacobian)
+
+    def to_dict(self) -> dict:
+        """A JSON-able description (dataset attribute ``system``), with the declaration."""
+        spec = super().to_dict()
+        spec["declaration"] = json.loads(json.dumps(dataclasses.asdict(self._declaration),
+                                                    default=_plain))
+        return spec
+
+
+def _plain(value):
+    """JSON for what `dataclasses.asdict` leaves (non-finite floats as strings)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return repr(value)
+    return str(value)
+
+
+def _rebuild(declaration, effects, values) -> DeclaredSystem:
+    return DeclaredSystem(declaration, effects=effects, **values)
