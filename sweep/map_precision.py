@@ -237,11 +237,12 @@ class MapAccuracy:
         differs from the reference's) with ``differing_error`` (its binomial standard
         error ``sqrt(p (1 - p) / n)`` for sampled starts, `sweep.Points`; NaN for a
         `sweep.Grid`, whose cells are not a random sample), ``fraction`` and
-        ``fraction_error`` (level x label), ``shift`` (fraction minus the reference's)
-        with ``shift_error`` (the standard error of a paired difference), ``max_shift``
-        (largest ``|shift|``), ``unresolved_fraction``, ``wall_time`` [s] (best of
-        ``repeats``, compilation excluded) and ``trajectory_steps`` (steps of all
-        trajectories; with ``stop_early``, the most they could take), and ``labels``
+        ``fraction_error`` (level x label), ``fraction_shift`` (fraction minus the
+        reference's) with ``fraction_shift_error`` (the standard error of a paired
+        difference), ``max_shift`` (largest ``|fraction_shift|`` of a resolved label),
+        ``unresolved_fraction``, ``wall_time`` [s] (best of ``repeats``, compilation
+        excluded) and ``trajectory_steps`` (steps of all trajectories; with
+        ``stop_early``, the most they could take), and ``labels``
         (level x start).
     """
 
@@ -492,9 +493,9 @@ def _dataset(scene, starts, label, levels, plans, values, unresolved, wall, step
                                                     "long_name": "fraction of the starts"}),
         "fraction_error": (("level", "label"), fraction_error, {
             "units": "1", "long_name": "binomial standard error of the fraction"}),
-        "shift": (("level", "label"), shift, {"units": "1", "long_name":
+        "fraction_shift": (("level", "label"), shift, {"units": "1", "long_name":
                                               "fraction minus the reference's"}),
-        "shift_error": (("level", "label"), shift_error, {
+        "fraction_shift_error": (("level", "label"), shift_error, {
             "units": "1", "long_name": "standard error of the shift (paired starts: "
                                        "sqrt(p_in + p_out - (p_in - p_out)^2) / sqrt(n))"}),
         "max_shift": (lv, np.abs(shift[:, resolved]).max(axis=1) if resolved.any() else

@@ -804,7 +804,7 @@ def map_accuracy(accuracy, ax=None, x="wall_time", title=None):
                          f".dataset), got {type(accuracy).__name__}")
     costs = ("wall_time", "trajectory_steps")
     if x not in costs:
-        raise ValueError(f"x must be one of {', '.join(map(repr, costs))}, got {x!r}")
+        raise ValueError(f"x must be one of {', '.join(repr(c) for c in costs)}, got {x!r}")
     if ax is None:
         fig, ax = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
     else:
