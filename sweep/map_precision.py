@@ -381,6 +381,10 @@ def map_accuracy(scene: Scene, starts, label=basins, ladder=None, *, repeats: in
         raise ValueError(f"ladder['tol'] varies the labelling's tolerance, but label = "
                          f"{label!r} takes no tol; accepted: a labelling with a tol option "
                          "(maps.basins, maps.period), or no 'tol' ladder")
+    if func is not None and _takes_tol(func) and "tol" not in options:
+        default = inspect.signature(func).parameters["tol"].default
+        if isinstance(default, float):  # recorded per level (the table's tol column)
+            options = dict(options, tol=default)
     levels = _levels(ladder, run_kwargs, options)
     plans = [engine.prepare(scene, starts, **kwargs) for _, _, kwargs, _ in levels]
 

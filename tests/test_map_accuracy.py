@@ -127,9 +127,9 @@ def test_rate_is_the_log_log_slope():
         MapAccuracy(ds).rate("dtype")
 
 
-def test_a_grid_has_no_standard_error_and_wells_are_matched_by_position():
-    """Unforced basins: labels are numbered per run by the wells found, so a run that
-    finds another set of wells renumbers; map_accuracy compares the wells themselves."""
+def test_a_grid_has_no_standard_error_and_unforced_basins_number_wells_as_basins():
+    """Unforced basins are compared by the well each start settles in, and numbered in
+    the end as `basins` numbers them (wells in increasing order)."""
     scene = sweep.Scene(gravity=9.81, length=1.0, effects=(sweep.Damping(0.5),))
     grid = sweep.Grid(theta0=np.linspace(-3, 3, 9), omega0=np.linspace(-14, 14, 9))
     acc = sweep.map_accuracy(scene, grid, maps.basins, {"dtype": ["float32", "float64"]},
@@ -174,12 +174,17 @@ def test_forced_basins_stop_on_one_pilot_catalogue_and_keep_basins_numbering():
     kwargs = dict(t_end=200 * PERIOD, t_transient=20 * PERIOD, observe=("strobe",),
                   stop_early=True)
     acc = sweep.map_accuracy(WADA, points, maps.basins,
-                             {"dt": [PERIOD / 25, PERIOD / 50]}, pilot=9, **kwargs)
+                             {"dt": [PERIOD / 25, PERIOD / 50], "tol": [0.05, 1e-3]},
+                             pilot=9, **kwargs)
     catalogue = maps.pilot_catalogue(WADA, points, 9, dt=PERIOD / 50, **kwargs)
-    direct = maps.basins(sweep.run(WADA, points, dt=PERIOD / 50, attractors=catalogue,
-                                   progress=False, **kwargs))
+    run = sweep.run(WADA, points, dt=PERIOD / 50, attractors=catalogue, progress=False,
+                    **kwargs)
     ds = acc.dataset
-    np.testing.assert_array_equal(ds.labels.values[-1], direct.values)
+    np.testing.assert_array_equal(ds.labels.values[-1], maps.basins(run).values)
+    # the tol level labels the reference's run with basins(tol=0.05)
+    assert list(ds.setting.values) == ["dt", "tol", "reference"]
+    np.testing.assert_array_equal(ds.tol.values, [1e-3, 0.05, 1e-3])
+    np.testing.assert_array_equal(ds.labels.values[1], maps.basins(run, tol=0.05).values)
     np.testing.assert_allclose(ds.fraction.sum("label").values, 1.0,
                                rtol=1e-12)  # rounding only: every start has one label
 
@@ -337,4 +342,21 @@ def test_cli_errors_are_one_line_and_write_nothing(tmp_path, extra, words):
     assert code == cli.EXIT_ERROR and out == ""
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("sweep: error:") and words in lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.toml"]
+
+
+def test_cli_a_failed_write_is_one_line_and_leaves_no_file(tmp_path, monkeypatch):
+    (tmp_path / "run.toml").write_text(RUN_FILE)
+
+    def fail(self, target, *a, **k):
+        with open(target, "wb") as handle:
+            handle.write(b"half")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", fail)
+    code, _, err = call("map-accuracy", tmp_path / "run.toml", "--label", "motion",
+                          "--ladder", "dt=0.5,0.25", "-o", tmp_path / "acc.nc")
+    lines = err.strip().splitlines()
+    assert code == cli.EXIT_ERROR
+    assert len(lines) == 1 and lines[0].startswith("sweep: error:") and "acc.nc" in lines[0]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.toml"]
