@@ -343,7 +343,9 @@ def map_accuracy(scene: Scene, starts, label=basins, ladder=None, *, repeats: in
     ValueError, TypeError
         Before anything runs: a bad scene, starts, label, ladder, ``repeats`` or
         ``pilot``, a refused run argument, or any level's run arguments that
-        `sweep.run` would refuse (`sweep.engine.prepare` checks each level in full).
+        `sweep.run` would refuse (`sweep.engine.prepare` checks each level in full);
+        then what the labelling raises on the reference run, the first one run (a map
+        that needs a variable the run does not observe).
 
     Examples
     --------
