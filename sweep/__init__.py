@@ -37,6 +37,9 @@ _LAZY_MODULES = {"plot": "plot", "io": "io", "cli": "cli", "maps": "maps",
                  # sweep.explore(scene, grid, ...) is sweep.explore.explore(...)
                  "explore": "explore"}
 
+#: Functions imported on first use, like the modules above: name -> (module, name).
+_LAZY_FUNCTIONS = {"map_accuracy": ("map_precision", "map_accuracy")}
+
 
 def __getattr__(name):
     """Import submodules such as `sweep.plot` on first use."""
@@ -44,6 +47,11 @@ def __getattr__(name):
         import importlib
 
         return importlib.import_module(f".{_LAZY_MODULES[name]}", __name__)
+    if name in _LAZY_FUNCTIONS:
+        import importlib
+
+        module, attribute = _LAZY_FUNCTIONS[name]
+        return getattr(importlib.import_module(f".{module}", __name__), attribute)
     raise AttributeError(f"module 'sweep' has no attribute {name!r}")
 
 
@@ -65,6 +73,7 @@ __all__ = [
     "explore",
     "from_degrees",
     "load",
+    "map_accuracy",
     "run",
     "sample",
     "save",

@@ -7,6 +7,9 @@
     sweep demo [-o FOLDER] [--size N]
     sweep plot FILE.nc --var NAME [--sel DIM=VALUE ...] -o OUT.png
     sweep plot FILE.nc --trajectory --sel theta0=VALUE --sel omega0=VALUE -o OUT.png
+    sweep fractions FILE.nc [--label NAME] [--convergence] [-o OUT.csv]
+    sweep map-accuracy RUN.toml --ladder KEY=V1,V2,... [--label NAME] [--repeats N]
+                       [--pilot N] [-o OUT.nc] [--figure OUT.png]
     sweep explore [RUN.toml] [--port N] [--host ADDRESS] [--device cpu|cuda] [--no-browser]
     sweep --version
 
@@ -175,6 +178,38 @@ def build_parser() -> argparse.ArgumentParser:
     fractions.add_argument("-o", "--output", metavar="OUT.csv",
                            help="also write the table as CSV (its folder must exist)")
     fractions.set_defaults(handler=_command_fractions)
+
+    accuracy = commands.add_parser(
+        "map-accuracy", help="how many of a map's labels each setting changes, and its cost",
+        description="Run the starts of a run file ([sample] points cost seconds) under a "
+        "ladder of settings and print, per setting, the fraction of starts whose label "
+        "differs from the most accurate run (with its binomial standard error for sampled "
+        "starts), the largest shift of a label's fraction, and the cost "
+        "(sweep.map_accuracy). Each ladder varies one setting, the others at their most "
+        "accurate (the last value of their ladder).")
+    accuracy.add_argument("run_file", metavar="RUN.toml", help="the run file (its [run] "
+                          "table: the settings every level shares)")
+    accuracy.add_argument("--ladder", action="append", default=[], required=True,
+                          metavar="KEY=V1,V2,...",
+                          help="a setting and its values, least to most accurate (the last "
+                          "is the reference): dt, t_end, t_transient (s), tol, rtol, "
+                          "dtype (float32,float64) or method (heun,rk4); repeat for "
+                          "several settings")
+    accuracy.add_argument("--label", default="basins", metavar="NAME",
+                          help="basins (default), motion, well, period, inverted, or a "
+                          "variable of the run")
+    accuracy.add_argument("--repeats", type=int, default=1, metavar="N",
+                          help="wall time: best of N runs per level (default: %(default)s)")
+    accuracy.add_argument("--pilot", type=int, metavar="N",
+                          help="forced basins with stop_early: catalogue the attractors on "
+                          "N x N starts first (default: [run] pilot, else 41)")
+    accuracy.add_argument("-o", "--output", metavar="OUT.nc",
+                          help="also write the table, the fractions and every start's "
+                          "labels as netCDF (its folder must exist)")
+    accuracy.add_argument("--figure", metavar="OUT.png",
+                          help="also draw the labels differing against the wall time, "
+                          "log-log (sweep.plot.map_accuracy)")
+    accuracy.set_defaults(handler=_command_map_accuracy)
 
     explore = commands.add_parser(
         "explore", help="explore maps in the browser, recomputed on every zoom",
@@ -749,6 +784,90 @@ def _command_fractions(args: argparse.Namespace) -> int:
         frame.to_csv(tmp)
         tmp.replace(output)  # never a half-written table
         print(f"wrote {output}")
+    return 0
+
+
+def parse_ladder(items: list[str]) -> dict:
+    """``["dt=0.2,0.1", "dtype=float32,float64"]`` -> ``{"dt": [0.2, 0.1], "dtype":
+    ["float32", "float64"]}`` (numbers for the numeric settings; `sweep.map_accuracy`
+    checks the values)."""
+    from .map_precision import LADDER_KEYS
+
+    ladder = {}
+    for item in items:
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        values = [v.strip() for v in text.split(",")]
+        if not sep or key not in LADDER_KEYS or not all(values):
+            raise ValueError(f"--ladder {item!r}: accepted: KEY=V1,V2,... with KEY one of "
+                             f"{', '.join(LADDER_KEYS)} and its values least to most "
+                             "accurate (dt=0.2,0.1,0.05)")
+        if key in ladder:
+            raise ValueError(f"--ladder {key} given twice; accepted: one ladder per setting")
+        if key not in ("dtype", "method"):
+            try:
+                values = [float(v) for v in values]
+            except ValueError:
+                raise ValueError(f"--ladder {item!r}: {key} takes numbers; accepted: "
+                                 f"{key}=V1,V2,... with finite numbers") from None
+        ladder[key] = values
+    return ladder
+
+
+def _command_map_accuracy(args: argparse.Namespace) -> int:
+    """``sweep map-accuracy``: `sweep.map_accuracy` of a run file's starts under the
+    ``--ladder`` settings; print the table, optionally write the netCDF and the figure
+    (each atomically, after everything is computed)."""
+    from . import maps
+    from .io import check_output_path
+    from .map_precision import map_accuracy
+    from .toml_spec import REFINE_MAPS, load_run
+
+    ladder = parse_ladder(args.ladder)
+    output = check_output_path(args.output) if args.output is not None else None
+    figure = check_output_path(args.figure) if args.figure is not None else None
+    if output is not None and figure is not None and output.resolve() == figure.resolve():
+        raise ValueError(f"-o and --figure name the same file {str(output)!r}; accepted: "
+                         "two different files")
+    if figure is not None:
+        _use_agg()
+        from matplotlib.figure import Figure
+
+        fmt = figure.suffix.lstrip(".").lower() or "png"
+        supported = Figure().canvas.get_supported_filetypes()
+        if fmt not in supported:
+            raise ValueError(f"--figure {str(figure)!r}: unknown image format {fmt!r}; "
+                             f"accepted: {', '.join(sorted(supported))}")
+    options = {}
+    scene, starts, kwargs = load_run(args.run_file, options)
+    if options.get("scheduler") is not None:
+        raise ValueError("sweep map-accuracy runs locally; [run] scheduler is not used "
+                         "here; accepted: a run file without scheduler")
+    label = getattr(maps, args.label) if args.label in REFINE_MAPS else args.label
+    pilot = args.pilot if args.pilot is not None else options.get("pilot", 41)
+    start = time.perf_counter()
+    with _warnings_as_lines():
+        accuracy = map_accuracy(scene, starts, label, ladder, repeats=args.repeats,
+                                pilot=pilot, **kwargs)
+    seconds = time.perf_counter() - start
+    table = accuracy.table()
+    sampled = bool(accuracy.dataset.attrs["sampled"])
+    print(f"{args.run_file}: {args.label} of {starts.size} starts ({_shape(starts)}), "
+          f"{'binomial standard errors' if sampled else 'a grid: no standard errors'}, "
+          f"{seconds:.2f} s end to end")
+    print(table.to_string(float_format=lambda v: f"{v:.4g}"))
+    for key in ladder:
+        if key not in ("dtype", "method"):
+            print(f"rate of differing against {key}: {accuracy.rate(key):.3g} (log-log "
+                  "least-squares slope)")
+    if output is not None:
+        accuracy.save(output)
+        print(f"wrote {output}")
+    if figure is not None:
+        from . import plot
+
+        plot.save_figure(plot.map_accuracy(accuracy), figure)
+        print(f"wrote {figure}")
     return 0
 
 

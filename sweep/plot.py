@@ -772,3 +772,73 @@ def work_precision(wp, ax=None, x="wall_time", y="error_max", title=None):
 
 
 __all__ += ["work_precision"]
+
+
+def map_accuracy(accuracy, ax=None, x="wall_time", title=None):
+    """A map's work-precision diagram: the fraction of labels that differ from the
+    most accurate run against cost, log-log, one line per ladder.
+
+    Parameters
+    ----------
+    accuracy : sweep.map_precision.MapAccuracy or xarray.Dataset
+        From `sweep.map_accuracy` (or its ``.dataset``, e.g. loaded from its netCDF).
+    ax : matplotlib Axes, optional
+    x : {"wall_time", "trajectory_steps"}
+        Cost on the horizontal axis.
+    title : str, optional
+        Default: the labelling and the number of starts.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Each ladder's levels (value beside each point), with their standard errors as
+        bars where the starts are sampled; levels whose labels all agree with the
+        reference (0 on a log axis) are left out. The reference run is a dotted vertical
+        line at its cost.
+    """
+    import matplotlib.pyplot as plt
+
+    ds = getattr(accuracy, "dataset", accuracy)
+    if not hasattr(ds, "data_vars") or "differing" not in ds or "setting" not in ds.coords:
+        raise ValueError(f"accuracy must be what sweep.map_accuracy returns (or its "
+                         f".dataset), got {type(accuracy).__name__}")
+    costs = ("wall_time", "trajectory_steps")
+    if x not in costs:
+        raise ValueError(f"x must be one of {', '.join(repr(c) for c in costs)}, got {x!r}")
+    if ax is None:
+        fig, ax = plt.subplots(figsize=(6.4, 4.8), layout="constrained")
+    else:
+        fig = ax.figure
+    markers = "osD^v<>phX*"
+    settings = [s for s in dict.fromkeys(ds.setting.values.tolist()) if s != "reference"]
+    for k, setting in enumerate(settings):
+        rows = np.flatnonzero(ds.setting.values == setting)
+        cost = ds[x].values[rows].astype(float)
+        err = ds.differing.values[rows].astype(float)
+        bars = ds.differing_error.values[rows].astype(float)
+        keep = np.isfinite(cost) & (cost > 0) & (err > 0)
+        if not keep.any():
+            continue
+        line = ax.errorbar(cost[keep], err[keep],
+                           yerr=None if np.isnan(bars[keep]).all() else bars[keep],
+                           marker=markers[k % len(markers)], capsize=2, label=setting)
+        for c, e, text in zip(cost[keep], err[keep], ds.value.values[rows][keep]):
+            ax.annotate(str(text), (c, e), textcoords="offset points", xytext=(4, 4),
+                        fontsize="x-small", color=line[0].get_color())
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    reference = int(np.flatnonzero(ds.setting.values == "reference")[-1])
+    ref_cost = float(ds[x].values[reference])
+    if np.isfinite(ref_cost) and ref_cost > 0:
+        ax.axvline(ref_cost, linestyle=":", color="0.4", label="reference run")
+    ax.set_xlabel(_label(ds[x].attrs.get("long_name", x), None, ds[x].attrs.get("units", "")))
+    ax.set_ylabel("fraction of labels differing from the reference")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize="small")
+    ax.set_title(title if title is not None else
+                 f"{ds.attrs.get('labelling', 'labels')} of {ds.attrs.get('starts', '')} "
+                 "starts against the most accurate run", fontsize="medium")
+    return fig
+
+
+__all__ += ["map_accuracy"]

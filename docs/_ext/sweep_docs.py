@@ -51,6 +51,9 @@ API_MODULES = (
     ("sweep.accuracy", "sweep.accuracy: exact references and work-precision",
      "Exact solutions (Jacobi elliptic functions, closed forms), observed orders and "
      "work-precision datasets."),
+    ("sweep.map_precision", "sweep.map_precision: a map's work-precision",
+     "The labels of a map's starts under a ladder of settings against its most accurate "
+     "run, and what each setting costs (``sweep.map_accuracy``)."),
     ("sweep.io", "sweep.io: files and provenance",
      "netCDF files and the attributes that reproduce a run."),
     ("sweep.distributed", "sweep.distributed: grids larger than memory",

@@ -94,15 +94,17 @@ class _ForcedAttractors:
         self.turns.append(turns)
         return len(self.theta) - 1
 
-    def keys(self, ds: xr.Dataset) -> np.ndarray:
-        """Per trajectory of ``ds`` (one level's run), the index of its attractor among
-        those met so far; -1 unresolved."""
-        labels = basins(ds, max_period=self.max_period, tol=self.tol)
+    def keys(self, ds: xr.Dataset, tol: float | None = None) -> np.ndarray:
+        """Per trajectory of ``ds`` (one run), the index of its attractor among those
+        met so far; -1 unresolved. ``tol``: `basins`' tolerance for this run (default
+        the matching's own; `sweep.map_accuracy` varies it from run to run)."""
+        tol = self.tol if tol is None else tol
+        labels = basins(ds, max_period=self.max_period, tol=tol)
         flat = labels.values.ravel().astype(np.int64)
         periods = np.asarray(labels.attrs["attractor_period"], dtype=np.int64)
         if periods.size == 0:
             return flat  # all unresolved
-        rings = attractor_catalogue(ds, labels, max_period=self.max_period, tol=self.tol)
+        rings = attractor_catalogue(ds, labels, max_period=self.max_period, tol=tol)
         turns = labels.attrs["attractor_turns_per_period"]
         found = np.array([self.index(rings["theta"][a], rings["omega"][a], int(periods[a]),
                                      float(turns[a]) * periods[a])
