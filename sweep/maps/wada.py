@@ -127,7 +127,9 @@ class WadaMerging:
     radius : int
     tolerance : float
     verdict : str
-        ``"Wada"`` if every share is at most ``tolerance``, ``"not Wada"`` otherwise.
+        ``"Wada"`` if every share is at most ``tolerance``, ``"not Wada"`` otherwise
+        (some part of the boundary is not every basin's: a partially Wada map
+        included).
     """
 
     labels: np.ndarray
@@ -288,12 +290,16 @@ def wada(labels, labels_of, x=None, y=None, *, max_steps: int = 8,
     m basins; a Wada map has ``W_N`` near 1, growing toward 1 with the steps.
 
     What was followed: the procedure of Daza, Wagemakers, Sanjuán, Yorke, Sci. Rep. 5,
-    16579 (2015) (boundary boxes of a grid point and its neighbours, trajectories on
-    the segments between grid points, doubled at each step up to a maximum, ``W_m``
-    per step), as its authors' Julia code (Wagemakers' ``Basins.jl``,
-    ``detect_wada_grid_method``) implements it, except that every neighbour's segment
-    is refined there being one in the code, and that no point is computed twice: a
-    point shared by two cells' segments is one trajectory.
+    16579 (2015) (the box of a grid point and its neighbours, new trajectories on the
+    segments between grid points, their number doubled at each step up to a maximum,
+    ``W_m`` per step), read through the summaries of it and its authors' Julia code
+    (Wagemakers' ``Basins.jl``, ``detect_wada_grid_method``). Two choices differ from
+    that code: it refines one segment per cell (towards one neighbour of another
+    basin), this refines the segments to all 8 neighbours (a third basin can lie
+    between two points of one basin; it costs up to 8 times more per cell); and a point
+    shared by two cells' segments is computed once. The grid method rather than the
+    merging method (`wada_merging`) answers here because it looks below the grid's
+    scale; the merging method is bound to the map's resolution.
 
     Parameters
     ----------
@@ -440,7 +446,7 @@ def _rebit(bits: np.ndarray, old: np.ndarray, new: np.ndarray) -> np.ndarray:
     return out
 
 
-def wada_merging(labels, *, radius: int = 2, tolerance: float = 0.05) -> WadaMerging:
+def wada_merging(labels, *, radius: int = 2, tolerance: float = 0.01) -> WadaMerging:
     """The Wada test of a 2-D basin map by the merging method (Daza et al. 2018), on
     the label array alone.
 
@@ -468,8 +474,10 @@ def wada_merging(labels, *, radius: int = 2, tolerance: float = 0.05) -> WadaMer
         The map, >= 0 a basin, < 0 unresolved (ignored); three or more basins.
     radius : int, default 2
         Cells, >= 0: how far a merged boundary may lie from the whole one.
-    tolerance : float, default 0.05
-        In [0, 1): the share of the boundary a merged boundary may miss.
+    tolerance : float, default 0.01
+        In [0, 1): the share of the boundary a merged boundary may miss (as `wada`'s
+        tolerance: the forced pendulum's 200 x 200 maps miss at most 0.0024 at
+        A = 1.66, Wada, and up to 0.037 at A = 1.71, partially Wada).
 
     Returns
     -------
