@@ -208,6 +208,24 @@ def test_refine_script(tmp_path):
     assert figure.stat().st_size > 0
 
 
+def test_wada_script(tmp_path):
+    """benchmarks/wada.py at 21 x 21 with 2 steps and its figure; its 21 x 21 pilot of
+    the A = 1.66 map is conftest's Wada pilot (the same kernels)."""
+    wada = importlib.import_module("wada")
+    figure = tmp_path / "wada.png"
+    assert wada.main(["--size", "21", "--steps", "2", "--pilot", "21", "--out",
+                      str(tmp_path), "--figure", str(figure)]) == 0
+    result = json.loads((tmp_path / "wada.json").read_text())
+    assert [case["basins"] for case in result["cases"]] == [3, 4]
+    for case in result["cases"]:
+        grid = case["grid_method"]
+        assert len(grid["W"]) == grid["steps"] + 1 == 3
+        assert np.allclose(np.sum(grid["W"], axis=1), 1)
+        assert len(case["merging_method"]["shares"]) == case["basins"]
+    assert "| m | grid | step 1 | step 2 |" in (tmp_path / "wada.md").read_text()
+    assert figure.stat().st_size > 0
+
+
 def test_lyapunov_script(tmp_path):
     """Tiny sizes: the script runs, checks its NumPy baseline against sweep (the same
     step map, to rounding) and writes both result files."""
