@@ -1,7 +1,8 @@
 """Maps of what each region of phase space does: pure functions ``Dataset -> DataArray``
 that read a run's stored features (they never re-run the integrator), periodicity maps,
 attractor continuation along a grid axis, basin metrics, frequency responses by
-continuation, and adaptive refinement of a 2-D map toward its boundaries (`refine`).
+continuation, adaptive refinement of a 2-D map toward its boundaries (`refine`), and the
+uncertainty exponent from random pairs of starts (`uncertainty_sampled`).
 
 ``sweep.maps.metrics`` and ``sweep.maps.response`` are also reachable as
 ``sweep.metrics`` and ``sweep.response``.
@@ -24,9 +25,10 @@ from .networks import basin_stability, synchronized
 from .period import NO_PERIOD, period
 from .pilot import pilot_catalogue, pilot_grid
 from .refine import refine
+from .uncertainty import SampledUncertainty, scene_labels, uncertainty_sampled
 
-__all__ = ["NO_PERIOD", "UNRESOLVED", "amplitude", "attractor_catalogue", "basin_stability",
-           "basins", "continuation", "fractions",
+__all__ = ["NO_PERIOD", "UNRESOLVED", "SampledUncertainty", "amplitude",
+           "attractor_catalogue", "basin_stability", "basins", "continuation", "fractions",
            "identify_attractors", "inverted", "motion", "natural_frequency_squared", "period",
-           "pilot_catalogue", "pilot_grid", "refine", "synchronized",
-           "well"]
+           "pilot_catalogue", "pilot_grid", "refine", "scene_labels", "synchronized",
+           "uncertainty_sampled", "well"]
