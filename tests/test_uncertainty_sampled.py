@@ -266,7 +266,17 @@ def test_scene_labels_bad_input(kwargs, match, no_compute):
         maps.scene_labels(DAMPED, **kwargs, **WELLS_RUN)
 
 
-def test_scene_labels_run_arguments_are_checked_before_compute(no_compute):
-    labels_of = maps.scene_labels(DAMPED, maps.well, **dict(WELLS_RUN, dt=-1.0))
-    with pytest.raises(ValueError, match="dt"):
-        maps.uncertainty_sampled(labels_of, PHASE_BOX, **GOOD)
+@pytest.mark.parametrize("scene", [None, "pendulum", sweep.Damping(0.2)])
+def test_scene_labels_bad_scene(scene, no_compute):
+    with pytest.raises(ValueError, match=r"scene must be a sweep.Scene .*got"):
+        maps.scene_labels(scene, **WELLS_RUN)
+
+
+@pytest.mark.parametrize("run, match", [
+    (dict(WELLS_RUN, dt=-1.0), "dt"),
+    (dict(WELLS_RUN, observe=("nonsense",)), "nonsense"),
+    (dict(WELLS_RUN, t_end=np.nan), "t_end"),
+])
+def test_scene_labels_run_arguments_are_checked_up_front(run, match, no_compute):
+    with pytest.raises(ValueError, match=match):
+        maps.scene_labels(DAMPED, maps.well, **run)

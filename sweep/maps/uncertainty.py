@@ -346,9 +346,10 @@ def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega
     Raises
     ------
     ValueError
-        If ``label`` is not callable or ``axes`` not two distinct names of `sweep.Points`
-        columns; `sweep.run` checks ``run_kwargs`` when ``labels_of`` is first called,
-        before anything is integrated.
+        If ``scene`` is not a `sweep.Scene`, ``label`` not callable, ``axes`` not two
+        distinct names of `sweep.Points` columns, or ``run_kwargs`` not what `sweep.run`
+        accepts (checked here, on a start at 0 along both axes, computing nothing;
+        each call's run checks its own starts again).
 
     Notes
     -----
@@ -358,9 +359,11 @@ def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega
     """
     from .. import engine
     from ..grid import Points
-    from ..physics import parameter_names
+    from ..physics import Scene, parameter_names
     from .labels import basins
 
+    if not isinstance(scene, Scene):
+        raise ValueError(f"scene must be a sweep.Scene (a pendulum scene), got {scene!r}")
     if label is None:
         label = basins
     if not callable(label):
@@ -376,6 +379,9 @@ def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega
         raise ValueError(f"axes must be {accepted}, got {axes!r}")
     axes = pair
     run_kwargs.setdefault("progress", False)
+    # every run argument checked now, on one start, as sweep.run checks it (the starts'
+    # own values are checked again by each call's run)
+    engine.prepare(scene, Points(**{axes[0]: [0.0], axes[1]: [0.0]}), **run_kwargs)
 
     def labels_of(starts: np.ndarray) -> np.ndarray:
         starts = np.asarray(starts, dtype=np.float64)
