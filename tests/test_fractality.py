@@ -84,6 +84,24 @@ def test_two_basin_fractal_is_found():
     assert result.fractal and result.sbb < result.smooth_sbb
 
 
+def test_attractors_jl_verdicts():
+    """Attractors.jl's tests of its basins_fractal_test (test/basins/uncertainty_tests.jl,
+    "Basin entropy and Fractal test"), balls of 5 cells on 300 x 300 grids: the map of
+    Grebogi et al. (1983) on [0, 2 pi] x [-0.5, 0.5] is fractal (Sbb measured 0.585 to
+    0.593, 25 standard errors above the smooth interval's top 0.471, over four seeds);
+    the Henon map's (a = 1.4, b = 0.3) bounded basin on [-2, 2]^2 is smooth (0.448 to
+    0.456, inside the interval)."""
+    from test_metrics import grebogi_map_basins
+
+    assert fractality_test(grebogi_map_basins(300), radius=5, rng=7).fractal
+    x, y = np.meshgrid(np.linspace(-2, 2, 300), np.linspace(-2, 2, 300), indexing="ij")
+    for _ in range(60):  # escaped orbits are clipped at 1e6 so that nothing overflows
+        x, y = np.clip(1 - 1.4 * x * x + y, -1e6, 1e6), np.clip(0.3 * x, -1e6, 1e6)
+    bounded = np.abs(x) < 1e5  # the attractor lies within |x| < 1.3
+    assert 0.3 < bounded.mean() < 0.6  # both basins present (measured 0.43)
+    assert not fractality_test(bounded, radius=5, rng=8).fractal
+
+
 def test_pendulum_wells_are_smooth():
     """The damped pendulum's wells on 128 x 128 starts, balls of 3 cells (the map has
     about 40 radii per axis): smooth (Sbb inside the smooth interval for six seeds)."""
