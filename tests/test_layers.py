@@ -1,7 +1,8 @@
 """The package's layers: every import inside sweep (at module level or inside a
 function) points down or sideways within a layer, never up, and there is no circle.
 
-    cli -> maps, accuracy, plot, toml_spec, distributed, diskspace -> engine -> execution, io
+    cli -> maps, accuracy, map_precision, plot, toml_spec, distributed, diskspace
+        -> engine -> execution, io
         -> kernels, grid, stability -> physics, methods, observables -> _config, ...
 
 The documentation's layout section (docs/guide/extending.md) draws the same picture.
@@ -25,7 +26,8 @@ LAYERS = {
     "sweep.kernels": 2, "sweep.grid": 2, "sweep.stability": 2,
     "sweep.execution": 3, "sweep.io": 3, "sweep.settings": 3,
     "sweep.engine": 4, "sweep.engine_systems": 4,
-    "sweep.maps": 5, "sweep.accuracy": 5, "sweep.plot": 5, "sweep.toml_spec": 5,
+    "sweep.maps": 5, "sweep.accuracy": 5, "sweep.map_precision": 5, "sweep.plot": 5,
+    "sweep.toml_spec": 5,
     "sweep.distributed": 5, "sweep.diskspace": 5,
     "sweep.cli": 6, "sweep.__main__": 7,
     "sweep.explore": 6,  # the browser explorer, beside cli: the public API and maps
