@@ -211,6 +211,37 @@ def build_parser() -> argparse.ArgumentParser:
                           "log-log (sweep.plot.map_accuracy)")
     accuracy.set_defaults(handler=_command_map_accuracy)
 
+    boundary = commands.add_parser(
+        "boundary", help="is a map's boundary fractal, and Wada? its numbers, one call",
+        description="Run a run file's 2-D grid of theta0 x omega0, label it and print "
+        "what the map's boundary is (sweep.maps.describe_boundary): each basin's fraction, "
+        "the basin entropy Sb and Sbb, the fractality test (Puy et al. 2021), the "
+        "uncertainty exponent at the grid's scale and, on request, below it (random "
+        "pairs of starts, --sampled) and the Wada test (grid method, --wada). Forced "
+        "basins are labelled by an attractor catalogue of a pilot grid, so new "
+        "trajectories number the basins as the map does; an unforced map's basins are "
+        "its wells.")
+    boundary.add_argument("run_file", metavar="RUN.toml",
+                          help="the run file: a [grid] of theta0 and omega0 (other axes "
+                          "one value)")
+    boundary.add_argument("--label", default="basins", metavar="NAME",
+                          help="basins (default), motion, well, period or inverted")
+    boundary.add_argument("--sampled", type=int, default=0, metavar="N",
+                          help="the uncertainty exponent below the grid's scale from N "
+                          "random pairs per eps level, eps 1e-9 to 1e-2 of the box "
+                          "(>= 100; default: not computed)")
+    boundary.add_argument("--wada", type=int, default=0, metavar="STEPS",
+                          help="the Wada test with STEPS refinement steps (a map of three "
+                          "basins or more; default: not computed)")
+    boundary.add_argument("--pilot", type=int, metavar="N",
+                          help="forced basins: catalogue the attractors on N x N starts "
+                          "first (default: [run] pilot, else 41)")
+    boundary.add_argument("--seed", type=int, default=0, metavar="S",
+                          help="seed of the random balls and pairs (default: 0)")
+    boundary.add_argument("-o", "--output", metavar="OUT.json",
+                          help="also write the numbers as JSON (its folder must exist)")
+    boundary.set_defaults(handler=_command_boundary)
+
     explore = commands.add_parser(
         "explore", help="explore maps in the browser, recomputed on every zoom",
         description="Start a local web app (sweep.explore; needs the explore extra) that "
@@ -868,6 +899,76 @@ def _command_map_accuracy(args: argparse.Namespace) -> int:
 
         plot.save_figure(plot.map_accuracy(accuracy), figure)
         print(f"wrote {figure}")
+    return 0
+
+
+def _command_boundary(args: argparse.Namespace) -> int:
+    """``sweep boundary``: `sweep.maps.describe_boundary` of a run file's 2-D map;
+    print it, optionally write it as JSON (atomically)."""
+    import json
+
+    from . import maps
+    from .grid import Grid
+    from .io import check_output_path
+    from .maps.boundary import describe_boundary
+    from .toml_spec import REFINE_MAPS, load_run
+
+    output = check_output_path(args.output) if args.output is not None else None
+    if args.label not in REFINE_MAPS:
+        raise ValueError(f"--label {args.label!r} is not a map; accepted: "
+                         f"{', '.join(REFINE_MAPS)}")
+    for name, value, low in (("--sampled", args.sampled, 0), ("--wada", args.wada, 0),
+                             ("--seed", args.seed, 0), ("--pilot", args.pilot, 2)):
+        if value is not None and value < low:
+            raise ValueError(f"{name} must be >= {low}, got {value}")
+    if 0 < args.sampled < 100:
+        raise ValueError(f"--sampled must be 0 or >= 100 pairs per eps level, got "
+                         f"{args.sampled}")
+    options = {}
+    scene, grid, kwargs = load_run(args.run_file, options)
+    varying = [d for d, values in getattr(grid, "axes", {}).items() if len(values) > 1]
+    if not isinstance(grid, Grid) or sorted(varying) != ["omega0", "theta0"]:
+        has = ("a [grid] varying " + ", ".join(varying)) if isinstance(grid, Grid) \
+            else "no [grid]"
+        raise ValueError(f"sweep boundary maps a [grid] of theta0 and omega0 (other axes "
+                         f"one value); {args.run_file!r} has {has}")
+    if options.get("scheduler") is not None:
+        raise ValueError("sweep boundary runs locally; [run] scheduler is not used here; "
+                         "accepted: a run file without scheduler")
+    fixed = {d: float(values[0]) for d, values in grid.axes.items() if len(values) == 1}
+    if fixed:
+        raise ValueError(f"sweep boundary maps theta0 x omega0 of one scene; put "
+                         f"{', '.join(fixed)} in [scene], not in [grid]")
+    label = getattr(maps, args.label)
+    forced = args.label == "basins" and "strobe" in (kwargs.get("observe") or ())
+    start = time.perf_counter()
+    with _warnings_as_lines():
+        if forced:
+            pilot = args.pilot if args.pilot is not None else options.get("pilot", 41)
+            kwargs["attractors"] = maps.pilot_catalogue(scene, grid, pilot, **kwargs)
+        elif args.label == "basins":  # unforced: the wells, numbered alike in every run
+            label = maps.well
+        if label is maps.well:  # the well reads the final angle and the capture energy
+            observe = tuple(kwargs.get("observe") or ())
+            kwargs["observe"] = observe + tuple(n for n in ("final", "energy")
+                                                if n not in observe)
+        labels_of = maps.scene_labels(scene, label, **kwargs)
+        x, y = grid.axes["theta0"], grid.axes["omega0"]
+        starts = np.stack(np.meshgrid(x, y, indexing="ij"), axis=-1).reshape(-1, 2)
+        labels = labels_of(starts).reshape(x.size, y.size)
+        report = describe_boundary(labels, x, y, labels_of, sampled=args.sampled,
+                                   wada_steps=args.wada, seed=args.seed)
+    seconds = time.perf_counter() - start
+    what = "forced basins (pilot catalogue)" if forced else (
+        "basins (wells)" if args.label == "basins" else args.label)
+    print(f"{args.run_file}: {what}, {seconds:.2f} s end to end")
+    for line in report.lines():
+        print(line)
+    if output is not None:
+        tmp = output.with_name(output.name + ".tmp")
+        tmp.write_text(json.dumps(report.to_dict(), indent=1), encoding="utf-8")
+        tmp.replace(output)  # never a half-written file
+        print(f"wrote {output}")
     return 0
 
 

@@ -9,6 +9,7 @@ test of a map of three or more basins (`wada`, `wada_merging`).
 ``sweep.metrics`` and ``sweep.response``.
 """
 
+from .boundary import BoundaryReport, describe_boundary
 from .continuation import continuation
 from .fractions import fractions
 from .labels import (
@@ -29,9 +30,10 @@ from .refine import refine
 from .uncertainty import SampledUncertainty, scene_labels, uncertainty_sampled
 from .wada import Wada, WadaMerging, wada, wada_merging
 
-__all__ = ["NO_PERIOD", "UNRESOLVED", "SampledUncertainty", "Wada", "WadaMerging",
-           "amplitude", "attractor_catalogue", "basin_stability", "basins", "continuation",
-           "fractions", "identify_attractors", "inverted", "motion",
+__all__ = ["NO_PERIOD", "UNRESOLVED", "BoundaryReport", "SampledUncertainty", "Wada",
+           "WadaMerging", "amplitude", "attractor_catalogue", "basin_stability", "basins",
+           "continuation",
+           "describe_boundary", "fractions", "identify_attractors", "inverted", "motion",
            "natural_frequency_squared", "period", "pilot_catalogue", "pilot_grid", "refine",
            "scene_labels", "synchronized", "uncertainty_sampled", "wada", "wada_merging",
            "well"]

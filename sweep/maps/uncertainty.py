@@ -355,7 +355,10 @@ def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega
     -----
     Labels are comparable within one call (one run): `sweep.maps.basins` numbers the
     attractors of each run by basin size, so two separate calls may number them
-    differently. `uncertainty_sampled` labels every start in one call.
+    differently. `uncertainty_sampled` labels every start in one call. With a catalogue
+    (``attractors=``, e.g. `sweep.maps.pilot_catalogue`) and ``label`` `basins`, a start
+    is labelled by the index of the catalogued attractor it settles on (-1: none), so
+    separate calls agree (what `sweep.maps.wada` needs).
     """
     from .. import engine
     from ..grid import Points
@@ -383,11 +386,14 @@ def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega
     # own values are checked again by each call's run)
     engine.prepare(scene, Points(**{axes[0]: [0.0], axes[1]: [0.0]}), **run_kwargs)
 
+    catalogued = label is basins and run_kwargs.get("attractors") is not None
+
     def labels_of(starts: np.ndarray) -> np.ndarray:
         starts = np.asarray(starts, dtype=np.float64)
         ds = engine.run(scene, Points(**{axes[0]: starts[:, 0], axes[1]: starts[:, 1]}),
                         **run_kwargs)
-        values = np.asarray(label(ds), dtype=np.float64).ravel()
+        found = ds["attractor"] if catalogued else label(ds)
+        values = np.asarray(found, dtype=np.float64).ravel()
         return np.where(np.isfinite(values), values, -1).astype(np.int64)
 
     return labels_of

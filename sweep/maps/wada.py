@@ -535,17 +535,7 @@ def _scene_labels(scene, attractors, **run_kwargs):
         `sweep.run` arguments (``t_end``, ``dt``, ``t_transient``, ``observe``,
         ``stop_early``, ...); ``progress`` defaults to False.
     """
-    from .. import engine
-    from ..grid import Points
+    from .uncertainty import scene_labels
 
-    kwargs = dict(run_kwargs, attractors=attractors)
-    kwargs.setdefault("progress", False)
-
-    def labels_of(starts: np.ndarray) -> np.ndarray:
-        starts = np.asarray(starts, dtype=np.float64)
-        ds = engine.run(scene, Points(theta0=starts[:, 0], omega0=starts[:, 1]), **kwargs)
-        index = np.asarray(ds["attractor"].values, dtype=np.float64)
-        return np.where(np.isfinite(index) & (index >= 0), index, -1).astype(np.int64)
-
-    return labels_of
+    return scene_labels(scene, attractors=attractors, **run_kwargs)
 
