@@ -23,6 +23,7 @@ import sweep
 import sweep.execution.local
 
 import compile_log
+from shared_kernels import WADA_PILOT, WADA_SCENE  # the wada_catalogue fixture's scene
 
 # numba's cache index updates under a lock (as sweep.kernels.build does), also for the
 # tests that call sweep.kernels.vecmath's helpers directly: pytest-xdist's workers
@@ -39,16 +40,6 @@ def pytest_configure(config):
 
 def pytest_runtest_setup(item):
     compile_log.pytest_runtest_setup(item)
-
-
-#: The forced Wada map (c = 0.2, A = 1.66, W = 1, cos forcing, g/L = 1; three attractors),
-#: its 21 x 21 pilot and the strict early stop: tests/test_attractor_catalogue.py's SCENE,
-#: _grid(21) and EARLY (its test_pilot_catalogue_thins_the_map_and_finds_its_attractors
-#: checks that its own pilot gives these bits).
-WADA_SCENE = sweep.Scene(gravity=1.0, length=1.0, effects=(
-    sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, np.pi / 2)))
-WADA_PILOT = dict(t_end=320 * 2 * np.pi, dt=2 * np.pi / 100, t_transient=20 * 2 * np.pi,
-                  observe=("strobe",), stop_early=True, progress=False)
 
 
 @pytest.fixture(scope="session")

@@ -16,6 +16,10 @@ one lane for fewer than 4, 16 lanes up to 127, 64 up to 2047, 128 above; tests t
 share a kernel also share that size class.
 """
 
+import numpy as np
+
+import sweep
+
 #: Every observable of a fixed-step run without a forcing period to sample: the set of
 #: tests/test_naive.py (each one against the pure-Python reference), and of the tests
 #: that need "all of them" or any set at all (test_engine, test_oracles,
@@ -26,3 +30,13 @@ EVERY = ("final", "winding", "theta_max", "amplitude", "omega_mean", "tension", 
 #: Every observable the adaptive dopri5 takes (`omega_mean` needs a fixed step).
 EVERY_ADAPTIVE = ("final", "winding", "theta_max", "amplitude", "tension", "energy",
                   "top_distance")
+
+
+#: The forced Wada map (c = 0.2, A = 1.66, W = 1, cos forcing, g/L = 1; three attractors),
+#: its 21 x 21 pilot and the strict early stop: tests/test_attractor_catalogue.py's SCENE,
+#: _grid(21) and EARLY (its test_pilot_catalogue_thins_the_map_and_finds_its_attractors
+#: checks that its own pilot gives these bits).
+WADA_SCENE = sweep.Scene(gravity=1.0, length=1.0, effects=(
+    sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, np.pi / 2)))
+WADA_PILOT = dict(t_end=320 * 2 * np.pi, dt=2 * np.pi / 100, t_transient=20 * 2 * np.pi,
+                  observe=("strobe",), stop_early=True, progress=False)

@@ -113,7 +113,7 @@ def test_pendulum_wells_are_smooth():
 def test_forced_wada_map_is_fractal(wada_catalogue):
     """The forced Wada scene (c = 0.2, A = 1.66, W = 1) on 128 x 128 starts: Sbb about
     0.89, some 55 standard errors above the smooth interval's top (0.497 at radius 3)."""
-    from conftest import WADA_PILOT, WADA_SCENE
+    from shared_kernels import WADA_PILOT, WADA_SCENE
 
     labels = maps.basins(sweep.run(WADA_SCENE, phase_grid(128), attractors=wada_catalogue,
                                    **WADA_PILOT))

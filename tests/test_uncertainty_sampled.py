@@ -134,7 +134,7 @@ def test_forced_wada_scene_is_fractal(wada_catalogue):
     """The forced Wada scene (c = 0.2, A = 1.66, W = 1): three basins sharing a fractal
     boundary, alpha well below 1 (measured 0.147 +- 0.008 with 500 pairs per level).
     Its labels come from one run of every start with conftest's catalogue."""
-    from conftest import WADA_PILOT, WADA_SCENE
+    from shared_kernels import WADA_PILOT, WADA_SCENE
 
     labels_of = maps.scene_labels(WADA_SCENE, attractors=wada_catalogue, **WADA_PILOT)
     result = maps.uncertainty_sampled(labels_of, PHASE_BOX, eps=10.0 ** -np.arange(2, 8),
