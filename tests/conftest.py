@@ -18,12 +18,12 @@ if os.environ.get("SWEEP_REAL_CUDA") != "1":
 import matplotlib
 import numpy as np
 import pytest
+from shared_kernels import WADA_PILOT, WADA_SCENE  # the wada_catalogue fixture's scene
 
 import sweep
 import sweep.execution.local
 
 import compile_log
-from shared_kernels import WADA_PILOT, WADA_SCENE  # the wada_catalogue fixture's scene
 
 # numba's cache index updates under a lock (as sweep.kernels.build does), also for the
 # tests that call sweep.kernels.vecmath's helpers directly: pytest-xdist's workers
