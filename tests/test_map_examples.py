@@ -133,7 +133,8 @@ def _forced_run_files():
 
 
 def test_the_forced_run_files_are_found():
-    assert [p.name for p in _forced_run_files()] == ["forced.toml", "points.toml"]
+    assert [p.name for p in _forced_run_files()] == ["forced.toml", "points.toml",
+                                                     "wada_map.toml", "wada_sample.toml"]
 
 
 @pytest.mark.parametrize("path", _forced_run_files(), ids=lambda p: p.name)
