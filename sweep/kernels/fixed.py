@@ -208,6 +208,8 @@ def fixed_kernel(spec: KernelSpec, method) -> str:
     later = set(IDENTIFIER.findall(NL.join(step_body + drives.step + drives.carry +
                                            [observe_head, observe_body, finish] +
                                            [code for _, code in renormalise])))
+    if spec.known_cells:  # read as lane arrays (`known_source`)
+        later |= set(KNOWN_STATE)
     lane = {name: dtype for name, dtype in lane.items() if name in later}
     init_loop = lane_loop(NL.join(first), lane, level=2, load=False)
     step_loop = lane_loop(NL.join(step_body), lane, level=3,

@@ -191,9 +191,10 @@ def known_source(action: str) -> str:
     column 0, columns per rad/s, rows per 2 pi turn (> 0)]``. A point beyond the map
     (or non-finite) is no hit.
     """
-    return f"""# known cells
-if k_state == acc_kn_next:
-    acc_kn_next += acc_kn_S
+    return f"""# known cells (its state read and written in its lane arrays: loaded
+# only at a stroboscopic time)
+if k_state == lane_acc_kn_next[j]:
+    lane_acc_kn_next[j] += lane_acc_kn_S[j]
     if not done:
         acc_kn_x = (th - known_axes[0]) * known_axes[1]
         acc_kn_x -= known_axes[4] * math.floor((acc_kn_x + 0.5) / known_axes[4])
@@ -204,13 +205,13 @@ if k_state == acc_kn_next:
             acc_kn_l = known[int(math.floor(acc_kn_x + 0.5)),
                              int(math.floor(acc_kn_y + 0.5))]
         if acc_kn_l < 0:
-            acc_kn_n = 0
-        elif acc_kn_n > 0 and acc_kn_l == acc_kn_L:
-            acc_kn_n += 1
+            lane_acc_kn_n[j] = 0
+        elif lane_acc_kn_n[j] > 0 and acc_kn_l == lane_acc_kn_L[j]:
+            lane_acc_kn_n[j] += 1
         else:
-            acc_kn_n = 1
-            acc_kn_L = acc_kn_l
-        if acc_kn_n >= {KNOWN_HITS}:
+            lane_acc_kn_n[j] = 1
+            lane_acc_kn_L[j] = acc_kn_l
+        if lane_acc_kn_n[j] >= {KNOWN_HITS}:
 {indent(action, 3)}"""
 
 
