@@ -123,9 +123,10 @@ def figure(results: dict, path: Path) -> None:
                   extent=(theta[0], theta[-1], omega[0], omega[-1]), interpolation="none")
         for name, marker, colour in (("known", "x", "red"), ("refine_known", "o", "black")):
             rows, cols = np.nonzero(found["routes"][name]["differ"])
-            ax.scatter(theta[rows], omega[cols], marker=marker, s=14, c=colour,
-                       facecolors="none" if marker == "o" else None, linewidths=0.8,
-                       label=f"{name}: {rows.size} of {full.size} differ")
+            style = dict(facecolors="none", edgecolors=colour) if marker == "o" else \
+                dict(c=colour)
+            ax.scatter(theta[rows], omega[cols], marker=marker, s=14, linewidths=0.8,
+                       label=f"{name}: {rows.size} of {full.size} differ", **style)
         ax.set_title(f"{title}, {theta.size} x {omega.size}")
         ax.set_xlabel("theta0 [rad]")
         ax.set_ylabel("omega0 [rad/s]")
