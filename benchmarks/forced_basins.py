@@ -66,15 +66,20 @@ def main(argv=None) -> int:
                         help="the catalogue's pilot run: pilot x pilot starts")
     parser.add_argument("--no-c-limit", action="store_true",
                         help="do not build and time the C limit")
-    parser.add_argument("--variants", default=",".join(VARIANTS),
+    parser.add_argument("--variants", default=None,
                         help="comma-separated, from " + ", ".join(VARIANTS) +
-                             " (labels are compared with the first)")
+                             " (labels are compared with the first; default: all, the "
+                             "first three with --rows)")
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results")
     args = parser.parse_args(argv)
-    chosen = args.variants.split(",")
-    if not chosen or any(v not in VARIANTS for v in chosen):
-        parser.error(f"--variants: {args.variants!r}; accepted: some of {', '.join(VARIANTS)}")
     args.rows = args.size if args.rows is None else args.rows
+    band = args.rows != args.size
+    chosen = (args.variants or ",".join(VARIANTS[:3] if band else VARIANTS)).split(",")
+    if any(v not in VARIANTS for v in chosen):
+        parser.error(f"--variants: {args.variants!r}; accepted: some of {', '.join(VARIANTS)}")
+    if band and {"known", "refine_known"} & set(chosen):
+        parser.error("--variants known and refine_known need the whole, evenly spaced "
+                     "map; accepted: without --rows")
     args.out.mkdir(parents=True, exist_ok=True)
     period = 2 * np.pi
     scene = sweep.Scene(gravity=1.0, length=1.0,
