@@ -199,3 +199,10 @@ def test_run_refuses_bad_known_cells_before_any_compute(wada_catalogue, no_compu
         options = {k: v for k, v in options.items() if k != "stop_early"}
         with pytest.raises(ValueError, match=message):
             sweep.run(WADA_SCENE, GRID, **run, **options)
+
+
+def test_run_refuses_known_cells_for_a_system(no_compute):
+    grid = sweep.Grid(theta1_0=np.linspace(-1, 1, 3), theta2_0=np.linspace(-1, 1, 4))
+    with pytest.raises(ValueError, match="known_cells is for the pendulum's forced basins"):
+        sweep.run(sweep.DoublePendulum(), grid, t_end=1.0, dt=0.1,
+                  known_cells=_known(np.zeros((SIZE, SIZE))))
