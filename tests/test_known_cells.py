@@ -206,3 +206,15 @@ def test_run_refuses_known_cells_for_a_system(no_compute):
     with pytest.raises(ValueError, match="known_cells is for the pendulum's forced basins"):
         sweep.run(sweep.DoublePendulum(), grid, t_end=1.0, dt=0.1,
                   known_cells=_known(np.zeros((SIZE, SIZE))))
+
+
+def test_refine_with_known_cells_on_a_grid_of_omega0_first(wada_catalogue):
+    """The map of known cells has theta0 rows whatever the grid's order: a grid of
+    omega0 x theta0 gives the transposed labels."""
+    flipped = sweep.Grid(omega0=GRID.axes["omega0"], theta0=GRID.axes["theta0"])
+    first = _refined(wada_catalogue)
+    other = maps.refine(WADA_SCENE, flipped, attractors=wada_catalogue, known_cells=True,
+                        **WADA_PILOT)
+    assert other.dims == ("omega0", "theta0")
+    assert other.attrs["cells_stopped_known"] == first.attrs["cells_stopped_known"]
+    np.testing.assert_array_equal(other.values.T, first.values)
