@@ -16,6 +16,7 @@ import numpy as np
 from . import _config, io
 from . import methods as _methods
 from . import stability as _stability
+from ._known import check_known_cells, known_arguments, no_known_arguments
 from ._timesteps import WHOLE_STEPS_RTOL
 from ._validate import check_flag, check_positive_int
 from ._version import __version__
@@ -236,7 +237,7 @@ def _drive_axes(effect) -> tuple[str, str]:
 def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, method,
              rtol, atol, chunk_size, specialize, check_stability, estimate_error,
              stop_early, device="cpu", strobe_samples=STROBE_SAMPLES, dtype="float64",
-             attractors=None):
+             attractors=None, known_cells=None, checkpoint=None):
     """Validate the arguments of `run` (before any compute); return the time
     settings, the kernel spec and the chunk size. Raises ValueError/TypeError."""
     if not isinstance(scene, Scene):
@@ -278,6 +279,13 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     check_observables_fit(integrator, names)
     _check_stroboscopic(names, scene, grid, settings)
     _check_stop_early(names, scene, grid, stop_early, save_every)
+    if known_cells is not None:
+        check_known_cells(known_cells, attractors=len(orbits), stop_early=stop_early,
+                          method=integrator, checkpoint=checkpoint)
+        if device != "cpu" or dtype != "float64":
+            raise ValueError(f"known_cells runs on the CPU in float64; got device="
+                             f"{device!r}, dtype={dtype!r}; accepted: device='cpu', "
+                             "dtype='float64', or known_cells=None")
     if not isinstance(check_stability, (bool, np.bool_)):
         raise TypeError(f"check_stability must be True or False, got {check_stability!r}")
     check_flag("specialize", specialize)
@@ -307,6 +315,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         strobe_samples=int(strobe_samples),
         dtype=dtype,
         attractors=orbits,
+        known_cells=known_cells is not None,
     )
     _check_angle_range(grid, spec)
     return settings, spec, int(chunk_size)
@@ -421,6 +430,7 @@ def run(
     strobe_samples: int = STROBE_SAMPLES,
     dtype: str = "float64",
     attractors=None,
+    known_cells=None,
 ):
     """Integrate every trajectory of ``grid`` under ``scene``; return a labelled Dataset.
 
@@ -552,6 +562,20 @@ def run(
         such a trajectory by the catalogued attractor. Attractors not in the catalogue
         are still found by the ``strobe`` test. The catalogue is stored in the
         dataset's attributes (``attractors_*``).
+    known_cells : xarray.DataArray, optional
+        With ``attractors`` and ``stop_early`` (fixed-step methods on the CPU, float64):
+        a map over ``theta0`` and ``omega0`` (each evenly spaced) of the catalogued
+        attractor each cell's start settles on (its index in ``attractors``), -1 where
+        unknown, e.g. labels known from a coarser map. A trajectory whose stroboscopic
+        points (times ``t0 + m 2 pi / W``, m >= 1, from the start on, whatever
+        ``t_transient``) fall in cells of one label `sweep.observables.KNOWN_HITS`
+        periods running (the angle taken modulo 2 pi onto the map's rows; a point
+        beyond the map is no hit) stops there and is labelled with it (``attractor``).
+        The map is read, never written, during the run, so the result does not depend
+        on threads, blocks, chunks or Dask. The dataset gains ``stopped_known`` (1
+        where a trajectory stopped on known cells) and the attribute
+        ``cells_stopped_known``. Which cells to mark known sets the accuracy (see
+        `sweep.maps.refine` with ``known_cells=True`` and the maps guide).
 
     Returns
     -------
@@ -582,7 +606,8 @@ def run(
             estimate_error=estimate_error, checkpoint=checkpoint, resume=resume,
             keep_checkpoint=keep_checkpoint, stop_early=stop_early, client=client,
             device=device, strobe_samples=None if strobe_samples == STROBE_SAMPLES
-            else strobe_samples, dtype=dtype, attractors=attractors)
+            else strobe_samples, dtype=dtype, attractors=attractors) \
+            if known_cells is None else _refuse_known_cells(scene)
     check_flag("progress", progress, allow_none=True)
     check_flag("keep_checkpoint", keep_checkpoint)
     settings, spec, chunk_size = _prepare(
@@ -590,7 +615,8 @@ def run(
         save_every=save_every, method=method, rtol=rtol, atol=atol, chunk_size=chunk_size,
         specialize=specialize, check_stability=check_stability,
         estimate_error=estimate_error, stop_early=stop_early, device=device,
-        strobe_samples=strobe_samples, dtype=dtype, attractors=attractors)
+        strobe_samples=strobe_samples, dtype=dtype, attractors=attractors,
+        known_cells=known_cells, checkpoint=checkpoint)
     n = grid.size
     _check_memory(n, spec, settings)
     if client is not None:
@@ -612,8 +638,9 @@ def run(
                 store.store(start, stop, persisted)
             bar.update(stop - start)
 
-        execute(RunContext(scene, grid, spec, settings), todo, persisted, finished,
-                client=client)
+        execute(RunContext(scene, grid, spec, settings,
+                           known_arguments(known_cells) if spec.known_cells else ()),
+                todo, persisted, finished, client=client)
     if store is not None and not keep_checkpoint:
         store.remove()
     if store is not None:  # one writer per checkpoint: let the next run have it
@@ -626,6 +653,8 @@ def run(
     ds = io.to_dataset(scene=scene, grid=grid, settings=settings, spec=spec, out=out,
                        status=status, saved=persisted.get("saved"))
     ds.attrs.update(_catalogue_attrs(attractors))
+    if spec.known_cells:
+        ds.attrs["cells_stopped_known"] = int(np.nansum(ds["stopped_known"].values))
     if settings.adaptive:
         _add_step_statistics(ds, grid, settings, persisted["stats"])
     if estimate_error is not None:
@@ -633,6 +662,11 @@ def run(
                                   t0=t0, t_transient=t_transient, method=method, rtol=rtol,
                                   atol=atol, dtype=dtype))
     return ds
+
+
+def _refuse_known_cells(system: System):
+    raise ValueError(f"known_cells is for the pendulum's forced basins; {system!r} is a "
+                     "system with several coordinates; accepted: known_cells=None")
 
 
 def prepare(scene: Scene, grid: Grid, **run_kwargs):
@@ -684,7 +718,8 @@ def warm_up(scene: Scene, grid: Grid, **kwargs) -> KernelSpec:
     """
     settings, spec, _ = prepare(scene, grid, **kwargs)
     _integrate(build(spec), grid.table(scene, 0, 0), settings,
-               _allocate(spec, settings, 0))  # no trajectories: compiles, runs nothing
+               _allocate(spec, settings, 0),  # no trajectories: compiles, runs nothing
+               no_known_arguments() if spec.known_cells else ())
     io.warm_up()
     return spec
 

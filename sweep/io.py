@@ -97,6 +97,12 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
                     observable.sample_dim, np.arange(1 - width, 1),
                     {"units": "1", "long_name": "forcing periods before the last sample"})
             col += width
+    if getattr(spec, "known_cells", False):  # the column after the observables
+        data_vars["stopped_known"] = xr.Variable(
+            dims, grid.unflatten(out[:, col]),
+            {"units": "1", "long_name": "1 where the trajectory stopped on known cells "
+                                        "(sweep.run's known_cells; its attractor is "
+                                        "theirs), else 0"})
     data_vars["status"] = status_variable(grid, status)
     if saved is not None:
         n_saved = saved.shape[2]

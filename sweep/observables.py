@@ -173,6 +173,12 @@ ATTRACTOR_TOL = 1e-3
 #: run).
 ATTRACTOR_MATCHES = 3
 
+#: Forcing periods running on which a trajectory's stroboscopic point must fall in known
+#: cells of one label before it stops there (`sweep.run(..., known_cells=...)`,
+#: `sweep.maps.refine(..., known_cells=True)`; the kernels' `KernelSpec.known_cells`).
+#: Measured on the 1200^2 Wada map and the Baker-Gollub map (docs/guide/refine.md).
+KNOWN_HITS = 3
+
 #: Steps between renormalisations of the ``lyapunov`` observable's tangent vectors. A
 #: stable RK4 step (|z| <= 2.83) grows a tangent vector by at most ~14 (the stability
 #: polynomial's modulus there), so 64 steps stay below 14**64 ~ 1e73, far from

@@ -185,6 +185,23 @@ def test_forced_basins_script(tmp_path):
     assert "attractor catalogue (21 x 21 pilot)" in (tmp_path / "forced_basins.md").read_text()
 
 
+def test_forced_basins_script_with_known_cells(tmp_path):
+    """The known-cells variants (issue 37) on a whole 40 x 40 map (its one background
+    map: 20 x 20), against the full run; the pilot is conftest's (the wada_catalogue
+    fixture's kernels)."""
+    forced_basins = importlib.import_module("forced_basins")
+    assert forced_basins.main(["--size", "40", "--pilot", "21", "--no-c-limit", "--variants",
+                               "full,catalogue,known,refine_known", "--out",
+                               str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "forced_basins.json").read_text())
+    assert result["variants"] == ["full", "catalogue", "known", "refine_known"]
+    for name in ("known", "refine_known"):
+        assert isinstance(result[name]["labels_differing"], int)
+        assert result[name]["cpu_seconds"] > 0
+        assert result[name]["stopped_known_fraction"] > 0
+    assert "known cells" in (tmp_path / "forced_basins.md").read_text()
+
+
 def test_refine_script(tmp_path):
     """benchmarks/refine.py at 21 x 21 (forced) and 33 x 33 (wells), with its figure;
     its 21 x 21 pilot (the forced map's own starts) is conftest's Wada pilot, so the

@@ -69,7 +69,7 @@ def run_chunk_task(context: RunContext, start: int, stop: int) -> dict:
     arrays = allocate(context.spec, context.settings, stop - start)
     table = context.table(start, stop)
     with _KERNEL_LOCK:
-        integrate(kernel, table, context.settings, arrays)
+        integrate(kernel, table, context.settings, arrays, context.known)
     arrays["seconds"] = time.perf_counter() - began
     return arrays
 

@@ -12,17 +12,20 @@ __all__ = ["RunContext", "allocate", "integrate", "run_chunks"]
 
 
 class RunContext:
-    """What every chunk needs: scene, grid, kernel spec and time settings.
+    """What every chunk needs: scene, grid, kernel spec and time settings, and the
+    kernel's extra arguments (``known``: `sweep._known.known_arguments` for a spec with
+    ``known_cells``, else ``()``).
 
     A plain picklable object (a Dask task carries it); `table` gives a chunk's
     parameter rows.
     """
 
-    def __init__(self, scene, grid, spec, settings) -> None:
+    def __init__(self, scene, grid, spec, settings, known: tuple = ()) -> None:
         self.scene = scene
         self.grid = grid
         self.spec = spec
         self.settings = settings
+        self.known = tuple(known)
 
     def table(self, start: int, stop: int):
         """The rows ``start:stop`` for the kernel: a table on the CPU, described
@@ -45,9 +48,10 @@ def allocate(spec, settings, n: int) -> dict[str, np.ndarray]:
     return arrays
 
 
-def integrate(kernel, table, settings, arrays: dict[str, np.ndarray]) -> None:
+def integrate(kernel, table, settings, arrays: dict[str, np.ndarray], known: tuple = ()) -> None:
     """Run ``kernel`` on the parameter rows ``table``, writing into ``arrays`` (same
-    rows): the one call of the kernel contract, shared by local runs and workers."""
+    rows): the one call of the kernel contract, shared by local runs and workers
+    (``known``: the arguments a known-cells kernel takes after ``saved``)."""
     if settings.adaptive:
         kernel(table, settings.t0, settings.t_end, settings.dt, settings.t_transient,
                settings.rtol, settings.atol, arrays["out"], arrays["status"],
@@ -56,7 +60,7 @@ def integrate(kernel, table, settings, arrays: dict[str, np.ndarray]) -> None:
         saved = arrays.get("saved")
         kernel(table, settings.t0, settings.dt, settings.n_steps, settings.n_transient,
                settings.save_every or 1, arrays["out"], arrays["status"],
-               saved if saved is not None else np.empty((0, 2, 0)))
+               saved if saved is not None else np.empty((0, 2, 0)), *known)
 
 
 def run_chunks(context: RunContext, chunks, arrays: dict[str, np.ndarray], done) -> None:
@@ -67,5 +71,5 @@ def run_chunks(context: RunContext, chunks, arrays: dict[str, np.ndarray], done)
     kernel = build(context.spec)
     for start, stop in chunks:
         integrate(kernel, context.table(start, stop), context.settings,
-                  {name: array[start:stop] for name, array in arrays.items()})
+                  {name: array[start:stop] for name, array in arrays.items()}, context.known)
         done(start, stop)

@@ -27,8 +27,13 @@ from ..observables import OBSERVABLES
 from .lanes import IDENTIFIER, allocate, blocks_head, indent, lane_loop, lane_snippet, scalar_lanes
 from .precision import float64_symbols
 from .snippets import (
+    KNOWN_STATE,
     failed_samples,
     failed_status,
+    known_final,
+    known_head,
+    known_init,
+    known_source,
     ok_test,
     renormalisations,
     snippets,
@@ -101,7 +106,8 @@ def _first_lines(spec: KernelSpec, parts: dict, per_lane: list[str], lane_sines:
     state, observables' init, first save."""
     first = ([index] if index else []) + [_load(spec, "th0", "i"), _load(spec, "om0", "i")] + \
         [_load(spec, p, "i") for p in per_lane] + \
-        ["th = th0", "om = om0", lane_snippet(snippets(spec, "init"))]
+        ["th = th0", "om = om0", lane_snippet(snippets(spec, "init"))] + \
+        ([known_init()] if spec.known_cells else [])
     if update:
         first += ["if n_transient <= 0:", indent(update, 1)]
     if spec.save:
@@ -119,11 +125,15 @@ def _observe_parts(spec: KernelSpec, update: str) -> tuple[str, str, str]:
     if not update:
         return "", "", ""
     body, head = update, ""
+    action = "done = True\nth_stop = th\nom_stop = om\nn_done += 1"
     if spec.stop_early:
         head = "    if lane_done[j]:\n        continue\n"
-        body += NL + lane_snippet(stop_source(
-            spec, action="done = True\nth_stop = th\nom_stop = om\nn_done += 1"))
+        body += NL + lane_snippet(stop_source(spec, action=action))
     block = "if step + 1 >= n_transient:\n{loop}"
+    if spec.known_cells:  # the known-cells stop runs from the first step on
+        head += known_head("k_state", "k_state < n_transient")
+        body = "if k_state >= n_transient:\n" + indent(body, 1) + NL + known_source(action)
+        block = "if True:\n{loop}"
     if spec.stop_early:
         block += "\n    if n_done == BLOCK:\n        break"
     return block, head, body
@@ -141,7 +151,8 @@ def _finish(spec: KernelSpec, index: str = "i = base + j\n", frozen: bool | None
     by the line ``index``); ``frozen``: a settled lane's state was kept in th_stop,
     om_stop (default: with early stop)."""
     width = n_columns(spec)
-    final = lane_snippet(snippets(spec, "final"))
+    final = lane_snippet(snippets(spec, "final") +
+                         (NL + known_final(spec) if spec.known_cells else ""))
     frozen = spec.stop_early if frozen is None else frozen
     stop_state = "if done:\n    th = th_stop\n    om = om_stop\n" if frozen else ""
     return f"""{index}{stop_state}if {ok_test(spec)}:
@@ -171,6 +182,8 @@ def _lane_dtypes(spec: KernelSpec, parts: dict, per_lane: list[str],
         lane.update(dict(OBSERVABLES[name].state))
     if spec.stop_early:
         lane.update({"done": "bool_", "th_stop": angle, "om_stop": real})
+    if spec.known_cells:
+        lane.update(KNOWN_STATE)
     lane.update({name: real for name in lane_sines})
     return lane
 
@@ -195,6 +208,8 @@ def fixed_kernel(spec: KernelSpec, method) -> str:
     later = set(IDENTIFIER.findall(NL.join(step_body + drives.step + drives.carry +
                                            [observe_head, observe_body, finish] +
                                            [code for _, code in renormalise])))
+    if spec.known_cells:  # read as lane arrays (`known_source`)
+        later |= set(KNOWN_STATE)
     lane = {name: dtype for name, dtype in lane.items() if name in later}
     init_loop = lane_loop(NL.join(first), lane, level=2, load=False)
     step_loop = lane_loop(NL.join(step_body), lane, level=3,
@@ -209,7 +224,7 @@ def fixed_kernel(spec: KernelSpec, method) -> str:
     renormalise_blocks = NL.join(head + NL + lane_loop(code, lane, level=1)
                                  for head, code in renormalise)
     finish_loop = lane_loop(finish, lane, level=2, stores=[], count="n_real")
-    kernel = blocks_head(spec.block) + f'''\
+    kernel = blocks_head(spec.block, spec.known_cells) + f'''\
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(parts["preamble"]), 1)}
@@ -233,4 +248,6 @@ def fixed_kernel(spec: KernelSpec, method) -> str:
 {indent(_SAVE_BLOCK if spec.save else "", 3)}
 {finish_loop}
 '''
-    return scalar_lanes(kernel, lane) if spec.block == 1 else kernel
+    # a known-cells kernel keeps its one-lane loop (its head's skip is no plain flag)
+    return scalar_lanes(kernel, lane) if spec.block == 1 and not spec.known_cells \
+        else kernel

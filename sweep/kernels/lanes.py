@@ -7,8 +7,8 @@ from __future__ import annotations
 import re
 import textwrap
 
-__all__ = ["ASSIGNED", "IDENTIFIER", "allocate", "blocks_head", "indent", "lane_loop",
-           "lane_snippet", "scalar_lanes", "skip_unless"]
+__all__ = ["ASSIGNED", "IDENTIFIER", "KNOWN_ARGUMENTS", "allocate", "blocks_head", "indent",
+           "lane_loop", "lane_snippet", "scalar_lanes", "skip_unless"]
 
 IDENTIFIER = re.compile(r"\b[A-Za-z_]\w*\b")
 ASSIGNED = re.compile(r"^\s*([A-Za-z_]\w*)\s*(?:[-+*/]?=)(?!=)", re.MULTILINE)
@@ -35,24 +35,30 @@ def lane_loop(body: str, lane: dict[str, str], *, level: int, head: str = "",
                   level)
 
 
-def blocks_head(block: int) -> str:
+def blocks_head(block: int, known: bool = False) -> str:
     """The head of a fixed-step kernel module's body: ``BLOCK``, the Python ``kernel``
     (the contract of `sweep.kernels.source`) that spreads the blocks over threads
     (`sweep.kernels.threads.run_blocks`), and the signature of the compiled ``blocks``
-    over a range of blocks, whose body follows."""
+    over a range of blocks, whose body follows (with ``known``: the two arguments of
+    `sweep.kernels.KernelSpec.known_cells` after ``saved``)."""
+    extra = KNOWN_ARGUMENTS if known else ""
     return f'''
 BLOCK = {block}
 
 
-def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
+def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra}):
     run_blocks(blocks, (params.shape[0] + BLOCK - 1) // BLOCK,
-               params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
+               params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra})
 
 
 @njit(nogil=True, **JIT)
-def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
+def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra},
            b_first, b_stop):
 '''
+
+
+#: The kernel arguments of `sweep.kernels.KernelSpec.known_cells`, after ``saved``.
+KNOWN_ARGUMENTS = ", known, known_axes"
 
 
 def indent(code: str, level: int) -> str:

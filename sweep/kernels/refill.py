@@ -20,8 +20,16 @@ from __future__ import annotations
 import re
 
 from .fixed import NL, _drives, _finish, _first_lines, _lane_dtypes, _load, _parameters
-from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet, skip_unless
-from .snippets import snippets, stop_source
+from .lanes import (
+    IDENTIFIER,
+    KNOWN_ARGUMENTS,
+    allocate,
+    indent,
+    lane_loop,
+    lane_snippet,
+    skip_unless,
+)
+from .snippets import KNOWN_STATE, known_head, known_source, snippets, stop_source
 from .spec import KernelSpec, n_columns
 from .steppers import STEPPERS
 
@@ -73,10 +81,12 @@ def refill_kernel(spec: KernelSpec, method) -> str:
     step_body = drives.values + parts["step"]
     settle = lane_snippet(stop_source(spec, action="done = True"))
     # the lane's step count was advanced in the loop's head
+    known = lane_snippet(known_source("done = True")) if spec.known_cells else ""
     observe = f"""k_state = ks
 if k_state >= n_transient:
 {indent(update, 1)}
 {indent(settle, 1)}
+{known}
 if done or k_state >= n_steps:
     lane_finished[j] = True
     n_finished += 1"""
@@ -93,6 +103,8 @@ else:
 finished = False"""
     lane = _lane_dtypes(spec, parts, per_lane, drives.names)
     lane.update({"i": "int64", "ks": "int64", "live": "bool_", "finished": "bool_"})
+    if spec.known_cells:
+        lane.update(KNOWN_STATE)
     later = set(IDENTIFIER.findall(NL.join(step_body + sines + drives.carry +
                                            [observe, refill])))
     lane = {name: dtype for name, dtype in lane.items() if name in later or name == "live"}
@@ -107,18 +119,24 @@ finished = False"""
                                   parts["carried"]])
     carry_loop = lane_loop(NL.join(drives.carry), lane, level=3) if drives.carry else ""
     counted = {name: dtype for name, dtype in lane.items() if name != "ks"}
-    observe_loop = lane_loop(
-        observe, counted, level=3,
-        head="    ks = lane_ks[j] + 1\n    lane_ks[j] = ks\n"
-             "    if not lane_live[j] or (ks < n_transient and ks < n_steps):\n"
-             "        continue\n")
+    # the known-cells stop runs from the first step on, the observables after the
+    # transient
+    head = "    ks = lane_ks[j] + 1\n    lane_ks[j] = ks\n"
+    if spec.known_cells:
+        head += "    if not lane_live[j]:\n        continue\n" + \
+            known_head("ks", "ks < n_transient and ks < n_steps")
+    else:
+        head += "    if not lane_live[j] or (ks < n_transient and ks < n_steps):\n" \
+                "        continue\n"
+    observe_loop = lane_loop(observe, counted, level=3, head=head)
     refill_loop = lane_loop(refill, lane, level=4,
                             head=skip_unless("finished"))
+    extra = KNOWN_ARGUMENTS if spec.known_cells else ""
     return f'''
 BLOCK = {spec.block}
 
 
-def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
+def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra}):
     """One group of lanes per thread, but no more groups than n // BLOCK (one group
     when n < BLOCK), each group on a thread of its own (`sweep.kernels.threads`)."""
     if n_steps < 1:  # every lane steps before its first stop test
@@ -126,11 +144,11 @@ def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
     n = params.shape[0]
     n_groups = min(max(n // BLOCK, 1), n, get_num_threads())
     run_blocks(grouped, n_groups, params, t0, dt, n_steps, n_transient, save_every, out,
-               status, saved, n_groups)
+               status, saved{extra}, n_groups)
 
 
 @njit(nogil=True, **JIT)
-def grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
+def grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra},
             n_groups, g_first, g_stop):
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]

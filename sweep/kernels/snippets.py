@@ -7,6 +7,7 @@ import re
 from ..observables import (
     ATTRACTOR_MATCHES,
     ATTRACTOR_TOL,
+    KNOWN_HITS,
     OBSERVABLES,
     STROBE_TOL,
     STROBE_TOL_FLOAT32,
@@ -15,8 +16,13 @@ from .lanes import indent
 from .spec import KernelSpec, Status
 from .terms import tension_terms
 
-__all__ = ["failed_samples", "failed_status", "finite_test", "ok_test", "renormalisations",
-           "snippets", "stop_source"]
+__all__ = ["KNOWN_STATE", "failed_samples", "failed_status", "finite_test", "known_final",
+           "known_head", "known_init", "known_source", "ok_test", "renormalisations", "snippets",
+           "stop_source"]
+
+#: Per-trajectory state of the known-cells stop (`known_source`), name -> dtype.
+KNOWN_STATE = {"acc_kn_S": "int64", "acc_kn_next": "int64", "acc_kn_n": "int64",
+               "acc_kn_L": "int64"}
 
 
 def _counts(code: str, spec: KernelSpec) -> str:
@@ -153,3 +159,70 @@ def finite_test(spec: KernelSpec) -> str:
     tests = ["math.isfinite(th)", "math.isfinite(om)"]
     tests += [OBSERVABLES[name].finite for name in spec.observe if OBSERVABLES[name].finite]
     return " and ".join(tests)
+
+
+def known_init() -> str:
+    """The known-cells stop's state at the start (`known_source`)."""
+    return ("acc_kn_S = round(TWO_PI / (W * dt))\n"
+            "acc_kn_next = acc_kn_S\n"
+            "acc_kn_n = 0\n"
+            "acc_kn_L = -1")
+
+
+def known_head(step: str, skip: str) -> str:
+    """The head of a lane loop of observables in a known-cells kernel: the lane is
+    skipped -- before its variables are loaded -- when ``skip`` holds (the condition
+    under which the kernel skipped it without known cells: a step in the transient)
+    unless its step ``step`` is its next stroboscopic time ``acc_kn_next``."""
+    return (f"    if {step} != lane_acc_kn_next[j] and {skip}:\n"
+            "        continue\n")
+
+
+def known_source(action: str) -> str:
+    """The known-cells stop (`KernelSpec.known_cells`), per trajectory, after every
+    step (state ``th, om`` at step ``k_state``) whatever the transient (`known_head`):
+    at each stroboscopic time ``t0 + m 2 pi / W`` (m >= 1; step ``acc_kn_next``)
+    the point is snapped to the nearest cell of the map ``known`` (its angle first
+    wrapped by whole turns into the map's rows); a cell of label ``L >= 0`` is a hit,
+    and ``KNOWN_HITS`` hits of one label running run ``action`` (once: only while the
+    trajectory is not ``done``).
+
+    ``known_axes`` holds, in cell units: ``[theta of row 0, rows per rad, omega of
+    column 0, columns per rad/s, rows per 2 pi turn (> 0)]``. A point beyond the map
+    (or non-finite) is no hit.
+    """
+    return f"""# known cells (its state read and written in its lane arrays: loaded
+# only at a stroboscopic time)
+if k_state == lane_acc_kn_next[j]:
+    lane_acc_kn_next[j] += lane_acc_kn_S[j]
+    if not done:
+        acc_kn_x = (th - known_axes[0]) * known_axes[1]
+        acc_kn_x -= known_axes[4] * math.floor((acc_kn_x + 0.5) / known_axes[4])
+        acc_kn_y = (om - known_axes[2]) * known_axes[3]
+        acc_kn_l = -1
+        if acc_kn_x >= -0.5 and acc_kn_x < known.shape[0] - 0.5 and acc_kn_y >= -0.5 \\
+                and acc_kn_y < known.shape[1] - 0.5:
+            acc_kn_l = known[int(math.floor(acc_kn_x + 0.5)),
+                             int(math.floor(acc_kn_y + 0.5))]
+        if acc_kn_l < 0:
+            lane_acc_kn_n[j] = 0
+        elif lane_acc_kn_n[j] > 0 and acc_kn_l == lane_acc_kn_L[j]:
+            lane_acc_kn_n[j] += 1
+        else:
+            lane_acc_kn_n[j] = 1
+            lane_acc_kn_L[j] = acc_kn_l
+        if lane_acc_kn_n[j] >= {KNOWN_HITS}:
+{indent(action, 3)}"""
+
+
+def known_final(spec: KernelSpec) -> str:
+    """Per trajectory at the end: ``stopped_known`` (the column after the observables)
+    and, for a trajectory stopped on known cells, its label as ``attractor``."""
+    col, attractor = 0, None
+    for name in spec.observe:
+        if name == "attractor":
+            attractor = col
+        col += OBSERVABLES[name].n_columns(spec)
+    return (f"out[i, {col}] = 1.0 if acc_kn_n >= {KNOWN_HITS} else 0.0\n"
+            f"if acc_kn_n >= {KNOWN_HITS}:\n"
+            f"    out[i, {attractor}] = acc_kn_L")

@@ -14,6 +14,10 @@ out : float64[n, n_columns(spec)]     observables, in observe order
 status : int8[n]                      Status code per trajectory
 saved : float64[n, 2, n_saved]        theta, omega at steps 0, k, 2k, ... (spec.save)
 
+With `KernelSpec.known_cells` a fixed-step kernel takes two arguments more, after
+``saved``: ``known`` (int32[n0, n1]) and ``known_axes`` (float64[5]); see
+`sweep.kernels.snippets.known_source`.
+
 Adaptive kernels (embedded pairs, per-trajectory step-size control)::
 
     kernel(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats)
@@ -103,6 +107,10 @@ def source(spec: KernelSpec) -> str:
     if method.adaptive and spec.save:
         raise ValueError(f"method {method.name!r} is adaptive: its steps are not on a fixed "
                          "grid, so it cannot save every k-th step; accepted: save=False")
+    if spec.known_cells and method.adaptive:
+        raise ValueError(f"known_cells stops trajectories at stroboscopic times on the "
+                         f"fixed step grid; method {method.name!r} is adaptive; accepted: "
+                         "a fixed-step method, or known_cells=False")
     check_tangent_fits(method, spec.effects, spec.observe)
     check_observables_fit(method, spec.observe)
     check_dtype(spec.dtype, method)

@@ -166,6 +166,14 @@ class KernelSpec:
         Trajectories per block of the fixed-step, refill and adaptive kernels (SIMD
         lanes; a multiple of 8, or 1 for a few trajectories, each alone). Results do not
         depend on it (a test checks it); `_config.BLOCK` by default.
+    known_cells : bool
+        With ``stop_early`` and an attractor catalogue: the kernel takes two more
+        arguments, ``known`` (int32[n0, n1], per cell of a map over theta0 x omega0 the
+        index of the catalogued attractor its start settles on, -1 unknown) and
+        ``known_axes`` (float64[5], `sweep.kernels.snippets.known_source`), and stops a
+        trajectory whose stroboscopic points (times ``t0 + m 2 pi / W``, m >= 1) fall
+        in known cells of one label ``KNOWN_HITS`` periods running, writing that label
+        as its ``attractor`` (fixed-step float64 CPU kernels only).
     """
 
     model: str
@@ -181,6 +189,7 @@ class KernelSpec:
     strobe_samples: int = STROBE_SAMPLES
     dtype: str = "float64"
     attractors: tuple = ()
+    known_cells: bool = False
 
     def __post_init__(self) -> None:
         check_device(self.device)
@@ -194,6 +203,11 @@ class KernelSpec:
             raise ValueError("the 'attractor' observable needs an attractor catalogue and a "
                              "catalogue needs the observable; accepted: both or neither, "
                              "each orbit with at least one point, every point finite")
+        if self.known_cells and not (self.stop_early and attractors
+                                     and self.device == "cpu" and self.dtype == "float64"):
+            raise ValueError("known_cells needs stop_early, an attractor catalogue, "
+                             "device='cpu' and dtype='float64'; accepted: all four, or "
+                             "known_cells=False")
         if self.device == "cuda":  # one thread per trajectory: no lanes to refill or share
             object.__setattr__(self, "refill", False)
             object.__setattr__(self, "shared_forcing", False)
@@ -240,7 +254,8 @@ class KernelSpec:
                 f"strobe_samples={self.strobe_samples!r}"
                 + (f", dtype={self.dtype!r}" if self.dtype != "float64" else "")
                 + (f", attractors: {len(self.attractors)} orbits of "
-                   f"{sum(map(len, self.attractors))} points" if self.attractors else ""))
+                   f"{sum(map(len, self.attractors))} points" if self.attractors else "")
+                + (", known_cells=True" if self.known_cells else ""))
 
 
 def check_block(block) -> int:
@@ -259,8 +274,11 @@ def check_block(block) -> int:
 
 def n_columns(spec: KernelSpec) -> int:
     """Width of ``out``: every column of every observed observable, in observe order
-    (an observable with samples > 1 fills ``samples`` columns per variable)."""
-    return sum(OBSERVABLES[name].n_columns(spec) for name in spec.observe)
+    (an observable with samples > 1 fills ``samples`` columns per variable), then with
+    ``known_cells`` one column ``stopped_known`` (1 where the trajectory stopped on
+    known cells, else 0)."""
+    return sum(OBSERVABLES[name].n_columns(spec) for name in spec.observe) + \
+        (1 if spec.known_cells else 0)  # stopped_known, after the observables
 
 
 def _check_option(name: str, value, accepted: tuple[str, ...], default: str, method) -> None:

@@ -61,12 +61,17 @@ class Refinement:
         Cells computed at each level (level 0: the lattice lines).
     blocks_filled : int
         Blocks whose interior was filled without being computed.
+    decided : ndarray, shape (n0, n1), bool
+        True where the label is final: computed, or filled (a block is filled as soon
+        as its perimeter is seen to agree, so during the refinement this is what the
+        levels so far decided).
     """
 
     labels: np.ndarray
     computed: np.ndarray
     cells_per_level: list = field(default_factory=list)
     blocks_filled: int = 0
+    decided: np.ndarray = None
 
     @property
     def cells_computed(self) -> int:
@@ -94,8 +99,8 @@ def _ragged(start: np.ndarray, stop: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return which, start[which] + offset
 
 
-def refine_field(shape: tuple[int, int], compute: Callable[[np.ndarray, np.ndarray],
-                 np.ndarray], step: int = 16) -> Refinement:
+def refine_field(shape: tuple[int, int], compute: Callable[..., np.ndarray],
+                 step: int = 16, *, with_state: bool = False) -> Refinement:
     """Labels of a 2-D field, computing only the cells its boundaries need.
 
     Parameters
@@ -106,6 +111,8 @@ def refine_field(shape: tuple[int, int], compute: Callable[[np.ndarray, np.ndarr
         ``rows``, ``cols``: int64 arrays of shape (m,), the cells to compute (each cell
         is asked for once over the whole refinement); returns their labels, shape (m,),
         integers (equal labels mean the same class).
+        With ``with_state``, called as ``compute(rows, cols, refinement)``: the
+        `Refinement` so far (read only; its ``labels`` hold what ``decided`` marks).
     step : int, default 16
         Spacing of the lattice lines, cells; >= 2. Larger steps compute fewer lattice
         cells but can miss larger islands (see the module docstring).
@@ -127,10 +134,10 @@ def refine_field(shape: tuple[int, int], compute: Callable[[np.ndarray, np.ndarr
     n0, n1 = (check_count("shape", n, minimum=1, accepted="two ints >= 1") for n in shape)
     labels = np.zeros((n0, n1), dtype=np.int64)
     computed = np.zeros((n0, n1), dtype=bool)
-    out = Refinement(labels, computed)
+    out = Refinement(labels, computed, decided=np.zeros((n0, n1), dtype=bool))
 
     def ask(rows: np.ndarray, cols: np.ndarray) -> None:
-        got = np.asarray(compute(rows, cols))
+        got = np.asarray(compute(rows, cols, out) if with_state else compute(rows, cols))
         if got.shape != rows.shape:
             raise ValueError(f"compute returned labels of shape {got.shape} for "
                              f"{rows.size} cells; accepted: shape ({rows.size},)")
@@ -139,6 +146,7 @@ def refine_field(shape: tuple[int, int], compute: Callable[[np.ndarray, np.ndarr
                              "integers")
         labels[rows, cols] = got
         computed[rows, cols] = True
+        out.decided[rows, cols] = True
         out.cells_per_level.append(int(rows.size))
 
     rows_l, cols_l = _lines(n0, step), _lines(n1, step)
@@ -149,7 +157,6 @@ def refine_field(shape: tuple[int, int], compute: Callable[[np.ndarray, np.ndarr
     del lattice
     r0, c0 = (a.ravel() for a in np.meshgrid(rows_l[:-1], cols_l[:-1], indexing="ij"))
     r1, c1 = (a.ravel() for a in np.meshgrid(rows_l[1:], cols_l[1:], indexing="ij"))
-    fills = []
     while True:
         inner = (r1 - r0 >= 2) & (c1 - c0 >= 2)
         r0, r1, c0, c1 = r0[inner], r1[inner], c0[inner], c1[inner]
@@ -169,7 +176,13 @@ def refine_field(shape: tuple[int, int], compute: Callable[[np.ndarray, np.ndarr
         left, right = np.searchsorted(left_right, c0), np.searchsorted(left_right, c1)
         uniform = ((along[t, c1] == along[t, c0]) & (along[b, c1] == along[b, c0])
                    & (down[r1, left] == down[r0, left]) & (down[r1, right] == down[r0, right]))
-        fills.append((r0[uniform], r1[uniform], c0[uniform], c1[uniform]))
+        # filled now (a filled interior lies on no other block's perimeter, so the
+        # decisions below do not see it)
+        for i, j, k, m in zip(r0[uniform].tolist(), r1[uniform].tolist(),
+                              c0[uniform].tolist(), c1[uniform].tolist()):
+            labels[i + 1:j, k + 1:m] = labels[i, k]
+            out.decided[i + 1:j, k + 1:m] = True
+        out.blocks_filled += int(uniform.sum())
         split = ~uniform
         r0, r1, c0, c1 = r0[split], r1[split], c0[split], c1[split]
         if r0.size == 0:
@@ -185,8 +198,4 @@ def refine_field(shape: tuple[int, int], compute: Callable[[np.ndarray, np.ndarr
         del need
         r0, r1 = np.concatenate([r0, r0, rm, rm]), np.concatenate([rm, rm, r1, r1])
         c0, c1 = np.concatenate([c0, cm, c0, cm]), np.concatenate([cm, c1, cm, c1])
-    for a0, a1, b0, b1 in fills:
-        for i, j, k, m in zip(a0.tolist(), a1.tolist(), b0.tolist(), b1.tolist()):
-            labels[i + 1:j, k + 1:m] = labels[i, k]
-        out.blocks_filled += int(a0.size)
     return out

@@ -26,6 +26,8 @@ from ..grid import Grid, Points
 from ..observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
 from ..physics import Scene
 from ._quadtree import check_step, refine_field
+from .known import background, seed_attractors, settled, upsample
+from .known import known_map as _known_map
 from .labels import (
     UNRESOLVED,
     _orbit,
@@ -160,6 +162,48 @@ def _variables(run_kwargs: dict) -> list[str]:
     return names
 
 
+def _check_known_cells(known_cells, scene, grid, func, pilot, run_kwargs) -> bool:
+    """``known_cells`` as a bool; with True, what it needs (forced basins of theta0 x
+    omega0 on evenly spaced axes, stop_early and a catalogue)."""
+    if not isinstance(known_cells, (bool, np.bool_)):
+        raise ValueError(f"known_cells must be True or False, got {known_cells!r}")
+    if not known_cells:
+        return False
+    accepted = ("accepted: known_cells=True with label=sweep.maps.basins of a forced "
+                "scene over theta0 x omega0 (evenly spaced), stop_early=True and a "
+                "catalogue (pilot=N or attractors=...), or known_cells=False")
+    if func is not basins or scene.forcing is None:
+        raise ValueError(f"known_cells=True stops trajectories on cells of known forced "
+                         f"basins; got label={func.__name__ if func else None!r} and a "
+                         f"scene {'without' if scene.forcing is None else 'with'} "
+                         f"forcing; {accepted}")
+    if set(d for d in grid.dims if grid.varies(d)) != set(INITIAL_AXES):
+        raise ValueError(f"known_cells=True needs a map over theta0 and omega0; got "
+                         f"{[d for d in grid.dims if grid.varies(d)]}; {accepted}")
+    for name in INITIAL_AXES:
+        values = np.asarray(grid.axes[name], dtype=np.float64)
+        gaps = np.diff(values)
+        if np.max(np.abs(gaps - gaps.mean())) > 1e-6 * abs(gaps.mean()):
+            raise ValueError(f"known_cells=True needs evenly spaced axes; {name} has gaps "
+                             f"from {gaps.min()!r} to {gaps.max()!r}; {accepted}")
+    if run_kwargs.get("stop_early") is not True:
+        raise ValueError(f"known_cells=True needs stop_early=True, got stop_early="
+                         f"{run_kwargs.get('stop_early')!r}; {accepted}")
+    if "strobe" not in resolve(run_kwargs.get("observe", DEFAULT_OBSERVE)):
+        raise ValueError(f"known_cells=True labels forced basins from stroboscopic "
+                         f"samples; observe={run_kwargs.get('observe', DEFAULT_OBSERVE)!r} "
+                         f"lacks 'strobe'; {accepted}")
+    if run_kwargs.get("attractors") is None and (
+            pilot is None or not set(grid.dims) <= set(INITIAL_AXES)):
+        raise ValueError(f"known_cells=True needs an attractor catalogue: attractors=..., "
+                         f"or pilot=N on a grid of theta0 and omega0 only (got pilot="
+                         f"{pilot!r}, axes {list(grid.dims)}); {accepted}")
+    if "known_cells" in run_kwargs:
+        raise ValueError("known_cells is refine's own option (a bool): refine makes the "
+                         "map of known cells itself; accepted: known_cells=True or False")
+    return True
+
+
 def _check(scene, grid, label, step, pilot, run_kwargs):
     """Every argument refine can check before computing anything; returns them checked,
     with the grid's two varying axes."""
@@ -206,7 +250,7 @@ def _check(scene, grid, label, step, pilot, run_kwargs):
 
 
 def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
-           pilot: int | None = 41, **run_kwargs) -> xr.DataArray:
+           pilot: int | None = 41, known_cells: bool = False, **run_kwargs) -> xr.DataArray:
     """The labels of a 2-D map, computing only the trajectories its boundaries need.
 
     The grid's cells on lattice lines every ``step`` cells (and its last row and column)
@@ -239,6 +283,18 @@ def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
         (`sweep.maps.pilot_catalogue`) and every level stops on them (grids of
         ``theta0`` and ``omega0`` only: a catalogue holds one scene's attractors).
         None: no pilot. Ignored otherwise.
+    known_cells : bool, default False
+        Forced `basins` over theta0 x omega0 (evenly spaced) with ``stop_early`` and a
+        catalogue: a trajectory stops once its stroboscopic points fall in known cells
+        of one attractor `sweep.observables.KNOWN_HITS` periods running
+        (`sweep.run`'s ``known_cells``). Known are, frozen while a level runs: the
+        settled cells (`sweep.maps.known.settled`: 8 neighbours of one label) of
+        coarse maps of the whole window run first (`sweep.maps.known.background`) and
+        of the cells earlier levels decided, and the cells of the catalogued
+        attractors. The labels then do not depend on threads, blocks, chunks or Dask;
+        they may differ from the full run's near fractal boundaries (measured in the
+        refine guide: on the 1200 x 1200 Wada map, 631 of 1.44 M differ, refine's own
+        filled islands, as without known cells).
     **run_kwargs
         `sweep.run` arguments (``t_end``, ``dt``, ``observe``, ``stop_early``,
         ``attractors``, ``device``, ...), the same for every level; ``progress``
@@ -258,7 +314,9 @@ def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
         - attributes ``refine_step`` (the step), ``cells_computed`` (trajectories run,
           the pilot's not counted), ``cells_total`` (n0 n1), ``cells_per_level``
           (trajectories run at each level; level 0: the lattice), ``blocks_filled``,
-          ``pilot_cells`` (the pilot's trajectories, 0 without one).
+          ``pilot_cells`` (the pilot's trajectories, 0 without one); with
+          ``known_cells``: ``cells_stopped_known`` (the map's trajectories that stopped
+          on known cells) and ``background_cells`` (the coarse maps' trajectories).
 
     Raises
     ------
@@ -283,15 +341,17 @@ def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
     """
     step, pilot, func, options, (first, second) = _check(scene, grid, label, step, pilot,
                                                           run_kwargs)
+    known_cells = _check_known_cells(known_cells, scene, grid, func, pilot, run_kwargs)
     kwargs = dict(run_kwargs)
     kwargs.setdefault("progress", False)
     dims = grid.dims
     shape = (grid.axes[first].size, grid.axes[second].size)
 
-    def run(rows, cols):
+    def run(rows, cols, known=None):
         columns = {d: float(values[0]) for d, values in grid.axes.items()}  # one value
         columns[first], columns[second] = grid.axes[first][rows], grid.axes[second][cols]
-        return engine.run(scene, Points(**columns), **kwargs)
+        return engine.run(scene, Points(**columns), **kwargs,
+                          **({} if known is None else {"known_cells": known}))
 
     def labelled(ds):
         return ds[label] if func is None else func(ds, **options)
@@ -324,7 +384,12 @@ def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
         def keys(ds):
             return codes.encode(labelled(ds).values)
 
-    found = refine_field(shape, lambda rows, cols: keys(run(rows, cols)), step)
+    if known_cells:
+        found, known_attrs = _refine_known(scene, grid, run, keys, step, kwargs,
+                                           flip=first != "theta0", shape=shape)
+    else:
+        found, known_attrs = refine_field(shape, lambda rows, cols: keys(run(rows, cols)),
+                                          step), {}
     # the coordinates' attributes as the label passes them on (xr.where drops them)
     coords = {d: xr.Variable(d, grid.axes[d], attrs=(template.coords[d] if d in
                                                       template.coords else probe[d]).attrs)
@@ -351,4 +416,45 @@ def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
                       "cells_total": int(grid.size),
                       "cells_per_level": np.array(found.cells_per_level, dtype=np.int64),
                       "blocks_filled": found.blocks_filled, "pilot_cells": pilot_cells})
+    out.attrs.update(known_attrs)
     return out
+
+
+def _refine_known(scene, grid: Grid, run, keys, step: int, kwargs: dict, *, flip: bool,
+                  shape: tuple[int, int]):
+    """`refine_field` whose levels stop on known cells (``known_cells=True``): the
+    background's settled cells and seeds, unknown where a cell the levels so far
+    decided disagrees with it, overridden by the settled cells among those decided,
+    then the catalogued attractors' cells (`sweep.maps.known`). Returns the refinement
+    and refine's known-cells attributes."""
+    catalogue = kwargs["attractors"]  # flip: the field's rows are omega0, the map's theta0
+    theta, omega = (np.asarray(grid.axes[name], dtype=np.float64) for name in INITIAL_AXES)
+    others = {k: v for k, v in kwargs.items() if k != "attractors"}
+    back, back_cells = background(scene, theta, omega, catalogue, **others)
+    base = upsample(back, theta, omega) if back is not None else \
+        np.full((theta.size, omega.size), -1, dtype=np.int32)
+    lookup = {}  # the field's key -> catalogue index, from the cells run so far
+    stopped = [0]
+
+    def compute(rows, cols, state):
+        index = np.full(state.labels.shape, -1, dtype=np.int64)
+        if lookup:
+            table = np.full(max(lookup) + 2, -1, dtype=np.int64)
+            table[list(lookup)] = list(lookup.values())
+            index[state.decided] = table[state.labels[state.decided]]  # -1 -> last
+        fine = settled(np.where(state.decided, index, -2))
+        known = np.array(base.T if flip else base)
+        known[state.decided & (index != known)] = -1  # the background is wrong there
+        known = np.where(fine >= 0, fine, known)
+        known = seed_attractors(known.T if flip else known, theta, omega, catalogue)
+        ds = run(rows, cols, _known_map(known, theta, omega))
+        stopped[0] += int(ds.attrs["cells_stopped_known"])
+        found = keys(ds)
+        matched = np.isfinite(ds["attractor"].values) & (ds["attractor"].values >= 0)
+        for key, a in zip(found[matched].tolist(),
+                          ds["attractor"].values[matched].astype(np.int64).tolist()):
+            lookup.setdefault(key, a)
+        return found
+
+    found = refine_field(shape, compute, step, with_state=True)
+    return found, {"cells_stopped_known": stopped[0], "background_cells": back_cells}

@@ -1,0 +1,137 @@
+"""Known cells of a forced basin map, for `sweep.run(..., known_cells=...)`: which cells
+of a map of attractor indices may stop a trajectory (`settled`), the catalogued
+attractors' own cells (`seed_attractors`), and the coarse maps of the whole window that
+`sweep.maps.refine` runs first (`background`).
+
+What may stop a trajectory was decided by measurement (docs/guide/refine.md): a cell
+whose label is shared by its 8 neighbours (`KNOWN_RADIUS`), and the 3 x 3 cells around
+each point of a catalogued attractor's orbit (`SEED_RADIUS`); a trajectory stops after
+`sweep.observables.KNOWN_HITS` periods running in such cells of one label.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from .. import engine
+from ..grid import Grid
+
+__all__ = ["BACKGROUND_FACTORS", "KNOWN_RADIUS", "SEED_RADIUS", "background", "known_map",
+           "seed_attractors", "settled", "upsample"]
+
+#: A cell is settled when every cell within this many rows and columns (its 8
+#: neighbours for 1) is known with its label.
+KNOWN_RADIUS = 1
+
+#: The cells within this many rows and columns of a catalogued attractor's orbit
+#: points are known with that attractor (a stable orbit lies inside its own basin).
+SEED_RADIUS = 0
+
+#: The background maps `background` runs before the map: the window at 1/8, 1/4 and
+#: 1/2 of the map's resolution, each stopping on the settled cells of the one before.
+BACKGROUND_FACTORS = (8, 4, 2)
+
+#: Background maps smaller than this (points per axis) are skipped.
+_SMALLEST = 16
+
+
+def settled(labels: np.ndarray, radius: int = KNOWN_RADIUS) -> np.ndarray:
+    """The labels (>= 0) of the cells whose neighbours within ``radius`` rows and
+    columns all hold the same label; -1 elsewhere (cells at the map's edge too).
+
+    Parameters
+    ----------
+    labels : ndarray, shape (n0, n1), int
+        Attractor indices, negative where unknown.
+    radius : int
+        >= 0.
+    """
+    labels = np.asarray(labels)
+    out = np.where(labels >= 0, labels, -1).astype(np.int32)
+    n0, n1 = labels.shape
+    for dr in range(-radius, radius + 1):
+        for dc in range(-radius, radius + 1):
+            if dr == 0 and dc == 0:
+                continue
+            shifted = np.full(labels.shape, -2, dtype=labels.dtype)
+            shifted[max(-dr, 0):n0 - max(dr, 0), max(-dc, 0):n1 - max(dc, 0)] = \
+                labels[max(dr, 0):n0 - max(-dr, 0), max(dc, 0):n1 - max(-dc, 0)]
+            out[shifted != labels] = -1
+    return out
+
+
+def _cell(theta: np.ndarray, omega: np.ndarray, t: float, w: float) -> tuple[int, int]:
+    """The cell (row, column) of the point ``(t, w)`` on evenly spaced axes, the angle
+    wrapped by whole turns into the rows as the kernel wraps it
+    (`sweep.kernels.snippets.known_source`)."""
+    step = (theta[-1] - theta[0]) / (theta.size - 1)
+    turn = 2 * np.pi / abs(step)
+    x = (t - theta[0]) / step
+    x -= turn * np.floor((x + 0.5) / turn)
+    y = (w - omega[0]) / ((omega[-1] - omega[0]) / (omega.size - 1))
+    return int(np.floor(x + 0.5)), int(np.floor(y + 0.5))
+
+
+def seed_attractors(known: np.ndarray, theta: np.ndarray, omega: np.ndarray,
+                    catalogue: dict, radius: int = SEED_RADIUS) -> np.ndarray:
+    """``known`` with the cells within ``radius`` of each point of each catalogued
+    attractor's orbit set to its index (``catalogue``: `attractor_catalogue`)."""
+    out = np.array(known, dtype=np.int32)
+    for a, period in enumerate(np.asarray(catalogue["period"], dtype=np.int64)):
+        for q in range(1, int(period) + 1):
+            row, col = _cell(theta, omega, catalogue["theta"][a][-q], catalogue["omega"][a][-q])
+            if 0 <= row < out.shape[0] and 0 <= col < out.shape[1]:
+                out[max(row - radius, 0):row + radius + 1,
+                    max(col - radius, 0):col + radius + 1] = a
+    return out
+
+
+def known_map(known: np.ndarray, theta: np.ndarray, omega: np.ndarray) -> xr.DataArray:
+    """``known`` (rows theta0, columns omega0) as `sweep.run`'s ``known_cells``."""
+    return xr.DataArray(np.asarray(known, dtype=np.int32), dims=("theta0", "omega0"),
+                        coords={"theta0": theta, "omega0": omega})
+
+
+def upsample(known: xr.DataArray, theta: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """The labels of the nearest cell of ``known`` at each point of the axes ``theta``
+    x ``omega`` (the same window, finer): shape (theta.size, omega.size)."""
+    def nearest(axis, values):
+        values = np.asarray(values, dtype=np.float64)
+        step = (values[-1] - values[0]) / (values.size - 1)
+        return np.clip(np.floor((axis - values[0]) / step + 0.5), 0,
+                       values.size - 1).astype(np.int64)
+
+    rows = nearest(theta, known["theta0"].values)
+    cols = nearest(omega, known["omega0"].values)
+    return np.asarray(known.values)[np.ix_(rows, cols)]
+
+
+def background(scene, theta: np.ndarray, omega: np.ndarray, catalogue: dict,
+               **run_kwargs) -> tuple[xr.DataArray | None, int]:
+    """The known cells of the window ``theta`` x ``omega`` from coarse maps of it
+    (`BACKGROUND_FACTORS`), each run with the known cells of the one before (settled
+    cells and seeds).
+
+    Returns
+    -------
+    known : xarray.DataArray or None
+        The last background's settled cells and seeds (None if every background was
+        smaller than 16 x 16).
+    cells : int
+        Trajectories the backgrounds ran.
+    """
+    known, cells = None, 0
+    for factor in BACKGROUND_FACTORS:
+        size = [(axis.size - 1) // factor + 1 for axis in (theta, omega)]
+        if min(size) < _SMALLEST:
+            continue
+        axes = [np.linspace(axis[0], axis[-1], n) for axis, n in zip((theta, omega), size)]
+        extra = {} if known is None else {"known_cells": known}
+        ds = engine.run(scene, Grid(theta0=axes[0], omega0=axes[1]), attractors=catalogue,
+                        **run_kwargs, **extra)
+        cells += int(np.prod(size))
+        index = np.where(np.isfinite(ds["attractor"].values), ds["attractor"].values, -1)
+        known = known_map(seed_attractors(settled(index.astype(np.int64)), *axes,
+                                          catalogue), *axes)
+    return known, cells
