@@ -20,7 +20,7 @@ ROOT = Path(sweep.__file__).parent
 #: Layer of each module (by name prefix, longest match wins); higher imports lower.
 LAYERS = {
     "sweep._config": 0, "sweep._validate": 0, "sweep._version": 0, "sweep._timesteps": 0,
-    "sweep._moved": 0,
+    "sweep._moved": 0, "sweep._known": 0,
     "sweep.physics": 1, "sweep.methods": 1, "sweep.observables": 1,
     "sweep.system_observables": 1,
     "sweep.kernels": 2, "sweep.grid": 2, "sweep.stability": 2,
