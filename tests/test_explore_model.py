@@ -192,6 +192,7 @@ def test_cancel_lands_between_bands(monkeypatch):
 def test_requests_newest_wins(monkeypatch):
     e = explorer()
     monkeypatch.setattr(model, "BAND_MIN", 1)
+    monkeypatch.setattr(model, "PREVIEW_AFTER", 0.0)  # every preview shown
     started = threading.Event()
     release = threading.Event()
     run = Explorer._run
