@@ -60,7 +60,7 @@ def _zoom_to(page, window):
 
 def _final_shown(page, request):
     """The final map of ``request`` is on the page."""
-    shown = [r for _, r, event in page.timeline if event == "final"]
+    shown = [r for _, r, event, _ in page.timeline if event == "final"]
     return (page.latest == request and bool(shown) and shown[-1] == request
             and page.source.data["stage"] == ["final"])
 
@@ -92,7 +92,7 @@ def test_the_page_draws_the_final_map_with_its_stage_and_its_numbers(session):
     numbers = session.explorer.numbers(session.result)
     assert session.numbers.object == numbers.markdown()
     assert "python" in session.map_python.object  # written after the picture
-    events = [event for _, r, event in session.timeline if r == request]
+    events = [event for _, r, event, _ in session.timeline if r == request]
     assert events[0] == "zoom" and events[1] == "submit"
     assert events.index("final") < events.index("numbers")
 
@@ -162,10 +162,10 @@ def test_a_newer_zoom_drops_the_older_ones_pictures(session, monkeypatch):
     assert wait_for(lambda: _final_shown(session, second))
     assert session.requests.idle(60)
     assert session.result.state.view.x_range == newer[0]
-    first_events = [event for _, r, event in session.timeline if r == first]
+    first_events = [event for _, r, event, _ in session.timeline if r == first]
     assert "final" not in first_events and "numbers" not in first_events
     assert first_events.count("step") <= 1  # it stopped at its next band
-    second_events = [event for _, r, event in session.timeline if r == second]
+    second_events = [event for _, r, event, _ in session.timeline if r == second]
     assert second_events[-2:] == ["final", "numbers"]
     assert second_events.count("step") == 3  # after 1, 2 and 4 of 8 bands
     # a picture or numbers of the older request still queued for the event loop when

@@ -189,9 +189,11 @@ class _Session:
         self.result: MapResult | None = None
         self.pending_zoom = None
         self.last_change = 0.0
-        #: ``(time.perf_counter(), request, event)`` of the page's recent stages: "zoom"
-        #: (the debounced window taken), "submit", "preview"/"step"/"final" (each drawn,
-        #: just after it was handed to the document), "numbers".
+        #: ``(time.perf_counter(), request, event, seconds)`` of the page's recent
+        #: stages: "zoom" (the debounced window taken), "submit", "preview"/"step"/
+        #: "final" (each drawn, just after it was handed to the document; ``seconds``:
+        #: its computation, a final map's with the preview computed before it),
+        #: "numbers"; ``seconds`` is None where there is none.
         self.timeline: deque = deque(maxlen=TIMELINE_SIZE)
         self.numbers_request = 0
         self._build()
@@ -402,7 +404,7 @@ class _Session:
             self.pending_zoom = self.doc.add_timeout_callback(
                 self._zoom, max(1, math.ceil(DEBOUNCE_MS - quiet)))
             return
-        self.timeline.append((time.perf_counter(), self.latest + 1, "zoom"))
+        self.timeline.append((time.perf_counter(), self.latest + 1, "zoom", None))
         xr_, yr = self.map.x_range, self.map.y_range
         window = ((float(xr_.start), float(xr_.end)), (float(yr.start), float(yr.end)))
         v = self.explorer.state.view
@@ -445,7 +447,7 @@ class _Session:
         self.back.disabled = not e.can_go_back()
         self.forward.disabled = not e.can_go_forward()
         self.latest = self.requests.submit(e.state)
-        self.timeline.append((time.perf_counter(), self.latest, "submit"))
+        self.timeline.append((time.perf_counter(), self.latest, "submit", None))
         s = e.state
         self.status.object = (f"computing {e.quantity_info(s.quantity).label} at "
                               f"{s.resolution} x {s.resolution}…")
@@ -484,7 +486,8 @@ class _Session:
                                   f"{pilot}{more}")
             self.caption.object = f"*{result.description}*"
             self.map.title.text = f"{self.explorer.quantity_info(s.quantity).label}"
-        self.timeline.append((time.perf_counter(), request, result.stage))
+        seconds = result.seconds + (result.preview_seconds if result.stage == "final" else 0)
+        self.timeline.append((time.perf_counter(), request, result.stage, seconds))
         if result.stage == "final":
             if self.doc is not None and getattr(self.doc, "session_context", None):
                 self.doc.add_next_tick_callback(partial(self._show_code, request, s))
@@ -521,7 +524,7 @@ class _Session:
             return
         self.numbers.object = (numbers.markdown() if numbers is not None else
                                "*a map of continuous values: no labels to count*")
-        self.timeline.append((time.perf_counter(), request, "numbers"))
+        self.timeline.append((time.perf_counter(), request, "numbers", None))
 
     def _request_numbers(self) -> None:
         """Run the selected on-request number for the view's final map on a thread of

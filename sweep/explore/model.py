@@ -72,11 +72,12 @@ BANDS = 8
 #: an expensive one up to `BANDS` bands, so that a newer zoom waits at most about this.
 BAND_SECONDS = 0.25
 
-#: Seconds of final map (estimated from the preview's cost per start) below which the
-#: preview is not shown: the final picture follows within about this, and each picture
-#: costs the browser a redraw (30-60 ms in headless chromium on 2 shared cores) that
-#: would delay the final one.
-PREVIEW_AFTER = 0.1
+#: Seconds of final map (estimated from the preview's cost per start, its run's fixed
+#: cost included: a 400 x 400 damped-well map is estimated at 0.08-0.15 s and takes
+#: 0.01-0.05 s) below which the preview is not shown: the final picture follows within
+#: about this, and each picture costs the browser a redraw (30-60 ms in headless
+#: chromium on 2 shared cores) that would delay the final one.
+PREVIEW_AFTER = 0.2
 
 #: Seconds between two progressive steps shown while a final map computes: a step
 #: (the rows computed so far, each missing row drawn as its nearest computed one) is
@@ -376,6 +377,9 @@ class MapResult:
         Wall time of the `sweep.run` calls alone [s] (no pilot, no labelling).
     numbers : ViewNumbers or None
         The view's numbers (`Explorer.numbers`), once computed.
+    preview_seconds : float
+        A final map's: wall time of the preview `Explorer.stages` computed before it
+        (shown or not) [s]; 0 when none was (a cached map).
     """
 
     state: State
@@ -395,6 +399,7 @@ class MapResult:
     done: float = 1.0
     run_seconds: float = 0.0
     numbers: Any = None
+    preview_seconds: float = 0.0
 
 
 @dataclass
@@ -963,14 +968,16 @@ class Explorer:
         unless the final map is cached, and shown only when the final map is expected to
         take `PREVIEW_AFTER` or more (from the preview's cost per start). Raises
         `Cancelled` once ``cancel`` is set."""
-        per_start = None
+        per_start, preview_seconds = None, 0.0
         if state not in self._cache:
             preview = self.compute(state, preview=True, cancel=cancel)
+            preview_seconds = preview.seconds
             starts = preview.values.size
             per_start = preview.run_seconds / starts if starts else None
             if per_start is None or per_start * state.resolution ** 2 >= PREVIEW_AFTER:
                 emit(preview)
         final = self.compute(state, cancel=cancel, per_start=per_start, on_step=emit)
+        final.preview_seconds = preview_seconds
         cancel.check()
         emit(final)
         return final
