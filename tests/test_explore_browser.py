@@ -200,6 +200,10 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
                  and "well" in s["title"], 60)
     driver.save_screenshot(str(tmp_path / "1-home.png"))
     assert home["shape"] == [400, 400]
+    # the numbers of the view under the map: each well's share, Sb, Sbb and the verdict
+    numbers = _wait(driver, _TEXTS, lambda texts: len(texts) == 1, 30, "Sbb")[0]
+    assert "share of the view" in numbers and "well 0" in numbers
+    assert "on a boundary" in numbers
 
     # box-zoom: a real mouse drag over the middle of the frame
     frame = driver.execute_script(_FRAME)
