@@ -274,18 +274,32 @@ def test_a_slow_map_is_cut_into_bands_a_cheap_one_is_one_run():
     assert middle == 3  # three bands of about BAND_SECONDS each
 
 
-def test_a_cheap_maps_preview_is_computed_but_not_shown(monkeypatch):
+def test_a_cheap_maps_preview_is_not_shown_and_once_measured_not_computed(monkeypatch):
     e = explorer()
-    shown = []
+    shown, runs = [], []
+    run = Explorer._run
+
+    def counting(state, grid, kwargs):
+        runs.append(grid.shape)
+        return run(state, grid, kwargs)
+
+    monkeypatch.setattr(Explorer, "_run", staticmethod(counting))
+    side = max(model.RESOLUTION_RANGE[0], N // model.PREVIEW_FACTOR)
     monkeypatch.setattr(model, "PREVIEW_AFTER", math.inf)  # every map counts as cheap
     e.stages(e.state, CancelToken(), shown.append)
     assert [r.stage for r in shown] == ["final"]
+    assert runs == [(side, side), (N, N)]  # the preview measured the cost, unseen
+    shown.clear()
+    runs.clear()
+    zoomed = e.zoom((0.0, 1.0), (0.0, 1.0))  # another window of the same settings
+    e.stages(zoomed, CancelToken(), shown.append)
+    assert [r.stage for r in shown] == ["final"]
+    assert runs == [(N, N)]  # the last map's cost says cheap: no preview at all
     e._cache.clear()
     shown.clear()
     monkeypatch.setattr(model, "PREVIEW_AFTER", 0.0)  # every map counts as slow
     e.stages(e.state, CancelToken(), shown.append)
     assert [r.stage for r in shown] == ["preview", "final"]
-    side = max(model.RESOLUTION_RANGE[0], N // model.PREVIEW_FACTOR)
     assert shown[0].values.shape == (side, side)
 
 

@@ -197,7 +197,7 @@ def test_numbers_on_request_run_off_the_event_loop_and_show_on_the_page(session)
     assert "continuous" in session.numbers.object
 
 
-def test_the_systems_page_shows_steps_and_numbers_too():
+def test_the_systems_page_sends_float32_values_and_says_they_have_no_numbers():
     from sweep.explore.system_app import SystemExplorerApp
 
     app = SystemExplorerApp(sweep.DoublePendulum(),

@@ -547,6 +547,8 @@ class Explorer:
         # final maps by state; an app's sessions share one (the start-up warm-up's map)
         self._cache: OrderedDict[State, MapResult] = OrderedDict() if cache is None else cache
         self._catalogues: OrderedDict[tuple, dict] = OrderedDict()
+        # seconds per start of the last final map of each setting (all but the window)
+        self._costs: OrderedDict[State, float] = OrderedDict()
         self._lock = COMPUTE_LOCK
 
     # -- controls --------------------------------------------------------------
@@ -964,20 +966,33 @@ class Explorer:
     def stages(self, state: State, cancel: CancelToken, emit: Callable[[MapResult], None]
                ) -> MapResult:
         """The preview, progressive steps of the final map (`compute`'s ``on_step``) and
-        the final map; each is passed to ``emit`` as it is ready. The preview is computed
-        unless the final map is cached, and shown only when the final map is expected to
-        take `PREVIEW_AFTER` or more (from the preview's cost per start). Raises
-        `Cancelled` once ``cancel`` is set."""
+        the final map; each is passed to ``emit`` as it is ready.
+
+        The preview is shown only when the final map is expected to take `PREVIEW_AFTER`
+        or more. It is not computed when the final map is cached, nor when the last final
+        map of the same settings (another window) cost under half of that per start: its
+        cost per start then sizes the bands. Raises `Cancelled` once ``cancel`` is
+        set."""
         per_start, preview_seconds = None, 0.0
+        starts = state.resolution ** 2
+        setting = dataclasses.replace(state, view=self.home)
         if state not in self._cache:
-            preview = self.compute(state, preview=True, cancel=cancel)
-            preview_seconds = preview.seconds
-            starts = preview.values.size
-            per_start = preview.run_seconds / starts if starts else None
-            if per_start is None or per_start * state.resolution ** 2 >= PREVIEW_AFTER:
-                emit(preview)
+            known = self._costs.get(setting)
+            if known is not None and known * starts < 0.5 * PREVIEW_AFTER:
+                per_start = known
+            else:
+                preview = self.compute(state, preview=True, cancel=cancel)
+                preview_seconds = preview.seconds
+                per_start = preview.run_seconds / preview.values.size
+                if per_start * starts >= PREVIEW_AFTER:
+                    emit(preview)
         final = self.compute(state, cancel=cancel, per_start=per_start, on_step=emit)
         final.preview_seconds = preview_seconds
+        if per_start is not None:  # computed now: its cost is the newest measure
+            self._costs[setting] = final.run_seconds / starts
+            self._costs.move_to_end(setting)
+            while len(self._costs) > 16:
+                self._costs.popitem(last=False)
         cancel.check()
         emit(final)
         return final
