@@ -86,10 +86,9 @@ class Timer:
         self.lock = threading.Lock()
 
     def result(self, request, result) -> None:
-        with self.lock:
-            key = "preview" if result.preview else "final"
-            self.events.setdefault(request, {})[key] = time.perf_counter()
-            if not result.preview:
+        with self.lock:  # the first of each stage (preview, step, final)
+            self.events.setdefault(request, {}).setdefault(result.stage, time.perf_counter())
+            if result.stage == "final":
                 self.done.set()
 
     def error(self, request, exc) -> None:
@@ -99,10 +98,11 @@ class Timer:
 
 def zoom_latencies(explorer: Explorer, count: int, seed: int = 0) -> dict:
     """Submit ``count`` zooms one after another (each waits for its final map); the
-    preview and final latencies from the submit [s]."""
+    latencies from the submit to the preview (when one is shown), the first progressive
+    step (a slow map's) and the final map [s]."""
     timer = Timer()
     requests = Requests(explorer, timer.result, timer.error)
-    previews, finals = [], []
+    previews, steps, finals = [], [], []
     try:
         for window in windows(explorer, count, seed):
             state = explorer.zoom(*window)
@@ -113,10 +113,13 @@ def zoom_latencies(explorer: Explorer, count: int, seed: int = 0) -> dict:
             got = timer.events.get(request, {})
             if "preview" in got:
                 previews.append(got["preview"] - begin)
+            if "step" in got:
+                steps.append(got["step"] - begin)
             finals.append(got["final"] - begin)
     finally:
         requests.close()
-    return summary(previews, "preview") | summary(finals, "final")
+    return (summary(previews, "preview") | summary(steps, "first_step")
+            | summary(finals, "final"))
 
 
 def summary(values, name) -> dict:
@@ -340,7 +343,10 @@ def markdown(result: dict) -> str:
         shown = (f"{b['browser_preview_median_s']:.2f} s ({b['browser_preview_max_s']:.2f})"
                  if "browser_preview_median_s" in b else "not shown")
         preview = (f"{e['preview_median_s']:.2f} s ({e['preview_max_s']:.2f})"
-                   if "preview_median_s" in e else "")
+                   if "preview_median_s" in e else "not shown")
+        if "first_step_median_s" in e:
+            preview += (f"; first step {e['first_step_median_s']:.2f} s "
+                        f"({e['first_step_max_s']:.2f})")
         lines.append(f"| {name} | {e['warm_up_s']:.2f} s | {e['first_zoom_final_s']:.2f} s | "
                      f"{preview} | {e['final_median_s']:.2f} s ({e['final_max_s']:.2f}) | "
                      f"{shown if b else ''} | {browser} |")

@@ -303,8 +303,8 @@ class _Session:
         self.forward.on_click(lambda event: self._history(self.explorer.forward))
         self.reset.on_click(lambda event: self._history(self.explorer.reset))
         self.view_error = self._alert()
-        self.status = pn.pane.Markdown("starting…", width=560, height=40, name="status")
-        self.caption = pn.pane.Markdown("", width=560, height=40)
+        self.status = pn.pane.Markdown("starting…", width=560, name="status")
+        self.caption = pn.pane.Markdown("", width=560)
         self.info = pn.pane.Markdown("**Click a start on the map** to see its trajectory.",
                                      width=460, name="info")
         self.numbers = pn.pane.Markdown("", width=560, name="numbers")
