@@ -213,3 +213,16 @@ def test_the_systems_page_sends_float32_values_and_says_they_have_no_numbers():
         assert wait_for(lambda: "continuous" in page.numbers.object)
     finally:
         page.requests.close()
+
+
+def test_the_app_lists_open_pages_without_keeping_closed_ones_alive():
+    import gc
+
+    app = demo_app()
+    page = explore_app._Session(app)
+    assert app.sessions == [page]
+    page.requests.close()
+    page.requests._thread.join(30)  # the worker holds the page until it stops
+    del page
+    gc.collect()
+    assert app.sessions == []  # a closed page's maps are freed

@@ -27,6 +27,7 @@ import sys
 import threading
 import time
 import warnings
+import weakref
 from collections import OrderedDict, deque
 from functools import partial
 
@@ -67,7 +68,7 @@ DEBOUNCE_MS = 25
 #: Events kept in a session's `timeline` (for `benchmarks/explore.py`).
 TIMELINE_SIZE = 256
 
-#: Sessions an app keeps a reference to (`ExplorerApp.sessions`).
+#: Sessions an app keeps a weak reference to (`ExplorerApp.sessions`).
 SESSIONS_KEPT = 8
 
 #: Colours of discrete maps.
@@ -200,7 +201,7 @@ class _Session:
         self.requests = Requests(self.explorer, self._from_worker(self._show),
                                  self._from_worker(self._failed),
                                  on_numbers=self._from_worker(self._show_numbers))
-        app.sessions.append(self)
+        app._sessions.append(weakref.ref(self))
         if self.doc is not None and hasattr(self.doc, "on_session_destroyed"):
             self.doc.on_session_destroyed(lambda context: self.requests.close())
         if app.call_when_warm(self._from_worker(self._first_submit)):
@@ -717,8 +718,13 @@ class ExplorerApp:
         self._warm_lock = threading.Lock()
         self._warming = 0  # warm-ups running now
         self._after_warm: list = []
-        #: The pages opened, newest last (at most `SESSIONS_KEPT`; for benchmarks).
-        self.sessions: deque = deque(maxlen=SESSIONS_KEPT)
+        self._sessions: deque = deque(maxlen=SESSIONS_KEPT)  # weak references
+
+    @property
+    def sessions(self) -> list:
+        """The pages open now (of the last `SESSIONS_KEPT` opened), newest last: weak
+        references, so a closed page's maps are not kept alive (for benchmarks)."""
+        return [s for s in (ref() for ref in self._sessions) if s is not None]
 
     # -- warm-up ----------------------------------------------------------------------
     def warm_up(self) -> float:
