@@ -975,7 +975,8 @@ class Explorer:
         set."""
         per_start, preview_seconds = None, 0.0
         starts = state.resolution ** 2
-        setting = dataclasses.replace(state, view=self.home)
+        v = state.view  # the setting: all but the window (the axes kept)
+        setting = dataclasses.replace(state, view=View(v.x, v.y, (0.0, 1.0), (0.0, 1.0)))
         if state not in self._cache:
             known = self._costs.get(setting)
             if known is not None and known * starts < 0.5 * PREVIEW_AFTER:
