@@ -295,6 +295,10 @@ def test_a_cheap_maps_preview_is_not_shown_and_once_measured_not_computed(monkey
     e.stages(zoomed, CancelToken(), shown.append)
     assert [r.stage for r in shown] == ["final"]
     assert runs == [(N, N)]  # the last map's cost says cheap: no preview at all
+    runs.clear()
+    other_axes = e.update(x="damping")  # another setting: its cost is not known yet
+    e.stages(other_axes, CancelToken(), shown.append)
+    assert runs == [(side, side), (N, N)]
     e._cache.clear()
     shown.clear()
     monkeypatch.setattr(model, "PREVIEW_AFTER", 0.0)  # every map counts as slow
