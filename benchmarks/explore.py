@@ -3,10 +3,13 @@
 Measured through the app's own model API (`sweep.explore.model`: a zoom is a
 `Requests.submit` of the new window; the preview and the final map arrive on the worker
 thread) and through a real browser (chromium via Selenium: the figure's ranges are set in
-the page, and the clock stops when the page holds the recomputed 400 x 400 image):
+the page, and the clock stops when the page has painted the recomputed final image):
 
 - damped wells (the demo scene of ``sweep demo``) and forced basins (the Wada scene of
   examples/forced_basins.py, pilot catalogue included), 400 x 400 windows, warm kernels;
+- in the browser, the browser's own share (the time to the painted final picture less
+  the computation) and its parts: debounce, the event loop, serialisation, transfer and
+  paint (`browser_latencies`);
 - the first map after start-up (the warm-up: compile or load the kernels from the disk
   cache, then the home view's preview, map and one trajectory);
 - the server's RSS over 200 zooms (memory must stay flat).
@@ -83,10 +86,9 @@ class Timer:
         self.lock = threading.Lock()
 
     def result(self, request, result) -> None:
-        with self.lock:
-            key = "preview" if result.preview else "final"
-            self.events.setdefault(request, {})[key] = time.perf_counter()
-            if not result.preview:
+        with self.lock:  # the first of each stage (preview, step, final)
+            self.events.setdefault(request, {}).setdefault(result.stage, time.perf_counter())
+            if result.stage == "final":
                 self.done.set()
 
     def error(self, request, exc) -> None:
@@ -96,10 +98,11 @@ class Timer:
 
 def zoom_latencies(explorer: Explorer, count: int, seed: int = 0) -> dict:
     """Submit ``count`` zooms one after another (each waits for its final map); the
-    preview and final latencies from the submit [s]."""
+    latencies from the submit to the preview (when one is shown), the first progressive
+    step (a slow map's) and the final map [s]."""
     timer = Timer()
     requests = Requests(explorer, timer.result, timer.error)
-    previews, finals = [], []
+    previews, steps, finals = [], [], []
     try:
         for window in windows(explorer, count, seed):
             state = explorer.zoom(*window)
@@ -110,10 +113,13 @@ def zoom_latencies(explorer: Explorer, count: int, seed: int = 0) -> dict:
             got = timer.events.get(request, {})
             if "preview" in got:
                 previews.append(got["preview"] - begin)
+            if "step" in got:
+                steps.append(got["step"] - begin)
             finals.append(got["final"] - begin)
     finally:
         requests.close()
-    return summary(previews, "preview") | summary(finals, "final")
+    return (summary(previews, "preview") | summary(steps, "first_step")
+            | summary(finals, "final"))
 
 
 def summary(values, name) -> dict:
@@ -156,20 +162,56 @@ def rss_over_zooms(explorer: Explorer, count: int) -> dict:
             "rss_max_mib": max(mib)}
 
 
-_MAP = """
-if (!window.Bokeh || !Bokeh.documents.length) return null;
+#: In the page: the map's source, and a hook that records each picture's arrival (its
+#: stage) and, for the final one, the second animation frame after it (painted).
+_HOOK = """
+if (!window.Bokeh || !Bokeh.documents.length) return false;
 const m = Bokeh.documents[0].get_model_by_name('map');
-if (!m) return null;
+if (!m) return false;
 const src = m.renderers[0].data_source;
-const img = src.data.image[0];
-return {n: img.length, x: src.data.x[0], dw: src.data.dw[0], y: src.data.y[0],
-        dh: src.data.dh[0]};
+if (!src.data.stage || src.data.stage[0] !== 'final') return false;
+if (window.__sweep_hooked) return true;
+window.__sweep_hooked = true;
+window.__sweep_events = [];
+const now = () => performance.timeOrigin + performance.now();
+src.properties.data.change.connect(() => {
+  const stage = src.data.stage[0];
+  window.__sweep_events.push([stage, now()]);
+  if (stage === 'final')
+    requestAnimationFrame(() => requestAnimationFrame(
+      () => window.__sweep_events.push(['painted', now()])));
+});
+return true;
 """
+
+#: Set the figure's ranges (what box zoom, wheel and pan do) and return the page's clock.
+_ZOOM = """
+window.__sweep_events = [];
+const m = Bokeh.documents[0].get_model_by_name('map');
+const t0 = performance.timeOrigin + performance.now();
+m.x_range.setv({start: arguments[0], end: arguments[1]});
+m.y_range.setv({start: arguments[2], end: arguments[3]});
+return t0;
+"""
+
+#: The parts of a zoom's wait in the browser, in order (see `browser_latencies`).
+PARTS = ("debounce", "before_submit", "server_wait", "transfer", "paint")
 
 
 def browser_latencies(make, size: int, count: int) -> dict | None:
-    """Zooms through the figure's ranges in chromium; seconds until the page holds the
-    recomputed final image (its glyph covers the new window at full resolution)."""
+    """Zooms through the figure's ranges in chromium, timed in the page (its clock: the
+    ranges set, each picture's arrival, the final one painted) and on the server (the
+    session's `timeline`: the debounced zoom, the submit, each picture handed to the
+    document and its computation), on one clock (the system's, in ms).
+
+    Returns medians and maxima of: the preview and the final map on the page and painted
+    [s]; the computation (the final map's, with its preview) [s]; the browser's share
+    (painted minus the computation) and its parts: ``debounce`` (ranges set -> the
+    window taken), ``before_submit`` (-> handed to the worker), ``server_wait`` (->
+    the final picture handed to the document, less the computation: waiting for the
+    event loop, the colour mapping and the serialisation), ``transfer`` (-> the data
+    in the page) and ``paint`` (-> two animation frames later).
+    """
     try:
         from selenium import webdriver
         from selenium.webdriver.chrome.options import Options
@@ -193,33 +235,55 @@ def browser_latencies(make, size: int, count: int) -> dict | None:
                      "--disable-dev-shm-usage", "--window-size=1500,1250"):
         options.add_argument(argument)
     driver = webdriver.Chrome(service=Service(driver_path), options=options)
-    latencies = []
+    rows = []
     try:
         driver.get(app.url)
-        _until(driver, lambda s: s["n"] == size * size, 120)
+        _until(lambda: driver.execute_script(_HOOK), 180)
+        session = app.sessions[-1]
+        # the server's perf_counter on the system clock [s]
+        offset = time.time() - time.perf_counter()
         for (x0, x1), (y0, y1) in windows(app.template, count, seed=2):
-            begin = time.perf_counter()
-            driver.execute_script(
-                "const m = Bokeh.documents[0].get_model_by_name('map');"
-                "m.x_range.setv({start: arguments[0], end: arguments[1]});"
-                "m.y_range.setv({start: arguments[2], end: arguments[3]});", x0, x1, y0, y1)
-            _until(driver, lambda s, x0=x0, x1=x1, y0=y0: s["n"] == size * size
-                   and np.isclose(s["x"], x0)
-                   and np.isclose(s["x"] + s["dw"], x1) and np.isclose(s["y"], y0), 120,
-                   step=0.01)
-            latencies.append(time.perf_counter() - begin)
+            session.timeline.clear()
+            t0 = driver.execute_script(_ZOOM, x0, x1, y0, y1) / 1000.0
+            events = _until(lambda: _painted(driver), 300)
+            page = {}
+            for stage, t in events:
+                page.setdefault(stage, t / 1000.0 - t0)
+            server = {}
+            for t, _, event, seconds in list(session.timeline):
+                server.setdefault(event, (t + offset - t0, seconds))
+            compute = server["final"][1]
+            row = {"preview": page.get("preview"), "final": page["final"],
+                   "painted": page["painted"], "steps": sum(e == "step" for e, _ in events),
+                   "compute": compute, "debounce": server["zoom"][0],
+                   "before_submit": server["submit"][0] - server["zoom"][0],
+                   "server_wait": server["final"][0] - server["submit"][0] - compute,
+                   "transfer": page["final"] - server["final"][0],
+                   "paint": page["painted"] - page["final"]}
+            row["browser_share"] = row["painted"] - compute
+            rows.append(row)
     finally:
         driver.quit()
         app.stop()
-    return summary(latencies, "browser_final")
+    out = {}
+    for key in ("preview", "final", "painted", "compute", "browser_share", *PARTS):
+        out |= summary([r[key] for r in rows if r[key] is not None], f"browser_{key}")
+    out["browser_steps_median"] = statistics.median(r["steps"] for r in rows)
+    out["browser_zooms"] = rows
+    return out
 
 
-def _until(driver, predicate, timeout, step=0.05):
+def _painted(driver):
+    events = driver.execute_script("return window.__sweep_events || []")
+    return events if any(stage == "painted" for stage, _ in events) else None
+
+
+def _until(probe, timeout, step=0.01):
     end = time.monotonic() + timeout
     while time.monotonic() < end:
-        state = driver.execute_script(_MAP)
-        if state is not None and predicate(state):
-            return state
+        value = probe()
+        if value:
+            return value
         time.sleep(step)
     raise TimeoutError("the page did not show the map in time")
 
@@ -255,25 +319,55 @@ def main(argv=None) -> int:
     return 0
 
 
+def _ms(e: dict, key: str) -> str:
+    if f"{key}_median_s" not in e:
+        return ""
+    return f"{1000 * e[f'{key}_median_s']:.0f} ({1000 * e[f'{key}_max_s']:.0f})"
+
+
 def markdown(result: dict) -> str:
     n = result["size"]
     lines = [f"# Explorer latency ({n} x {n} windows)", "",
              f"Machine: {result['machine']}; sweep {result['sweep']}; {result['date']}.", "",
              "From a zoom (a new window submitted) to the map, warm kernels; through the "
              "model API (`sweep.explore.model.Requests`) and through chromium (the "
-             "figure's ranges set in the page, until the page holds the recomputed image). "
-             "Medians (max) over the zooms; `python benchmarks/explore.py`.", "",
+             "figure's ranges set in the page, until the page has painted the final "
+             "image). Medians (max) over the zooms; `python benchmarks/explore.py`.", "",
              "| scene | warm-up at start-up | first zoom | preview | final map | "
-             "final map, in the browser |", "|---|---|---|---|---|---|"]
+             "preview, in the browser | final map, painted in the browser |",
+             "|---|---|---|---|---|---|---|"]
     for name, e in result["scenes"].items():
         b = e.get("browser") or {}
-        browser = (f"{b['browser_final_median_s']:.2f} s ({b['browser_final_max_s']:.2f})"
+        browser = (f"{b['browser_painted_median_s']:.2f} s ({b['browser_painted_max_s']:.2f})"
                    if b else "not measured")
+        shown = (f"{b['browser_preview_median_s']:.2f} s ({b['browser_preview_max_s']:.2f})"
+                 if "browser_preview_median_s" in b else "not shown")
         preview = (f"{e['preview_median_s']:.2f} s ({e['preview_max_s']:.2f})"
-                   if "preview_median_s" in e else "")
+                   if "preview_median_s" in e else "not shown")
+        if "first_step_median_s" in e:
+            preview += (f"; first step {e['first_step_median_s']:.2f} s "
+                        f"({e['first_step_max_s']:.2f})")
         lines.append(f"| {name} | {e['warm_up_s']:.2f} s | {e['first_zoom_final_s']:.2f} s | "
                      f"{preview} | {e['final_median_s']:.2f} s ({e['final_max_s']:.2f}) | "
-                     f"{browser} |")
+                     f"{shown if b else ''} | {browser} |")
+    lines += ["", "Where a zoom's time goes in the browser, milliseconds, medians (max): the "
+              "computation (the final map and the preview computed before it) and the "
+              "browser's share (painted minus computation), made of the debounce (ranges "
+              "set -> window taken), the event loop before the submit, the server's wait "
+              "(-> final picture handed to the document, less the computation: event loop, "
+              "colour mapping, serialisation), the transfer (-> data in the page) and the "
+              "paint (-> two animation frames later).", "",
+              "| scene | painted | computation | browser's share | debounce | before submit "
+              "| server wait | transfer | paint | steps shown |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
+    for name, e in result["scenes"].items():
+        b = e.get("browser") or {}
+        if not b:
+            continue
+        cells = [_ms(b, f"browser_{k}") for k in ("painted", "compute", "browser_share",
+                                                  *PARTS)]
+        lines.append(f"| {name} | " + " | ".join(cells)
+                     + f" | {b['browser_steps_median']:g} |")
     rss = result["scenes"].get("damped wells", {}).get("rss")
     if rss:
         lines += ["", f"Server RSS over {rss['zooms']} zooms of damped wells (every 10 zooms): "

@@ -91,7 +91,7 @@ const shape = img.shape ? Array.from(img.shape) : [img.length];
 return {n: img.length, shape: shape, sum: sum, weighted: weighted,
         x: src.data.x[0], y: src.data.y[0], dw: src.data.dw[0], dh: src.data.dh[0],
         xr: [m.x_range.start, m.x_range.end], yr: [m.y_range.start, m.y_range.end],
-        title: m.title.text};
+        title: m.title.text, stage: src.data.stage[0]};
 """
 
 #: Viewport coordinates of the map's frame (the plotting area).
@@ -184,9 +184,11 @@ def _click(driver, point):
 
 
 def _recomputed_for(state, window):
-    """The image covers ``window`` exactly (its glyph's x, y, dw, dh) at 400 x 400."""
+    """The final image (not the preview, nor a progressive step) covers ``window``
+    exactly (its glyph's x, y, dw, dh) at 400 x 400."""
     (x0, x1), (y0, y1) = window
-    return (state["n"] == 400 * 400 and np.isclose(state["x"], x0, rtol=1e-9, atol=1e-12)
+    return (state["n"] == 400 * 400 and state["stage"] == "final"
+            and np.isclose(state["x"], x0, rtol=1e-9, atol=1e-12)
             and np.isclose(state["x"] + state["dw"], x1, rtol=1e-9, atol=1e-12)
             and np.isclose(state["y"], y0, rtol=1e-9, atol=1e-12)
             and np.isclose(state["y"] + state["dh"], y1, rtol=1e-9, atol=1e-12))
@@ -194,9 +196,14 @@ def _recomputed_for(state, window):
 
 def test_explorer_in_a_real_browser(app, driver, tmp_path):
     driver.get(app.url)
-    home = _wait(driver, _MAP, lambda s: s["n"] == 400 * 400 and "well" in s["title"], 60)
+    home = _wait(driver, _MAP, lambda s: s["n"] == 400 * 400 and s["stage"] == "final"
+                 and "well" in s["title"], 60)
     driver.save_screenshot(str(tmp_path / "1-home.png"))
     assert home["shape"] == [400, 400]
+    # the numbers of the view under the map: each well's share, Sb, Sbb and the verdict
+    numbers = _wait(driver, _TEXTS, lambda texts: len(texts) == 1, 30, "Sbb")[0]
+    assert "share of the view" in numbers and "well 0" in numbers
+    assert "on a boundary" in numbers
 
     # box-zoom: a real mouse drag over the middle of the frame
     frame = driver.execute_script(_FRAME)

@@ -192,6 +192,7 @@ def test_cancel_lands_between_bands(monkeypatch):
 def test_requests_newest_wins(monkeypatch):
     e = explorer()
     monkeypatch.setattr(model, "BAND_MIN", 1)
+    monkeypatch.setattr(model, "PREVIEW_AFTER", 0.0)  # every preview shown
     started = threading.Event()
     release = threading.Event()
     run = Explorer._run
@@ -217,6 +218,186 @@ def test_requests_newest_wins(monkeypatch):
     assert [r for r, _ in results] == [second, second]  # its preview, then its map
     assert [res.preview for _, res in results] == [True, False]
     assert results[-1][1].state == second_state
+
+
+# ------------------------------------------------------------------ progressive steps
+def test_bands_are_interleaved_rows_in_van_der_corput_order(monkeypatch):
+    assert Explorer.band_order(8) == [0, 4, 2, 6, 1, 5, 3, 7]
+    assert sorted(Explorer.band_order(5)) == list(range(5))
+    e = explorer()
+    monkeypatch.setattr(model, "BAND_MIN", 1)  # 8 bands of 3 rows
+    rows = []
+    run = Explorer._run
+
+    def recording(state, grid, kwargs):
+        rows.append(np.asarray(grid.axes["omega0"]))
+        return run(state, grid, kwargs)
+
+    monkeypatch.setattr(Explorer, "_run", staticmethod(recording))
+    e.compute()
+    ys = centres(*e.state.view.y_range, N)
+    for band, got in zip(Explorer.band_order(8), rows, strict=True):
+        np.testing.assert_array_equal(got, ys[band::8])  # rows band, band + 8, ...
+
+
+def test_progressive_steps_show_the_computed_rows_and_end_in_the_one_run_map(monkeypatch):
+    e = explorer()
+    whole = e.compute().values
+    e._cache.clear()
+    monkeypatch.setattr(model, "BAND_MIN", 1)  # 8 bands of 3 rows
+    monkeypatch.setattr(model, "STEP_SECONDS", 0.0)  # every step shown, however fast
+    steps = []
+    final = e.compute(on_step=steps.append)
+    np.testing.assert_array_equal(final.values, whole)  # steps change nothing computed
+    assert final.stage == "final" and final.done == 1.0 and not final.preview
+    # after 1, 2 and 4 of the 8 bands: rows every 8, 4 and 2 pixels
+    assert [s.stage for s in steps] == ["step"] * 3 and all(s.preview for s in steps)
+    assert [s.done for s in steps] == [1 / 8, 2 / 8, 4 / 8]
+    for step, stride in zip(steps, (8, 4, 2), strict=True):
+        assert step.values.shape == (N, N) and step.image.shape == (N, N)
+        np.testing.assert_array_equal(step.y, final.y)
+        computed = np.arange(0, N, stride)
+        np.testing.assert_array_equal(step.values[computed], whole[computed])
+        for row in range(N):  # a missing row repeats its nearest computed row
+            nearest = computed[np.argmin(np.abs(computed - row))]
+            np.testing.assert_array_equal(step.values[row], whole[nearest])
+        for value, text in step.legend:  # the legend names what the step shows
+            assert text and (value in step.values or math.isnan(value))
+
+
+def test_a_slow_map_is_cut_into_bands_a_cheap_one_is_one_run():
+    n = 400
+    assert Explorer.band_count(n) == model.BANDS  # no measure: the size rule alone
+    assert Explorer.band_count(n, per_start=1e-7) == 1  # 16 ms: one run
+    assert Explorer.band_count(n, per_start=2e-5) == model.BANDS  # 3.2 s: all bands
+    middle = Explorer.band_count(n, per_start=3 * model.BAND_SECONDS / n**2)
+    assert middle == 3  # three bands of about BAND_SECONDS each
+
+
+def test_a_cheap_maps_preview_is_not_shown_and_once_measured_not_computed(monkeypatch):
+    e = explorer()
+    shown, runs = [], []
+    run = Explorer._run
+
+    def counting(state, grid, kwargs):
+        runs.append(grid.shape)
+        return run(state, grid, kwargs)
+
+    monkeypatch.setattr(Explorer, "_run", staticmethod(counting))
+    side = max(model.RESOLUTION_RANGE[0], N // model.PREVIEW_FACTOR)
+    monkeypatch.setattr(model, "PREVIEW_AFTER", math.inf)  # every map counts as cheap
+    e.stages(e.state, CancelToken(), shown.append)
+    assert [r.stage for r in shown] == ["final"]
+    assert runs == [(side, side), (N, N)]  # the preview measured the cost, unseen
+    shown.clear()
+    runs.clear()
+    zoomed = e.zoom((0.0, 1.0), (0.0, 1.0))  # another window of the same settings
+    e.stages(zoomed, CancelToken(), shown.append)
+    assert [r.stage for r in shown] == ["final"]
+    assert runs == [(N, N)]  # the last map's cost says cheap: no preview at all
+    runs.clear()
+    other_axes = e.update(x="damping")  # another setting: its cost is not known yet
+    e.stages(other_axes, CancelToken(), shown.append)
+    assert [shape[:2] for shape in runs] == [(side, side), (N, N)]  # and omega0's 1
+    e._cache.clear()
+    shown.clear()
+    monkeypatch.setattr(model, "PREVIEW_AFTER", 0.0)  # every map counts as slow
+    e.stages(e.state, CancelToken(), shown.append)
+    assert [r.stage for r in shown] == ["preview", "final"]
+    assert shown[0].values.shape == (side, side)
+
+
+def test_a_newer_request_cancels_the_steps_of_an_older_one(monkeypatch):
+    e = explorer()
+    monkeypatch.setattr(model, "BAND_MIN", 1)
+    monkeypatch.setattr(model, "BAND_SECONDS", 1e-12)  # as slow maps: every band
+    monkeypatch.setattr(model, "STEP_SECONDS", 0.0)
+    monkeypatch.setattr(model, "PREVIEW_AFTER", 0.0)
+    first_step, release = threading.Event(), threading.Event()
+    results = []
+
+    def on_result(request, result):
+        results.append((request, result.stage))
+        if request == 1 and result.stage == "step":
+            first_step.set()
+            assert release.wait(10)  # the newer zoom arrives while the step is shown
+
+    numbers = []
+    requests = Requests(e, on_result, on_numbers=lambda r, res, nums: numbers.append(r))
+    requests.submit(e.state)
+    assert first_step.wait(60)
+    second = requests.submit(e.zoom((0.0, 1.0), (0.0, 1.0)))
+    release.set()
+    assert requests.idle(60)
+    requests.close()
+    old = [stage for request, stage in results if request == 1]
+    assert old == ["preview", "step"]  # nothing of the old request after the cancel
+    assert [stage for request, stage in results if request == second][-1] == "final"
+    assert numbers == [second]
+
+
+# ------------------------------------------------------------------ the view's numbers
+def test_the_numbers_are_the_metrics_of_the_maps_labels():
+    from sweep.explore.numbers import BOX_SIZE
+    from sweep.maps.metrics import basin_entropy
+
+    e = explorer()
+    e.update(resolution=40)
+    e.zoom((-3.0, -1.0), (3.0, 8.0))  # crosses the boundaries of wells 0, 1 and 2
+    result = e.compute()
+    numbers = e.numbers(result)
+    assert e.numbers(result) is numbers  # computed once per result
+    ds = sweep.run(e.state.scene, e.grid(), **e.run_kwargs(), progress=False)
+    wells = maps.well(ds).values  # NaN: not captured, an outcome of its own
+    labels = np.where(np.isfinite(wells), wells, -1).astype(int)
+    reference = maps.fractions(labels)
+    assert len(numbers.meanings) == reference.sizes["label"] >= 2
+    order = [-1] if -1 in labels else []
+    by_label = {int(k): i for i, k in enumerate(reference["label"].values)}
+    legend_labels = [int(v) if math.isfinite(v) else -1 for v, _ in result.legend]
+    for k, label in enumerate(legend_labels):
+        i = by_label[label]
+        assert numbers.fractions[k] == pytest.approx(float(reference["fraction"][i]),
+                                                     rel=1e-15)  # n_j / n both ways
+        assert numbers.errors[k] == pytest.approx(float(reference["standard_error"][i]),
+                                                  rel=1e-15)
+    assert numbers.meanings == tuple(text for _, text in result.legend)
+    assert numbers.pixels == labels.size and order is not None
+    entropy = basin_entropy(labels, box_size=BOX_SIZE)
+    # the same partition of every box; the entropies' sums run in another order of
+    # the labels, so they agree to a few ulps, not bit for bit
+    assert numbers.sb == pytest.approx(entropy.sb, rel=1e-12)
+    assert numbers.sbb == pytest.approx(entropy.sbb, rel=1e-12)
+    assert (numbers.n_boxes, numbers.n_boundary_boxes, numbers.fractal) == (
+        entropy.n_boxes, entropy.n_boundary_boxes, entropy.fractal_boundary)
+    text = numbers.markdown()
+    assert f"{numbers.sb:.4f}" in text and f"{numbers.sbb:.4f}" in text
+    assert all(meaning in text for meaning in numbers.meanings)
+
+
+def test_a_map_of_continuous_values_has_no_numbers():
+    e = explorer(quantity="lyapunov_max")
+    assert e.numbers(e.compute()) is None
+
+
+def test_on_request_numbers_are_registered_by_name():
+    from sweep.explore import numbers
+
+    e = explorer()
+    e.update(resolution=40)  # the grid's exponent needs 32 pixels per axis or more
+    e.zoom((-3.0, -1.0), (3.0, 8.0))
+    result = e.compute()
+    text = numbers.ON_REQUEST["uncertainty exponent (grid scale)"](result, e)
+    assert "alpha" in text or "too few" in text
+    with pytest.raises(TypeError, match="function must be callable"):
+        numbers.register_on_request("wada", 3)
+    with pytest.raises(TypeError, match="name must be a non-empty string"):
+        numbers.register_on_request("", lambda result, explorer: "")
+    try:
+        numbers.register_on_request("count", lambda result, explorer: f"{result.values.size}")
+        assert numbers.ON_REQUEST["count"](result, e) == f"{40 * 40}"
+    finally:
+        numbers.ON_REQUEST.pop("count", None)
 
 
 # ------------------------------------------------------------------ every map kind

@@ -2,8 +2,10 @@
 ``sweep explore [RUN.toml]``.
 
 `sweep.explore.model` is the app's model in plain Python (state, validation, history,
-cancellable computation, snippets, exports; no Panel import); `sweep.explore.app` is the
-Panel/Bokeh page (the optional extra ``explore``: ``pip install -e ".[explore]"``).
+cancellable computation, snippets, exports; no Panel import); `sweep.explore.numbers`
+the numbers of a view (fractions, basin entropy, and the on-request ones registered by
+name); `sweep.explore.app` is the Panel/Bokeh page (the optional extra ``explore``:
+``pip install -e ".[explore]"``).
 Importing this package imports neither Panel nor Bokeh; `explore` does.
 
 The module itself is callable, ``sweep.explore(scene, grid, ...)`` being

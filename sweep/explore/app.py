@@ -3,11 +3,19 @@ and the clicked trajectory (``name="trajectory"``, with the phase portrait ``"ph
 
 Each browser session gets its own `sweep.explore.model.Explorer` (its own history); the
 sessions of one app share the cache of final maps (the start-up warm-up's map appears at
-once) and one compute lock. Zoom, wheel and pan change the map's ranges; 150 ms after the
-last change the visible window is submitted (`sweep.explore.model.Requests`), computed
-on a worker thread (never on the server's event loop), and drawn back through the
-document's ``add_next_tick_callback`` (the one thread-safe entry into a Bokeh document):
-the preview first, then the final map. A stale result (an older request) is dropped.
+once) and one compute lock. Zoom, wheel and pan change the map's ranges; `DEBOUNCE_MS`
+after the last change the visible window is submitted (`sweep.explore.model.Requests`),
+computed on a worker thread (never on the server's event loop), and drawn back through
+the document's ``add_next_tick_callback`` (the one thread-safe entry into a Bokeh
+document): the preview first, progressive steps of a slow map, then the final map, and
+under it the view's numbers (`sweep.explore.numbers`). A stale result (an older request)
+is dropped.
+
+What travels to the page is small: a discrete map is sent as one byte per pixel (its
+index into the legend, coloured by the page's colour mapper), a continuous one as
+float32; the colour bar's ticker is one model updated in place (a new model would make
+Bokeh walk the document's whole model graph, ~50 ms per picture); the map's Python and
+run file are written after the final map is on its way.
 """
 
 from __future__ import annotations
@@ -19,12 +27,14 @@ import sys
 import threading
 import time
 import warnings
-from collections import OrderedDict
+import weakref
+from collections import OrderedDict, deque
 from functools import partial
 
 import numpy as np
 
 from .model import Explorer, InvalidInput, MapResult, Requests, Trajectory
+from .numbers import ON_REQUEST
 
 try:
     import panel as pn
@@ -41,6 +51,7 @@ try:
     )
     from bokeh.palettes import Category10_10, Category20_20, Viridis256
     from bokeh.plotting import figure
+    from panel.io import hold
 except ImportError as exc:  # pragma: no cover - the extra is missing
     raise ImportError(f"sweep.explore needs Panel and Bokeh ({exc}); install them with: "
                       "pip install -e \".[explore]\" (or pip install 'panel>=1.4' "
@@ -48,9 +59,17 @@ except ImportError as exc:  # pragma: no cover - the extra is missing
 
 __all__ = ["AddressUnavailable", "ExplorerApp", "free_port"]
 
-#: Seconds after the last range change before the window is recomputed (wheel zoom and
-#: pan send many changes; the newest request cancels the older anyway).
-DEBOUNCE_MS = 150
+#: Milliseconds without a range change before the window is recomputed: the four ends
+#: of one zoom arrive within a millisecond, a wheel or a pan sends a change per frame
+#: (~16 ms), and a newer request cancels an older one anyway (150 ms until 2026-11-27:
+#: most of the time a damped window took to reach the page).
+DEBOUNCE_MS = 25
+
+#: Events kept in a session's `timeline` (for `benchmarks/explore.py`).
+TIMELINE_SIZE = 256
+
+#: Sessions an app keeps a weak reference to (`ExplorerApp.sessions`).
+SESSIONS_KEPT = 8
 
 #: Colours of discrete maps.
 _MOTION_COLOURS = {-1.0: "#2166ac", 0.0: "#f0f0f0", 1.0: "#b2182b"}
@@ -139,6 +158,15 @@ def _palette(result: MapResult) -> list[str]:
     return colours
 
 
+def wire_image(result: MapResult) -> np.ndarray:
+    """What the page receives of ``result``'s picture: a discrete map's legend index as
+    uint8 (uint16 beyond 256 entries), a continuous map as float32 (NaN kept)."""
+    if result.legend:
+        dtype = np.uint8 if len(result.legend) <= 256 else np.uint16
+        return np.ascontiguousarray(result.image, dtype=dtype)
+    return np.ascontiguousarray(result.image, dtype=np.float32)
+
+
 def _legend_above(fig, items) -> Legend:
     """A horizontal legend of ``items`` (label, renderers) above ``fig``'s plotting area
     (between the title and the frame: it never covers a curve); a click hides a curve."""
@@ -161,9 +189,19 @@ class _Session:
         self.latest = 0
         self.result: MapResult | None = None
         self.pending_zoom = None
+        self.last_change = 0.0
+        #: ``(time.perf_counter(), request, event, seconds)`` of the page's recent
+        #: stages: "zoom" (the debounced window taken), "submit", "preview"/"step"/
+        #: "final" (each drawn, just after it was handed to the document; ``seconds``:
+        #: its computation, a final map's with the preview computed before it),
+        #: "numbers"; ``seconds`` is None where there is none.
+        self.timeline: deque = deque(maxlen=TIMELINE_SIZE)
+        self.numbers_request = 0
         self._build()
         self.requests = Requests(self.explorer, self._from_worker(self._show),
-                                 self._from_worker(self._failed))
+                                 self._from_worker(self._failed),
+                                 on_numbers=self._from_worker(self._show_numbers))
+        app._sessions.append(weakref.ref(self))
         if self.doc is not None and hasattr(self.doc, "on_session_destroyed"):
             self.doc.on_session_destroyed(lambda context: self.requests.close())
         if app.call_when_warm(self._from_worker(self._first_submit)):
@@ -194,8 +232,12 @@ class _Session:
         s = e.state
         v = s.view
         self.mapper = LinearColorMapper(palette=Viridis256, nan_color=_NAN_COLOUR)
-        # no image until the first map arrives (a blank frame, not a placeholder colour)
-        self.source = ColumnDataSource({"image": [], "x": [], "y": [], "dw": [], "dh": []})
+        # no image until the first map arrives (a blank frame, not a placeholder colour);
+        # "stage" says which picture it is ("preview", "step", "final")
+        self.source = ColumnDataSource({"image": [], "x": [], "y": [], "dw": [], "dh": [],
+                                        "stage": []})
+        self.ticker = FixedTicker(ticks=[])  # discrete maps' ticks, updated in place
+        self.basic_ticker = BasicTicker()
         n = s.resolution
         self.map = figure(name="map", frame_width=n, frame_height=n,
                           x_range=Range1d(*v.x_range), y_range=Range1d(*v.y_range),
@@ -209,7 +251,7 @@ class _Session:
         self.map.scatter("x", "y", source=self.clicked, size=12, marker="x", line_width=3,
                          color="white")
         self.colorbar = ColorBar(color_mapper=self.mapper, title="", width=16,
-                                 ticker=BasicTicker(), title_text_font_size="12px",
+                                 ticker=self.basic_ticker, title_text_font_size="12px",
                                  major_label_text_font_size="11px")
         self.map.add_layout(self.colorbar, "right")
         for r in (self.map.x_range, self.map.y_range):
@@ -266,6 +308,14 @@ class _Session:
         self.caption = pn.pane.Markdown("", width=560)
         self.info = pn.pane.Markdown("**Click a start on the map** to see its trajectory.",
                                      width=460, name="info")
+        self.numbers = pn.pane.Markdown("", width=560, name="numbers")
+        self.on_request = _labelled(pn.widgets.Select, "on request",
+                                    options=list(ON_REQUEST), width=300,
+                                    visible=bool(ON_REQUEST))
+        self.on_request_button = _labelled(pn.widgets.Button, "compute for this view",
+                                           width=170, visible=bool(ON_REQUEST))
+        self.on_request_button.on_click(lambda event: self._request_numbers())
+        self.on_request_text = pn.pane.Markdown("", width=560, name="on_request")
         self.map_python = pn.pane.Markdown("", width=560)
         self.map_toml = pn.pane.Markdown("", width=560)
         self.traj_python = pn.pane.Markdown("(click a start)", width=560)
@@ -283,7 +333,9 @@ class _Session:
             pn.pane.Markdown("### Run"), *run_controls, width=290, scroll=True, height=900)
         main = pn.Column(
             pn.Row(self.back, self.forward, self.reset, downloads), self.view_error,
-            self.status, pn.pane.Bokeh(self.map), self.caption)
+            self.status, pn.pane.Bokeh(self.map), self.caption,
+            pn.pane.Markdown("#### Numbers of this view"), self.numbers,
+            pn.Row(self.on_request, self.on_request_button), self.on_request_text)
         side = pn.Column(pn.pane.Bokeh(self.trajectory), pn.pane.Bokeh(self.phase), self.info)
         code = pn.Tabs(("map: Python", self.map_python), ("map: TOML", self.map_toml),
                        ("trajectory: Python", self.traj_python),
@@ -342,11 +394,18 @@ class _Session:
         self._submit()
 
     def _range_changed(self, attr, old, new) -> None:
+        self.last_change = time.perf_counter()
         if self.pending_zoom is None and self.doc is not None:
             self.pending_zoom = self.doc.add_timeout_callback(self._zoom, DEBOUNCE_MS)
 
     def _zoom(self) -> None:
         self.pending_zoom = None
+        quiet = (time.perf_counter() - self.last_change) * 1000.0
+        if quiet < DEBOUNCE_MS and self.doc is not None:  # still moving: wait for the rest
+            self.pending_zoom = self.doc.add_timeout_callback(
+                self._zoom, max(1, math.ceil(DEBOUNCE_MS - quiet)))
+            return
+        self.timeline.append((time.perf_counter(), self.latest + 1, "zoom", None))
         xr_, yr = self.map.x_range, self.map.y_range
         window = ((float(xr_.start), float(xr_.end)), (float(yr.start), float(yr.end)))
         v = self.explorer.state.view
@@ -389,11 +448,21 @@ class _Session:
         self.back.disabled = not e.can_go_back()
         self.forward.disabled = not e.can_go_forward()
         self.latest = self.requests.submit(e.state)
+        self.timeline.append((time.perf_counter(), self.latest, "submit", None))
         s = e.state
         self.status.object = (f"computing {e.quantity_info(s.quantity).label} at "
                               f"{s.resolution} x {s.resolution}…")
-        self.map_python.object = f"```python\n{e.python_snippet(s)}```"
-        self.map_toml.object = f"```toml\n{e.toml_text(s)}```"
+        self.numbers.object = "*computing with the map…*"
+        self.on_request_text.object = ""
+
+    def _show_code(self, request: int, state) -> None:
+        """The Python and the run file of ``state``'s map (after its picture: they wait
+        for no one)."""
+        if request != self.latest:
+            return
+        e = self.explorer
+        self.map_python.object = f"```python\n{e.python_snippet(state)}```"
+        self.map_toml.object = f"```toml\n{e.toml_text(state)}```"
 
     def _show(self, request: int, result: MapResult) -> None:
         """Draw a result (on the event loop); results of older requests are dropped."""
@@ -403,31 +472,91 @@ class _Session:
         s = result.state
         x0, x1 = s.view.x_range
         y0, y1 = s.view.y_range
-        self.source.data = {"image": [result.image], "x": [x0], "y": [y0], "dw": [x1 - x0],
-                            "dh": [y1 - y0]}
+        with hold(self.doc):  # one message for the picture, its colours and its text
+            self.source.data = {"image": [wire_image(result)], "x": [x0], "y": [y0],
+                                "dw": [x1 - x0], "dh": [y1 - y0], "stage": [result.stage]}
+            self._colours(result)
+            ny, nx = result.image.shape
+            word = {"preview": "preview", "step": "step"}.get(result.stage, "map")
+            more = ""
+            if result.stage != "final":
+                more = (f" ({result.done:.0%} of the starts); computing "
+                        f"{s.resolution} x {s.resolution}…")
+            pilot = " (pilot catalogue included)" if result.catalogue is not None else ""
+            self.status.object = (f"**{word}** {nx} x {ny} in {result.seconds:.2f} s"
+                                  f"{pilot}{more}")
+            self.caption.object = f"*{result.description}*"
+            self.map.title.text = f"{self.explorer.quantity_info(s.quantity).label}"
+        seconds = result.seconds + (result.preview_seconds if result.stage == "final" else 0)
+        self.timeline.append((time.perf_counter(), request, result.stage, seconds))
+        if result.stage == "final":
+            if self.doc is not None and getattr(self.doc, "session_context", None):
+                self.doc.add_next_tick_callback(partial(self._show_code, request, s))
+            else:
+                self._show_code(request, s)
+
+    def _colours(self, result: MapResult) -> None:
+        """The colour mapper and the colour bar of ``result`` (changed only where they
+        differ: an unchanged property sends nothing)."""
         if result.legend:
             palette = _palette(result)
-            self.mapper.update(palette=palette, low=-0.5, high=len(palette) - 0.5)
+            if list(self.mapper.palette) != palette:
+                self.mapper.palette = palette
+            self.mapper.update(low=-0.5, high=len(palette) - 0.5)
             step = max(1, math.ceil(len(palette) / 16))
             ticks = list(range(0, len(palette), step))
-            self.colorbar.update(ticker=FixedTicker(ticks=ticks), major_label_overrides={
+            self.ticker.ticks = ticks
+            self.colorbar.update(ticker=self.ticker, major_label_overrides={
                 k: result.legend[k][1] for k in ticks}, title=result.title)
         else:
             finite = result.image[np.isfinite(result.image)]
             low, high = (float(finite.min()), float(finite.max())) if finite.size else (0, 1)
             if high <= low:
                 high = low + 1.0
-            self.mapper.update(palette=Viridis256, low=low, high=high)
-            self.colorbar.update(ticker=BasicTicker(), major_label_overrides={},
+            if list(self.mapper.palette) != list(Viridis256):
+                self.mapper.palette = Viridis256
+            self.mapper.update(low=low, high=high)
+            self.colorbar.update(ticker=self.basic_ticker, major_label_overrides={},
                                  title=result.title)
-        ny, nx = result.image.shape
-        stage = "preview" if result.preview else "map"
-        more = f"; computing {s.resolution} x {s.resolution}…" if result.preview else ""
-        pilot = " (pilot catalogue included)" if result.catalogue is not None else ""
-        self.status.object = (f"**{stage}** {nx} x {ny} in {result.seconds:.2f} s"
-                              f"{pilot}{more}")
-        self.caption.object = f"*{result.description}*"
-        self.map.title.text = f"{self.explorer.quantity_info(s.quantity).label}"
+
+    def _show_numbers(self, request: int, result: MapResult, numbers) -> None:
+        """The numbers of the final map under it (None: a map of continuous values)."""
+        if request != self.latest:
+            return
+        self.numbers.object = (numbers.markdown() if numbers is not None else
+                               "*a map of continuous values: no labels to count*")
+        self.timeline.append((time.perf_counter(), request, "numbers", None))
+
+    def _request_numbers(self) -> None:
+        """Run the selected on-request number for the view's final map on a thread of
+        its own (it may run new trajectories: seconds); shown unless the view changed."""
+        name = self.on_request.value
+        result, request = self.result, self.latest
+        if name not in ON_REQUEST:
+            self.on_request_text.object = f"**refused**: {name!r} is not offered"
+            return
+        if result is None or result.stage != "final" or not result.legend:
+            self.on_request_text.object = ("**refused**: wait for the final map of a "
+                                           "discrete quantity")
+            return
+        self.on_request_text.object = f"computing {name}…"
+        function, explorer = ON_REQUEST[name], self.explorer
+        self.numbers_request += 1
+        ticket = self.numbers_request
+        report = self._from_worker(self._show_requested)
+
+        def work():
+            try:
+                text = function(result, explorer)
+            except Exception as exc:  # noqa: BLE001 - shown on the page
+                text = f"**{name} failed**: {' '.join(str(exc).split())}"
+            report(request, ticket, text)
+
+        threading.Thread(target=work, name="sweep-explore-on-request", daemon=True).start()
+
+    def _show_requested(self, request: int, ticket: int, text: str) -> None:
+        if request == self.latest and ticket == self.numbers_request:
+            self.on_request_text.object = text
 
     def _failed(self, request: int, exc: Exception) -> None:
         if request != self.latest:
@@ -470,7 +599,7 @@ class _Session:
     # -- downloads (bytes made here; the browser chooses where to save) ----------------
     def _final(self) -> MapResult:
         result = self.result
-        if result is None or result.preview or result.state != self.explorer.state:
+        if result is None or result.stage != "final" or result.state != self.explorer.state:
             result = self.explorer.compute(self.explorer.state)
         return result
 
@@ -589,6 +718,13 @@ class ExplorerApp:
         self._warm_lock = threading.Lock()
         self._warming = 0  # warm-ups running now
         self._after_warm: list = []
+        self._sessions: deque = deque(maxlen=SESSIONS_KEPT)  # weak references
+
+    @property
+    def sessions(self) -> list:
+        """The pages open now (of the last `SESSIONS_KEPT` opened), newest last: weak
+        references, so a closed page's maps are not kept alive (for benchmarks)."""
+        return [s for s in (ref() for ref in self._sessions) if s is not None]
 
     # -- warm-up ----------------------------------------------------------------------
     def warm_up(self) -> float:

@@ -66,6 +66,25 @@ BAND_MIN = 16_384
 #: Bands a final map is cut into at most (a cancel waits for at most 1/BANDS of a map).
 BANDS = 8
 
+#: Seconds of computation one band aims at when the preview measured the map's cost
+#: (`Explorer.stages`): a cheap map is one run (each band costs a `sweep.run` call:
+#: 8 bands of a 400 x 400 damped-well map took 32 ms against 13 ms in one run, Zen 5),
+#: an expensive one up to `BANDS` bands, so that a newer zoom waits at most about this.
+BAND_SECONDS = 0.25
+
+#: Seconds of final map (estimated from the preview's cost per start, its run's fixed
+#: cost included: a 400 x 400 damped-well map is estimated at 0.08-0.15 s and takes
+#: 0.01-0.05 s) below which the preview is not shown: the final picture follows within
+#: about this, and each picture costs the browser a redraw (30-60 ms in headless
+#: chromium on 2 shared cores) that would delay the final one.
+PREVIEW_AFTER = 0.2
+
+#: Seconds between two progressive steps shown while a final map computes: a step
+#: (the rows computed so far, each missing row drawn as its nearest computed one) is
+#: shown after 1, 2, 4, ... bands only when at least this long passed since the last
+#: picture, so a map that is ready sooner is shown once, final.
+STEP_SECONDS = 0.15
+
 #: Resolution limits (pixels per axis): a 2000 x 2000 map is 4 M trajectories.
 RESOLUTION_RANGE = (8, 2000)
 
@@ -347,6 +366,20 @@ class MapResult:
         Wall time of this stage (pilot included).
     catalogue : dict or None
         The pilot's attractor catalogue (forced basins).
+    stage : {"preview", "step", "final"}
+        The coarse preview, a progressive step of the final map (full resolution, only
+        the rows of the bands computed so far; the others repeat their nearest computed
+        row) or the final map. `preview` is True for the first two.
+    done : float
+        Share of the final map's starts computed for this picture (1.0 for the final
+        map, the preview's own share for the preview).
+    run_seconds : float
+        Wall time of the `sweep.run` calls alone [s] (no pilot, no labelling).
+    numbers : ViewNumbers or None
+        The view's numbers (`Explorer.numbers`), once computed.
+    preview_seconds : float
+        A final map's: wall time of the preview `Explorer.stages` computed before it
+        (shown or not) [s]; 0 when none was (a cached map).
     """
 
     state: State
@@ -362,6 +395,11 @@ class MapResult:
     ds: Any
     seconds: float
     catalogue: dict | None = None
+    stage: str = "final"
+    done: float = 1.0
+    run_seconds: float = 0.0
+    numbers: Any = None
+    preview_seconds: float = 0.0
 
 
 @dataclass
@@ -509,6 +547,8 @@ class Explorer:
         # final maps by state; an app's sessions share one (the start-up warm-up's map)
         self._cache: OrderedDict[State, MapResult] = OrderedDict() if cache is None else cache
         self._catalogues: OrderedDict[tuple, dict] = OrderedDict()
+        # seconds per start of the last final map of each setting (all but the window)
+        self._costs: OrderedDict[State, float] = OrderedDict()
         self._lock = COMPUTE_LOCK
 
     # -- controls --------------------------------------------------------------
@@ -865,7 +905,8 @@ class Explorer:
         return self._catalogues[key]
 
     def compute(self, state: State | None = None, *, preview: bool = False,
-                cancel: CancelToken | None = None) -> MapResult:
+                cancel: CancelToken | None = None, per_start: float | None = None,
+                on_step: Callable[[MapResult], None] | None = None) -> MapResult:
         """Compute ``state``'s map (default: the current state).
 
         Parameters
@@ -875,6 +916,14 @@ class Explorer:
             The coarse preview: resolution / `PREVIEW_FACTOR` per axis, in one run.
         cancel : CancelToken, optional
             Checked between bands (and before the run); `Cancelled` is raised once set.
+        per_start : float, optional
+            Seconds one start costs (measured by the preview): the final map is cut into
+            bands of about `BAND_SECONDS` (at most `BANDS`, each at least `BAND_MIN`
+            starts); without it, into `BANDS` bands of at least `BAND_MIN` starts.
+        on_step : callable, optional
+            ``on_step(result)`` with a progressive step of the final map (``stage ==
+            "step"``) after 1, 2, 4, ... of its bands, when `STEP_SECONDS` passed since
+            the computation began or the last step.
 
         Returns
         -------
@@ -893,14 +942,21 @@ class Explorer:
             if catalogue is not None:
                 kwargs["attractors"] = catalogue
             cancel.check()
+            run_begin = time.perf_counter()
             if preview:
                 n = max(RESOLUTION_RANGE[0], state.resolution // PREVIEW_FACTOR)
                 ds = self._run(state, self.grid(state, n), kwargs)
+                run_seconds = time.perf_counter() - run_begin
             else:
-                ds = self._run_bands(state, kwargs, cancel)
+                ds, run_seconds = self._run_bands(state, kwargs, cancel, per_start, on_step,
+                                                  begin, catalogue)
             cancel.check()
             result = self._image(state, ds, preview, catalogue)
             result.seconds = time.perf_counter() - begin
+            result.run_seconds = run_seconds
+            if preview:
+                result.stage = "preview"
+                result.done = min(1.0, (n / state.resolution) ** 2)
         if not preview:
             self._cache[state] = result
             while len(self._cache) > CACHE_SIZE:
@@ -909,14 +965,48 @@ class Explorer:
 
     def stages(self, state: State, cancel: CancelToken, emit: Callable[[MapResult], None]
                ) -> MapResult:
-        """The preview (skipped when the final map is cached), then the final map; each is
-        passed to ``emit`` as it is ready. Raises `Cancelled` once ``cancel`` is set."""
+        """The preview, progressive steps of the final map (`compute`'s ``on_step``) and
+        the final map; each is passed to ``emit`` as it is ready.
+
+        The preview is shown only when the final map is expected to take `PREVIEW_AFTER`
+        or more. It is not computed when the final map is cached, nor when the last final
+        map of the same settings (another window) cost under half of that per start: its
+        cost per start then sizes the bands. Raises `Cancelled` once ``cancel`` is
+        set."""
+        per_start, preview_seconds = None, 0.0
+        starts = state.resolution ** 2
+        v = state.view  # the setting: all but the window (the axes kept)
+        setting = dataclasses.replace(state, view=View(v.x, v.y, (0.0, 1.0), (0.0, 1.0)))
         if state not in self._cache:
-            emit(self.compute(state, preview=True, cancel=cancel))
-        final = self.compute(state, cancel=cancel)
+            known = self._costs.get(setting)
+            if known is not None and known * starts < 0.5 * PREVIEW_AFTER:
+                per_start = known
+            else:
+                preview = self.compute(state, preview=True, cancel=cancel)
+                preview_seconds = preview.seconds
+                per_start = preview.run_seconds / preview.values.size
+                if per_start * starts >= PREVIEW_AFTER:
+                    emit(preview)
+        final = self.compute(state, cancel=cancel, per_start=per_start, on_step=emit)
+        final.preview_seconds = preview_seconds
+        if per_start is not None:  # computed now: its cost is the newest measure
+            self._costs[setting] = final.run_seconds / starts
+            self._costs.move_to_end(setting)
+            while len(self._costs) > 16:
+                self._costs.popitem(last=False)
         cancel.check()
         emit(final)
         return final
+
+    def numbers(self, result: MapResult):
+        """The numbers of ``result``'s view (`sweep.explore.numbers.view_numbers`:
+        fractions with their standard errors, Sb and Sbb with the fractality verdict);
+        computed once per result. None for a map of continuous values."""
+        from .numbers import view_numbers
+
+        if result.numbers is None:
+            result.numbers = view_numbers(result)
+        return result.numbers
 
     @staticmethod
     def _run(state: State, grid: Grid, kwargs: dict):
@@ -924,23 +1014,88 @@ class Explorer:
             warnings.simplefilter("ignore", RuntimeWarning)
             return sweep_run(state.scene, grid, progress=False, **kwargs)
 
-    def _run_bands(self, state: State, kwargs: dict, cancel: CancelToken):
-        """The final map as up to `BANDS` runs of whole rows (each >= `BAND_MIN`
-        trajectories), concatenated along y: the same values as one run (results do not
-        depend on how the work is cut), with a cancel check between bands."""
+    @staticmethod
+    def band_count(n: int, per_start: float | None = None) -> int:
+        """Bands of an ``n`` x ``n`` final map: `BANDS` at most, each of at least
+        `BAND_MIN` starts, and with ``per_start`` (seconds per start) no more than
+        needed for about `BAND_SECONDS` each."""
+        by_size = math.ceil(n / max(1, min(n, max(math.ceil(n / BANDS),
+                                                  math.ceil(BAND_MIN / n)))))
+        if per_start is None or not math.isfinite(per_start):
+            return by_size
+        by_time = max(1, math.ceil(per_start * n * n / BAND_SECONDS))
+        return int(min(by_size, by_time))
+
+    @staticmethod
+    def band_order(bands: int) -> list[int]:
+        """The order the interleaved bands are computed in: band ``j`` holds the rows
+        ``j, j + bands, ...``, taken in van der Corput order (0, 4, 2, 6, 1, 5, 3, 7 for
+        8 bands), so the rows computed after 1, 2, 4, ... bands are evenly spread."""
+        def radical_inverse(j: int) -> float:
+            out, scale = 0.0, 0.5
+            while j:
+                out += scale * (j & 1)
+                j >>= 1
+                scale *= 0.5
+            return out
+
+        return sorted(range(bands), key=radical_inverse)
+
+    def _run_bands(self, state: State, kwargs: dict, cancel: CancelToken,
+                   per_start: float | None = None, on_step=None, begin: float = 0.0,
+                   catalogue=None):
+        """The final map as `band_count` runs of interleaved rows (band ``j``: rows ``j,
+        j + bands, ...``, in `band_order`), put back in row order: the same values as
+        one run (results do not depend on how the work is cut), with a cancel check
+        between bands. Returns ``(ds, seconds of the runs)``."""
+        n = state.resolution
+        bands = min(n, self.band_count(n, per_start))
+        parts, rows, run_seconds = [], [], 0.0
+        last = begin or time.perf_counter()
+        for done, first in enumerate(self.band_order(bands), start=1):
+            cancel.check()
+            band = slice(first, None, bands)
+            started = time.perf_counter()
+            parts.append(self._run(state, self.grid(state, rows=band), kwargs))
+            run_seconds += time.perf_counter() - started
+            rows.append(np.arange(n)[band])
+            power_of_two = done & (done - 1) == 0
+            if (on_step is not None and done < bands and power_of_two
+                    and time.perf_counter() - last >= STEP_SECONDS):
+                cancel.check()
+                on_step(self._step(state, parts, rows, catalogue))
+                last = time.perf_counter()
+        return self._in_row_order(state, parts, rows), run_seconds
+
+    @staticmethod
+    def _in_row_order(state: State, parts: list, rows: list):
+        """Bands of interleaved rows concatenated along y, in row order."""
         import xarray as xr
 
-        n = state.resolution
-        rows = max(1, min(n, max(math.ceil(n / BANDS), math.ceil(BAND_MIN / n))))
-        parts = []
-        for first in range(0, n, rows):
-            cancel.check()
-            parts.append(self._run(state, self.grid(state, rows=slice(first, first + rows)),
-                                   kwargs))
         if len(parts) == 1:
             return parts[0]
-        return xr.concat(parts, dim=state.view.y, data_vars="minimal", coords="minimal",
-                         compat="override", combine_attrs="override")
+        ds = xr.concat(parts, dim=state.view.y, data_vars="minimal", coords="minimal",
+                       compat="override", combine_attrs="override")
+        return ds.isel({state.view.y: np.argsort(np.concatenate(rows), kind="stable")})
+
+    def _step(self, state: State, parts: list, rows: list, catalogue) -> MapResult:
+        """A progressive step: the map of the rows computed so far, each missing row
+        drawn as its nearest computed row."""
+        n = state.resolution
+        ds = self._in_row_order(state, parts, rows)
+        partial = self._image(state, ds, True, catalogue)
+        done = np.sort(np.concatenate(rows))
+        every = np.arange(n)
+        above = np.clip(np.searchsorted(done, every), 0, done.size - 1)
+        below = np.clip(above - 1, 0, done.size - 1)
+        nearest = np.where(np.abs(done[below] - every) <= np.abs(done[above] - every),
+                           below, above)
+        partial.values = partial.values[nearest]
+        partial.image = partial.image[nearest]
+        partial.y = centres(*state.view.y_range, n)
+        partial.stage = "step"
+        partial.done = done.size / n
+        return partial
 
     def _image(self, state: State, ds, preview: bool, catalogue) -> MapResult:
         q = self.quantity_info(state.quantity)
@@ -1284,22 +1439,26 @@ class Requests:
     """Compute maps off the caller's thread: the newest request wins.
 
     One worker thread takes the latest request (a newer one replaces a waiting one, and
-    cancels the one computing, which stops at its next band), computes its preview and
-    final map (`Explorer.stages`) and reports each with ``on_result(request_id,
-    result)``; errors go to ``on_error(request_id, exception)``, cancellations to
-    ``on_cancel(request_id)``. Callbacks run on the worker thread.
+    cancels the one computing, which stops at its next band), computes its preview,
+    progressive steps and final map (`Explorer.stages`) and reports each with
+    ``on_result(request_id, result)``; then, with ``on_numbers``, the final map's numbers
+    (`Explorer.numbers`) with ``on_numbers(request_id, result, numbers)``. Errors go to
+    ``on_error(request_id, exception)``, cancellations to ``on_cancel(request_id)``.
+    Callbacks run on the worker thread.
 
     Parameters
     ----------
     explorer : Explorer
-    on_result, on_error, on_cancel : callable
+    on_result, on_error, on_cancel, on_numbers : callable
     """
 
-    def __init__(self, explorer: Explorer, on_result, on_error=None, on_cancel=None) -> None:
+    def __init__(self, explorer: Explorer, on_result, on_error=None, on_cancel=None,
+                 on_numbers=None) -> None:
         self.explorer = explorer
         self.on_result = on_result
         self.on_error = on_error or (lambda request, exc: None)
         self.on_cancel = on_cancel or (lambda request: None)
+        self.on_numbers = on_numbers
         self._condition = threading.Condition()
         self._pending = None
         self._token: CancelToken | None = None
@@ -1350,9 +1509,12 @@ class Requests:
                 self._pending = None
                 self._busy = True
             try:
-                self.explorer.stages(state, token,
-                                     lambda result, request=request: self.on_result(request,
-                                                                                    result))
+                final = self.explorer.stages(
+                    state, token,
+                    lambda result, request=request: self.on_result(request, result))
+                if self.on_numbers is not None:
+                    token.check()
+                    self.on_numbers(request, final, self.explorer.numbers(final))
             except Cancelled:
                 self.on_cancel(request)
             except Exception as exc:  # noqa: BLE001 - reported to the page, never raised into the loop

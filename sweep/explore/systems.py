@@ -225,6 +225,7 @@ class SystemExplorer(Explorer):
         self._position = 0
         self._cache = OrderedDict() if cache is None else cache
         self._catalogues = OrderedDict()
+        self._costs = OrderedDict()
         from .model import COMPUTE_LOCK
 
         self._lock = COMPUTE_LOCK
