@@ -649,3 +649,53 @@ def test_sweep_explore_refuses_a_run_file_the_explorer_cannot_use(capsys, tmp_pa
     assert main(["explore", str(path), "--no-browser"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("sweep: error:") and "dt" in err[0]
+
+
+def test_the_view_is_tested_for_fractality_and_below_the_grid_on_request():
+    """The forced Wada window: the fractality test of the view's labels is
+    `fractality_test`'s own; below the grid's scale, new starts labelled by the
+    explorer's catalogue agree with the map's pixels (same label function, same
+    catalogue) and the boundary reads fractal and Wada (alpha ~ 0.15 and W3 ~ 0.99 on
+    this scene, docs/guide/map_accuracy.md; here a short 60-period run)."""
+    from sweep.explore import numbers
+    from sweep.maps import metrics
+
+    e = explorer(wada)
+    e.update(resolution=64)
+    result = e.compute()
+    text = numbers.ON_REQUEST["fractality test (Puy et al.)"](result, e)
+    expected = metrics.fractality_test(np.asarray(result.image).astype(np.int64), radius=6,
+                                       n_balls=1000, rng=0)
+    assert f"{expected.sbb:.4f}" in text and ("fractal" if expected.fractal else "smooth") \
+        in text
+    # new starts at the pixel centres get the labels the map's run gave them: the same
+    # run, labelled by the catalogue's index instead of basins' numbering by size
+    labels_of = numbers.view_labels_of(result, e)
+    grid = e.grid(result.state)
+    rows, cols = np.meshgrid(np.arange(0, 64, 9), np.arange(0, 64, 7), indexing="ij")
+    starts = np.column_stack([grid.axes["theta0"][cols.ravel()],
+                              grid.axes["omega0"][rows.ravel()]])
+    fresh = labels_of(starts)
+    pixels = np.asarray(result.values)[rows.ravel(), cols.ravel()]
+    # one label per catalogue index: the map's basins and the catalogue agree start by
+    # start up to their numbering (a bijection between the two)
+    pairs = set(zip(fresh.tolist(), pixels.tolist()))
+    assert len(pairs) == len({a for a, _ in pairs}) == len({b for _, b in pairs})
+    below = numbers.ON_REQUEST["below the grid's scale: sampled exponent, Wada test"](
+        result, e)
+    alpha = float(below.split("scale: alpha = ")[1].split()[0])
+    assert 0.05 < alpha < 0.3  # measured 0.139 +- 0.009 here
+    assert "Wada test (grid method, 6 steps" in below and "): Wada (" in below
+
+
+def test_below_the_grid_is_refused_for_a_systems_explorer():
+    from sweep.explore import numbers
+
+    class Bare:  # a SystemExplorer has no quantity_info / uses_pilot of a scene
+        pass
+
+    class Result:
+        state = None
+
+    with pytest.raises(ValueError, match="pendulum scene only"):
+        numbers.view_labels_of(Result(), Bare())

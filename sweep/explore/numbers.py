@@ -18,9 +18,11 @@ from typing import Any
 import numpy as np
 
 from ..maps.fractions import fractions as label_fractions
-from ..maps.metrics import basin_entropy, uncertainty_exponent
+from ..maps.metrics import basin_entropy, fractality_test, uncertainty_exponent
 
-__all__ = ["BOX_SIZE", "ON_REQUEST", "ViewNumbers", "register_on_request", "view_numbers"]
+__all__ = ["BELOW_GRID_PAIRS", "BELOW_GRID_SIDE", "BELOW_GRID_STEPS", "BOX_SIZE",
+           "ON_REQUEST", "ViewNumbers", "register_on_request", "view_labels_of",
+           "view_numbers"]
 
 #: Side of the basin-entropy boxes [pixels] (Daza et al. 2016 use 5; Sb and Sbb depend
 #: on it, so the page says which).
@@ -140,6 +142,96 @@ def _grid_uncertainty(result: Any, explorer: Any) -> str:
             f"{out.alpha:.3f}, boundary dimension {out.boundary_dimension:.3f}; {table}")
 
 
+def _fractality(result: Any, explorer: Any) -> str:
+    """Puy et al.'s fractality test (`sweep.maps.metrics.fractality_test`) of the view's
+    labels, through balls of a tenth of the map's side (3 to 20 pixels; a fixed seed):
+    unlike Sbb > log 2 it decides with two basins too."""
+    labels = np.asarray(result.image).astype(np.int64)
+    radius = max(3, min(20, min(labels.shape) // 10))
+    if np.unique(labels).size < 2:
+        return "**fractality test**: one label in the view, no boundary"
+    if 2 * radius + 1 > min(labels.shape):
+        return "**fractality test**: the view is too small (fewer than 7 pixels a side)"
+    out = fractality_test(labels, radius=radius, n_balls=1000, rng=0)
+    return (f"**fractality test** (balls of radius {out.radius} pixels): "
+            f"{'fractal' if out.fractal else 'smooth'} boundary (Sbb of the balls "
+            f"{out.sbb:.4f} ± {out.sbb_error:.4f}; a smooth boundary gives "
+            f"{out.smooth_low:.4f} to {out.smooth_high:.4f})")
+
+
+#: Side [pixels] of the map `_below_grid` labels afresh for the Wada test, and the
+#: sampled pairs per eps level of its uncertainty exponent.
+BELOW_GRID_SIDE = 64
+BELOW_GRID_PAIRS = 500
+#: Refinement steps of `_below_grid`'s Wada test (the forced Wada window: W3 = 0.986
+#: after 4, enough to call it Wada after 6).
+BELOW_GRID_STEPS = 6
+
+
+def view_labels_of(result: Any, explorer: Any):
+    """``labels_of`` for new starts of the view's window: one `sweep.run` of
+    `sweep.Points` over the view's two axes (the view's other start values held), then
+    the view's map; forced basins are labelled by the explorer's attractor catalogue, so
+    that separate calls number the basins alike (`sweep.maps.wada` needs it).
+
+    Raises
+    ------
+    ValueError
+        For a systems explorer (its maps are not labelled per start this way yet).
+    """
+    from .. import engine
+    from ..grid import Points
+
+    state = result.state
+    if not hasattr(explorer, "quantity_info") or not hasattr(explorer, "uses_pilot"):
+        raise ValueError("new starts of the view are labelled for a pendulum scene only, "
+                         "not for a system yet")
+    quantity = explorer.quantity_info(state.quantity)
+    kwargs = dict(explorer.run_kwargs(state), progress=False)
+    catalogue = explorer.catalogue(state) if explorer.uses_pilot(state) else None
+    if catalogue is not None:
+        kwargs["attractors"] = catalogue
+    x, y = state.view.x, state.view.y
+    fixed = {name: [value] for name, value in state.start if name not in (x, y)}
+
+    def labels_of(starts: np.ndarray) -> np.ndarray:
+        starts = np.asarray(starts, dtype=np.float64)
+        columns = {x: starts[:, 0], y: starts[:, 1],
+                   **{k: np.repeat(v, len(starts)) for k, v in fixed.items()}}
+        ds = engine.run(state.scene, Points(**columns), **kwargs)
+        found = ds["attractor"] if catalogue is not None else quantity.compute(ds)
+        values = np.asarray(found, dtype=np.float64).ravel()
+        return np.where(np.isfinite(values), values, -1).astype(np.int64)
+
+    return labels_of
+
+
+def _below_grid(result: Any, explorer: Any) -> str:
+    """The uncertainty exponent below the grid's scale (`sweep.maps.uncertainty_sampled`:
+    `BELOW_GRID_PAIRS` random pairs per eps level, eps 1e-9 to 1e-2 of the window) and
+    the Wada test (`sweep.maps.wada`, `BELOW_GRID_STEPS` steps) of a `BELOW_GRID_SIDE`
+    x `BELOW_GRID_SIDE` map of the window labelled afresh (`view_labels_of`), by
+    `sweep.maps.describe_boundary`: new trajectories, seconds for a forced window."""
+    from ..maps.boundary import describe_boundary
+
+    labels_of = view_labels_of(result, explorer)
+    v = result.state.view
+    side = BELOW_GRID_SIDE
+    x = np.linspace(*v.x_range, side)
+    y = np.linspace(*v.y_range, side)
+    starts = np.stack(np.meshgrid(x, y, indexing="ij"), axis=-1).reshape(-1, 2)
+    labels = labels_of(starts).reshape(side, side)
+    report = describe_boundary(labels, x, y, labels_of, sampled=BELOW_GRID_PAIRS,
+                               wada_steps=BELOW_GRID_STEPS, seed=0)
+    lines = [line for line in report.lines()
+             if line.startswith(("uncertainty exponent below", "Wada test"))]
+    if report.wada is None:
+        lines.append(f"Wada test: not run ({sum(1 for k in report.fractions if k >= 0)} "
+                     "basins in the window; it needs three or more)")
+    return "\n\n".join([f"**below the grid's scale** (a {side} x {side} map of the "
+                         "window labelled afresh):"] + lines)
+
+
 #: Numbers computed only when asked for (the page's "on request" selector): name ->
 #: ``function(result, explorer) -> str`` (Markdown), run on a worker thread with the
 #: final map of the view (`sweep.explore.model.MapResult`) and its explorer (whose
@@ -147,6 +239,8 @@ def _grid_uncertainty(result: Any, explorer: Any) -> str:
 #: starts). Add entries with `register_on_request`.
 ON_REQUEST: dict[str, Callable[[Any, Any], str]] = {
     "uncertainty exponent (grid scale)": _grid_uncertainty,
+    "fractality test (Puy et al.)": _fractality,
+    "below the grid's scale: sampled exponent, Wada test": _below_grid,
 }
 
 
