@@ -483,8 +483,9 @@ class _Session:
                 more = (f" ({result.done:.0%} of the starts); computing "
                         f"{s.resolution} x {s.resolution}…")
             pilot = " (pilot catalogue included)" if result.catalogue is not None else ""
+            route = f"; {result.route}" if result.route and result.stage == "final" else ""
             self.status.object = (f"**{word}** {nx} x {ny} in {result.seconds:.2f} s"
-                                  f"{pilot}{more}")
+                                  f"{pilot}{route}{more}")
             self.caption.object = f"*{result.description}*"
             self.map.title.text = f"{self.explorer.quantity_info(s.quantity).label}"
         seconds = result.seconds + (result.preview_seconds if result.stage == "final" else 0)

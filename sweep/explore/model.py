@@ -103,8 +103,20 @@ COMPUTE_LOCK = threading.RLock()
 #: `sweep.run` keywords the explorer takes from ``run_kwargs`` and passes on unchanged.
 PASSTHROUGH = ("t0", "rtol", "atol", "dtype", "check_stability", "strobe_samples")
 
+#: Smallest resolution [pixels per axis] at which the explorer stops on known cells: its
+#: background's finest map (`sweep.maps.known.background`, half the resolution) then has
+#: 48 points or more per axis. Measured on the Wada map (c = 0.2, A = 1.66, W = 1; AMD
+#: EPYC Zen 5, 2026-11-27): at 96 and 200 pixels no start labelled differently from the
+#: exact route, home window and a zoom; at 48 (a 24 x 24 background) 1 % did.
+KNOWN_MIN_RESOLUTION = 96
+
+#: The forced basins' routes (`State.known_cells`): stop on known cells, or the
+#: catalogue alone.
+ROUTES = ("known cells", "exact")
+
 #: `sweep.run` keywords the explorer sets itself (per quantity, per view) and ignores.
-SET_BY_EXPLORER = ("observe", "stop_early", "attractors", "progress", "chunk_size",
+SET_BY_EXPLORER = ("observe", "stop_early", "attractors", "known_cells", "progress",
+                   "chunk_size",
                    "save_every", "checkpoint", "resume", "keep_checkpoint", "client",
                    "estimate_error", "specialize")
 
@@ -279,6 +291,11 @@ class State:
     extra : tuple of (str, value)
         `PASSTHROUGH` keywords of `sweep.run`.
     device : str
+    known_cells : bool, default True
+        Forced basins over the initial state: stop a trajectory on the known cells of a
+        background map of the home window (`Explorer.known`; `sweep.run`'s
+        ``known_cells``) where the run allows it (`Explorer.uses_known`); False: the
+        exact route (the catalogue alone).
     """
 
     scene: Scene
@@ -292,6 +309,7 @@ class State:
     start: tuple = (("theta0", 0.0), ("omega0", 0.0))
     extra: tuple = ()
     device: str = "cpu"
+    known_cells: bool = True
 
 
 def centres(lo: float, hi: float, n: int) -> np.ndarray:
@@ -395,6 +413,7 @@ class MapResult:
     ds: Any
     seconds: float
     catalogue: dict | None = None
+    route: str = ""
     stage: str = "final"
     done: float = 1.0
     run_seconds: float = 0.0
@@ -547,6 +566,7 @@ class Explorer:
         # final maps by state; an app's sessions share one (the start-up warm-up's map)
         self._cache: OrderedDict[State, MapResult] = OrderedDict() if cache is None else cache
         self._catalogues: OrderedDict[tuple, dict] = OrderedDict()
+        self._known: OrderedDict[tuple, tuple] = OrderedDict()  # `known`: per catalogue
         # seconds per start of the last final map of each setting (all but the window)
         self._costs: OrderedDict[State, float] = OrderedDict()
         self._lock = COMPUTE_LOCK
@@ -620,7 +640,13 @@ class Explorer:
                     help="integrator (sweep.methods.METHODS)", group="run"),
             Control("resolution", "resolution [pixels per axis]", "int", int(s.resolution),
                     minimum=low, help=f"an integer from {low} to {high}", group="run"),
-        ]
+        ] + ([Control("route", "forced basins route", "choice",
+                      ROUTES[0] if s.known_cells else ROUTES[1], choices=ROUTES,
+                      help="known cells: a trajectory stops once its stroboscopic points "
+                      "land 3 periods running in cells of a background map whose label "
+                      "is settled (measured: no start labelled differently on the Wada "
+                      "map); exact: the attractor catalogue alone", group="run")]
+             if self.uses_pilot(s) else [])
 
     # -- validation and updates ------------------------------------------------
     @staticmethod
@@ -742,7 +768,8 @@ class Explorer:
             values = {}
             for name, value in changes.items():
                 if isinstance(value, (bool, np.bool_)) or (
-                        name not in ("quantity", "x", "y", "model", "method", "device")
+                        name not in ("quantity", "x", "y", "model", "method", "device",
+                                     "route")
                         and not isinstance(value, (int, float, np.integer, np.floating))):
                     raise TypeError(f"{name} must be a number, got {value!r}")
                 if name in ("t_end", "dt", "t_transient"):
@@ -751,6 +778,11 @@ class Explorer:
                     state = dataclasses.replace(state, resolution=value)
                 elif name in ("quantity", "method", "device"):
                     state = dataclasses.replace(state, **{name: value})
+                elif name == "route":
+                    if value not in ROUTES:
+                        raise ValueError(f"route must be one of {', '.join(ROUTES)}, got "
+                                         f"{value!r}")
+                    state = dataclasses.replace(state, known_cells=value == ROUTES[0])
                 elif name == "model":
                     spec = state.scene.to_dict()
                     spec["model"] = value
@@ -904,6 +936,40 @@ class Explorer:
                 self._catalogues.popitem(last=False)
         return self._catalogues[key]
 
+    def uses_known(self, state: State | None = None) -> bool:
+        """Forced basins over the initial state, run where `sweep.run` takes
+        ``known_cells`` (the CPU, float64, a fixed-step method), at a resolution of
+        `KNOWN_MIN_RESOLUTION` or more, with ``state.known_cells`` on."""
+        state = state or self.state
+        return bool(state.known_cells) and self.uses_pilot(state) \
+            and state.resolution >= KNOWN_MIN_RESOLUTION \
+            and state.device == "cpu" and dict(state.extra).get("dtype", "float64") == \
+            "float64" and not METHODS[state.method].adaptive
+
+    def known(self, state: State | None = None):
+        """The known cells of ``state``'s map (`uses_known`), or None: the settled cells
+        of a background of the home window (`sweep.maps.known.background`: maps at 1/8,
+        1/4 and 1/2 of the home resolution, each stopping on the one before), computed
+        once per catalogue and shared by every zoom, so that a zoomed window's
+        trajectories also stop where they enter a region whose fate is known; frozen
+        while a map runs (the labels do not depend on threads, bands or blocks)."""
+        state = state or self.state
+        if not self.uses_known(state):
+            return None
+        from ..maps.known import background
+
+        pilot = self.pilot_state(state)
+        key = (pilot.scene, pilot.view, pilot.resolution, pilot.t_end, pilot.dt,
+               pilot.t_transient, pilot.method, pilot.extra)
+        if key not in self._known:
+            grid = self.grid(pilot)
+            self._known[key] = background(pilot.scene, grid.axes["theta0"],
+                                          grid.axes["omega0"], self.catalogue(state),
+                                          **self.run_kwargs(pilot))
+            while len(self._known) > 8:
+                self._known.popitem(last=False)
+        return self._known[key][0]
+
     def compute(self, state: State | None = None, *, preview: bool = False,
                 cancel: CancelToken | None = None, per_start: float | None = None,
                 on_step: Callable[[MapResult], None] | None = None) -> MapResult:
@@ -941,6 +1007,9 @@ class Explorer:
             catalogue = self.catalogue(state)
             if catalogue is not None:
                 kwargs["attractors"] = catalogue
+            known = self.known(state)
+            if known is not None:
+                kwargs["known_cells"] = known
             cancel.check()
             run_begin = time.perf_counter()
             if preview:
@@ -952,6 +1021,7 @@ class Explorer:
                                                   begin, catalogue)
             cancel.check()
             result = self._image(state, ds, preview, catalogue)
+            result.route = self._route(state, ds, catalogue, known)
             result.seconds = time.perf_counter() - begin
             result.run_seconds = run_seconds
             if preview:
@@ -997,6 +1067,23 @@ class Explorer:
         cancel.check()
         emit(final)
         return final
+
+    @staticmethod
+    def _route(state: State, ds, catalogue, known) -> str:
+        """Which route made the map, in words, with how many starts stopped early on
+        known cells (the page's status line)."""
+        n = int(np.prod([ds.sizes[d] for d in ds.dims if d in (state.view.x,
+                                                                  state.view.y)]))
+        if known is not None and "stopped_known" in ds:
+            stopped = int(np.nansum(ds["stopped_known"].values))
+            return (f"catalogue + known cells: {n} starts computed, {stopped} stopped on "
+                    "known cells")
+        if catalogue is not None:
+            why = " (exact route)" if not state.known_cells else (
+                f" (known cells from {KNOWN_MIN_RESOLUTION} pixels per axis)"
+                if state.resolution < KNOWN_MIN_RESOLUTION else "")
+            return f"catalogue{why}: {n} starts computed"
+        return ""
 
     def numbers(self, result: MapResult):
         """The numbers of ``result``'s view (`sweep.explore.numbers.view_numbers`:
