@@ -192,10 +192,29 @@ def cos(x):
 
 @njit(cache=True, **_JIT)
 def sincos(x):
-    """(sin(x), cos(x)) from one argument reduction: the same bits as `sin` and `cos`
-    (the tangent dynamics of `sweep.kernels` need both at every stage)."""
+    """(sin(x), cos(x)) from one argument reduction, each polynomial evaluated once: the
+    sine's and the cosine's (the operations of `_sine_of_reduced` on an even and on an
+    odd quadrant), then swapped and signed by quadrant, so the bits are those of `sin`
+    and `cos` (the tangent dynamics of `sweep.kernels` and the double pendulum's
+    ``sin``/``cos`` of theta1 - theta2 need both at every stage). Evaluating the
+    select-by-quadrant polynomial twice instead cost the double pendulum's kernel 7 %
+    (``docs/guide/performance.md``)."""
     r, q = _reduce(x)
-    return _sine_of_reduced(r, q), _sine_of_reduced(r, q + 1)
+    z = r * r
+    z2 = z * z
+    z4 = z2 * z2
+    # the sine's polynomial; its seventh coefficient is 0, and fma(z2, 0, a) = a here
+    # (a ~ S5 is never 0 and z2 is finite), so the term is left out
+    ps = fma(z4, fma(z, S6, S5), fma(z2, fma(z, S4, S3), fma(z, S2, S1)))
+    pc = fma(z4, fma(z2, C6, fma(z, C5, C4)), fma(z2, fma(z, C3, C2), fma(z, C1, -0.5)))
+    s_r = fma(z * r, ps, r)
+    c_r = fma(z, pc, 1.0)
+    odd = (q & 1) != 0
+    s = c_r if odd else s_r
+    c = s_r if odd else c_r
+    s = -s if (q & 2) else s
+    c = -c if ((q + 1) & 2) else c
+    return s, c
 
 
 #: ``x ** -0.2`` read off the bits: a float64's bits are ``2**52 (log2 x + 1023 - s)``
