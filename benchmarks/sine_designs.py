@@ -1,23 +1,25 @@
-"""sweep's sine against a one-reduction-by-pi sine in numba (issue 29, item 3's measurement).
+"""sweep's sine against other designs in numba (issues 29 and 38).
 
-Two designs, written with the conventions of `sweep.kernels.vecmath.sin` (explicit
+The designs, written with the conventions of `sweep.kernels.vecmath` (explicit
 `vecmath.fma`, the kernels' JIT flags, i.e. no fast-math, branch-free selects):
 
-* **sweep** (`vecmath.sin` today): ``k = round(x 2/pi)`` by the magic number, ``r = x -
-  k pi/2`` in two FMAs (|r| <= pi/4), one of two fdlibm polynomials (sine or cosine)
-  chosen by the quadrant through selects, Estrin's scheme, the sign by quadrant;
-* **pi** (the candidate, `sin_pi`): ``k = round(x/pi)`` by the magic number, ``r = x - k
-  pi`` in two FMAs (|r| <= pi/2), ONE odd polynomial ``r + r^3 P(r^2)`` (the minimax fit
-  of degree 17 from ``fit_sine.py``, 8 coefficients in P, Horner's scheme: the fastest
-  one-reduction design whose sine meets the contract in ``run_all.py``'s C search), the
-  sign from k's parity. ``cos_pi`` reduces by the odd multiples of pi/2 instead
-  (``x = (2k + 1) pi/2 + r``, ``cos x = (-1)**(k+1) sin r``, the same polynomial), and
-  ``sincos_pi`` is the pair: two reductions, two polynomials, the bits of each.
-  ``pi_estrin`` is the same polynomial by Estrin's scheme, shown for its latency (its
-  sine misses the contract: 3 ulps at about one argument in 1e8).
+* **sweep** (`vecmath.sin` since 2026-11-27): ``k = round(x/pi)`` by the magic number,
+  ``r = x - k pi`` in two FMAs (|r| <= pi/2), one odd polynomial ``r + r^3 P(r^2)``
+  (the minimax fit of degree 17 from ``fit_sine.py``) with ``P = M1 + z T``, T by
+  Estrin's scheme and M1 added last, the sign from k's parity applied to ``r`` beside
+  ``z = r^2``;
+* **quadrant** (`sin_quadrant`: `vecmath.sin` before, and `vecmath.cos` still): ``k =
+  round(x 2/pi)``, ``r = x - k pi/2`` (|r| <= pi/4), one of two fdlibm polynomials
+  (sine or cosine) chosen by the quadrant through selects, Estrin, the sign by quadrant;
+* **pi** (`sin_pi`, the C limit's sine): the reduction by pi, the same polynomial by
+  Horner's scheme. ``cos_pi`` reduces by the odd multiples of pi/2 (``x = (2k + 1) pi/2
+  + r``, the same polynomial; not exact for tiny x, which a test of vecmath asks), and
+  ``sincos_pi`` is the pair; ``pi_split`` evaluates the tail by Estrin and the head by
+  Horner; ``pi_estrin`` all by Estrin (misses the contract: 3 ulps at about one
+  argument in 1e8).
 
-Measured, side by side in one process, each timing the best of ``--repeats`` rounds in
-which the designs alternate (the machine is shared, so single timings are noisy):
+Default run, each timing the best of ``--repeats`` rounds in which the designs
+alternate (the machine is shared, so single timings are noisy):
 
 * **throughput**: a numba loop ``out[i] = sin(x[i])`` over 2**22 arguments in [-50, 50]
   (vectorised by LLVM: checked in the machine code), sines per second;
@@ -27,27 +29,32 @@ which the designs alternate (the machine is shared, so single timings are noisy)
 * **in an RK4 kernel**: run_all's full scene (2**17 trajectories x 2000 steps of the
   forced damped pendulum) in blocks of lanes with each sine (M trajectory-steps/s), and
   one trajectory alone (the narrow path: its steps wait on each other's sines);
-* **sweep.run itself** on that scene, its kernels built on each sine (fresh processes,
-  vecmath's sin/cos/sincos replaced before a kernel is generated, a cache folder each;
-  the designs alternate, 3 rounds);
+* **sweep.run itself** on that scene, its kernels built on the pi sine against sweep's
+  (fresh processes, vecmath's sin/cos/sincos replaced before a kernel is generated, a
+  cache folder each; the designs alternate, 3 rounds);
 * **accuracy**: the inputs and bounds of ``tests/test_vecmath.py`` (2**-52 absolute up
   to 1e12, 2.3e-16 |x| for small x, 4.5e-16 relative next to multiples of pi, the
   cosine equal to np.cos for tiny x, the same bits under a caller's FMA contraction,
   sincos = (sin, cos), NaN and inf), each design checked, plus the error past 1e12.
 
-``--patch PATH`` writes the drop-in replacement of vecmath's sin/cos/sincos as a diff
-(not applied). Writes ``results/sine_designs.json`` and ``.md``.
+``--in-kernels`` (issue 38) instead times sweep's own kernels with each of
+`KERNEL_DESIGNS` (sin, cos and sincos as vecmath would export them): a worker process
+per design, the workloads of `KERNEL_SIZES` (the full scene, a basins map with early
+stop and lane refill, the double pendulum, float32, one trajectory alone, the tangent
+dynamics of ``lyapunov``), designs and workloads interleaved round by round; medians,
+spreads and round-by-round ratios, and the outputs' digests. Writes
+``results/sine_designs_kernels.{json,md}``; the default run ``results/sine_designs.*``.
 
 Usage::
 
-    python benchmarks/sine_designs.py            # ~1 min
-    python benchmarks/sine_designs.py --quick    # small sizes: a smoke test
+    python benchmarks/sine_designs.py                        # ~1 min
+    python benchmarks/sine_designs.py --in-kernels --repeats 21   # ~10 min on 2 cores
+    python benchmarks/sine_designs.py --quick                # small sizes: a smoke test
 """
 
 from __future__ import annotations
 
 import argparse
-import inspect
 import json
 import math
 import os
@@ -55,6 +62,7 @@ import re
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -71,6 +79,8 @@ from _timing import best_alternating  # noqa: E402
 
 _JIT = _config.jit_options()
 _bits_of = vecmath._bits_of  # the IEEE bits of a float64 (a bitcast)
+#: the C references' base flags (`_c_builds.C_BASE_FLAGS`): compile_library adds them
+C_BASE_FLAGS_SET = {"-O3", "-march=native", "-fopenmp", "-shared", "-fPIC"}
 
 # ------------------------------------------------------------------- the candidate
 INV_PI = 0.3183098861837907
@@ -155,12 +165,126 @@ def sin_pi_estrin(x):
     return -v if (_bits_of(y) & 1) else v
 
 
-DESIGNS = {"sweep": vecmath.sin, "pi": sin_pi, "pi_estrin": sin_pi_estrin}
+@njit(cache=True, **_JIT)
+def _odd_poly_split(r):
+    """The same polynomial, its tail ``M3 + M4 z + ... + M8 z^5`` by Estrin's scheme (in
+    z and z^2: it adds less than 2e-4 to P, so its roundings are below 1e-19 of the
+    sine) and its head ``M1 + z (M2 + z tail)`` by Horner, as ``_odd_poly``: depth 6
+    multiply-adds after ``z`` instead of 8, the head's roundings (the error) unchanged."""
+    z = r * r
+    z2 = z * z
+    t = fma(z2, fma(z2, fma(z, M8, M7), fma(z, M6, M5)), fma(z, M4, M3))
+    p = fma(fma(t, z, M2), z, M1)
+    return fma(r * z, p, r)
+
+
+@njit(cache=True, **_JIT)
+def sin_pi_split(x):
+    """`sin_pi` with `_odd_poly_split`."""
+    y = fma(x, INV_PI, _MAGIC)
+    kf = y - _MAGIC
+    r = fma(-kf, PI_LO, fma(-kf, PI_HI, x))
+    v = _odd_poly_split(r)
+    return -v if (_bits_of(y) & 1) else v
+
+
+@njit(cache=True, **_JIT)
+def cos_pi_split(x):
+    """`cos_pi` with `_odd_poly_split`."""
+    y = fma(x, INV_PI, -0.5) + _MAGIC
+    kf = y - _MAGIC
+    mf = 2.0 * kf + 1.0
+    r = fma(-mf, PIO2_LO, fma(-mf, PIO2_HI, x))
+    v = _odd_poly_split(r)
+    return v if (_bits_of(y) & 1) else -v
+
+
+@njit(cache=True, **_JIT)
+def sincos_pi_split(x):
+    return sin_pi_split(x), cos_pi_split(x)
+
+
+@njit(cache=True, **_JIT)
+def sincos_split_sweep_cos(x):
+    """(sin_pi_split(x), vecmath.cos(x))."""
+    return sin_pi_split(x), vecmath.cos(x)
+
+
+@njit(cache=True, **_JIT)
+def sin_quadrant(x):
+    """vecmath.sin up to 2026-11-27 (its cos still): the reduction by pi/2, the sine's
+    or the cosine's fdlibm polynomial by quadrant (coefficients chosen by selects),
+    Estrin's scheme, the sign by quadrant."""
+    r, q = vecmath._reduce(x)
+    return vecmath._sine_of_reduced(r, q)
+
+
+@njit(cache=True, **_JIT)
+def sincos_once_each(x):
+    """(sin_quadrant(x), vecmath.cos(x)) from one reduction by pi/2, the sine's and the
+    cosine's polynomial evaluated once each, then swapped and signed by quadrant (the
+    same bits as `sincos_select_twice`)."""
+    r, q = vecmath._reduce(x)
+    z = r * r
+    z2 = z * z
+    z4 = z2 * z2
+    ps = fma(z4, fma(z, vecmath.S6, vecmath.S5),
+             fma(z2, fma(z, vecmath.S4, vecmath.S3), fma(z, vecmath.S2, vecmath.S1)))
+    pc = fma(z4, fma(z2, vecmath.C6, fma(z, vecmath.C5, vecmath.C4)),
+             fma(z2, fma(z, vecmath.C3, vecmath.C2), fma(z, vecmath.C1, -0.5)))
+    s_r = fma(z * r, ps, r)
+    c_r = fma(z, pc, 1.0)
+    odd = (q & 1) != 0
+    s = c_r if odd else s_r
+    c = s_r if odd else c_r
+    s = -s if (q & 2) else s
+    c = -c if ((q + 1) & 2) else c
+    return s, c
+
+
+@njit(cache=True, **_JIT)
+def sincos_select_twice(x):
+    """vecmath.sincos before 2026-11-27: the select-by-quadrant polynomial twice, for
+    the quadrant and the next (the bits of `sin_quadrant` and vecmath.cos)."""
+    r, q = vecmath._reduce(x)
+    return vecmath._sine_of_reduced(r, q), vecmath._sine_of_reduced(r, q + 1)
+
+
+#: The designs timed inside sweep's own kernels (`in_kernels`): (sin, cos, sincos) as
+#: `sweep.kernels.vecmath` would export them; the attribute names are looked up in this
+#: module or, prefixed ``vecmath.``, in vecmath.
+KERNEL_DESIGNS = {
+    "before": ("sin_quadrant", "vecmath.cos", "sincos_select_twice"),
+    "before_once": ("sin_quadrant", "vecmath.cos", "sincos_once_each"),
+    "pi": ("sin_pi", "cos_pi", "sincos_pi"),
+    "pi_split": ("sin_pi_split", "vecmath.cos", "sincos_split_sweep_cos"),
+    "sweep": ("vecmath.sin", "vecmath.cos", "vecmath.sincos"),
+}
+KERNEL_DESCRIPTION = {
+    "before": "sweep's sine up to 2026-11-27 (`sin_quadrant`; `vecmath.cos`; sincos = "
+              "the select-by-quadrant polynomial twice)",
+    "before_once": "the same, sincos evaluating the sine's and the cosine's polynomial "
+                   "once each (the same bits)",
+    "pi": "one reduction by pi, degree-17 minimax by Horner (the C limit's sine); cos "
+          "by the odd multiples of pi/2 (not exact for tiny x: fails a test); sincos = "
+          "two reductions",
+    "pi_split": "the pi sine, its polynomial's tail by Estrin, head by Horner; "
+                "`vecmath.cos`; sincos = (sin, cos)",
+    "sweep": "vecmath today: the pi sine, M2.. by Estrin and M1 last, the sign folded "
+             "into r; `vecmath.cos`; sincos = (sin, cos)",
+}
+
+
+DESIGNS = {"sweep": vecmath.sin, "quadrant": sin_quadrant, "pi": sin_pi,
+           "pi_estrin": sin_pi_estrin, "pi_split": sin_pi_split}
 DESCRIPTION = {
-    "sweep": "sweep's vecmath.sin: reduction by pi/2, sine or cosine polynomial by "
-             "quadrant (selects), Estrin",
-    "pi": "candidate: one reduction by pi, minimax degree-17 odd polynomial, Horner",
+    "sweep": "sweep's vecmath.sin since 2026-11-27: one reduction by pi, minimax degree "
+             "17, M2.. by Estrin and M1 last, the sign folded into r",
+    "quadrant": "sweep's sine before: reduction by pi/2, sine or cosine polynomial by "
+                "quadrant (selects), Estrin",
+    "pi": "the C limit's: one reduction by pi, minimax degree-17 odd polynomial, Horner",
     "pi_estrin": "one reduction by pi, the same polynomial by Estrin (misses the contract)",
+    "pi_split": "one reduction by pi, the same polynomial, its tail by Estrin, head by Horner",
 }
 
 
@@ -314,6 +438,261 @@ def sweep_run_with_each_sine(n, steps, rounds, repeats=2) -> dict:
     return out
 
 
+# ------------------------------------------- sweep's own kernels on each design (issue 38)
+#: One worker process per design: vecmath's sin/cos/sincos replaced before any kernel is
+#: generated (the generated modules import them when they are executed), its own cache
+#: folders, each workload run once to compile, then one timed run per line read from
+#: stdin (the workload's name), answered with the seconds and a digest of the outputs.
+KERNEL_WORKER = """
+import hashlib, json, math, sys, time
+import numpy as np
+sys.path.insert(0, {bench!r})
+import sweep
+from sweep.kernels import vecmath
+import sine_designs as sd
+def get(name):
+    return getattr(vecmath, name[8:]) if name.startswith("vecmath.") else getattr(sd, name)
+vecmath.sin, vecmath.cos, vecmath.sincos = [get(n) for n in {names!r}]
+from _c_builds import AMPLITUDE, DAMPING, DT, FREQUENCY, G_OVER_L, PHASE, grid_axes
+import double_pendulum as dp
+sizes = {sizes!r}
+scene = sweep.Scene(gravity=G_OVER_L, length=1.0, effects=(sweep.Damping(DAMPING),
+                    sweep.Forcing(AMPLITUDE, FREQUENCY, PHASE)))
+full = sweep.Grid(**dict(zip(("theta0", "omega0"), grid_axes(sizes.get("full", (2, 1))[0]))))
+kw = dict(dt=DT, observe=("final",), progress=False)
+period = 2 * math.pi
+basin_scene = sweep.Scene(gravity=1.0, length=1.0, effects=(sweep.Damping(0.2),
+                          sweep.Forcing(1.66, 1.0, math.pi / 2)))
+nb = sizes.get("basins", (2, 1))[0]
+basin_grid = sweep.Grid(theta0=np.linspace(-math.pi, math.pi, nb),
+                        omega0=np.linspace(-4.0, 4.0, nb))
+th1, th2 = dp.start_axes(sizes.get("double", (2, 1))[0])
+lyap = sweep.Grid(**dict(zip(("theta0", "omega0"), grid_axes(sizes.get("lyapunov", (2, 1))[0]))))
+work = {{
+    "full": lambda: sweep.run(scene, full, t_end=sizes["full"][1] * DT, **kw),
+    "basins": lambda: sweep.run(basin_scene, basin_grid, t_end=sizes["basins"][1] * period,
+                                dt=period / 100, t_transient=20 * period,
+                                observe=("strobe",), stop_early=True, progress=False),
+    "double": lambda: dp.run_sweep(th1, th2, sizes["double"][1]),
+    "float32": lambda: sweep.run(scene, full, t_end=sizes["float32"][1] * DT,
+                                 dtype="float32", **kw),
+    "one": lambda: sweep.run(scene, sweep.Grid(theta0=[0.1], omega0=[0.0]),
+                             t_end=sizes["one"][1] * DT, **kw),
+    "lyapunov": lambda: sweep.run(scene, lyap, t_end=sizes["lyapunov"][1] * DT, dt=DT,
+                                  observe=("lyapunov",), progress=False),
+}}
+work = {{k: v for k, v in work.items() if k in sizes}}
+def digest(ds):
+    return hashlib.sha1(b"".join(np.ascontiguousarray(ds[v].values).tobytes()
+                                 for v in sorted(ds.data_vars))).hexdigest()[:16]
+for fn in work.values():
+    fn(); fn()
+print(json.dumps({{"ready": True}}), flush=True)
+for line in sys.stdin:
+    fn = work[line.strip()]
+    start = time.perf_counter()
+    ds = fn()
+    seconds = time.perf_counter() - start
+    print(json.dumps({{"seconds": seconds, "digest": digest(ds)}}), flush=True)
+"""
+
+#: The workloads of `in_kernels`: (trajectories, steps) (basins: periods of 100 steps,
+#: early stop with lane refill; its work is reported per started trajectory and period).
+KERNEL_SIZES = {"full": (2**16, 1000), "basins": (100, 320), "double": (2**15, 1000),
+                "float32": (2**16, 1000), "one": (1, 5 * 10**5), "lyapunov": (2**14, 1000)}
+KERNEL_SIZES_QUICK = {"full": (2**10, 100), "basins": (16, 40), "double": (2**10, 50),
+                      "float32": (2**10, 100), "one": (1, 10**4), "lyapunov": (2**10, 50)}
+KERNEL_WHAT = {
+    "full": "run_all's full scene (damped, forced), final state",
+    "basins": "forced basins map (damping 0.2, forcing 1.66), strobe, early stop with lane "
+              "refill (rate: started trajectories x periods x 100 steps)",
+    "double": "double pendulum (double_pendulum.py's grid), final state",
+    "float32": "the full scene in float32 (sin32: not changed by the float64 designs; "
+               "a control of the noise)",
+    "one": "one trajectory of the full scene alone (the narrow path: the sine's latency)",
+    "lyapunov": "the full scene with observe=('lyapunov',) (tangent dynamics: sincos)",
+}
+
+
+def _start_worker(name: str, sizes: dict, tmp: str):
+    """The worker process of design ``name`` (`KERNEL_WORKER`), once it has compiled."""
+    env = dict(os.environ, SWEEP_CACHE_DIR=str(Path(tmp) / f"c_{name}"),
+               NUMBA_CACHE_DIR=str(Path(tmp) / f"n_{name}"), PYTHONPATH=str(HERE.parent))
+    code = KERNEL_WORKER.format(bench=str(HERE), names=KERNEL_DESIGNS[name], sizes=sizes)
+    proc = subprocess.Popen([sys.executable, "-c", code], env=env, text=True,
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    if not proc.stdout.readline():
+        raise RuntimeError(f"the worker of design {name!r} failed")
+    return proc
+
+
+def _ask(proc, workload: str) -> dict:
+    proc.stdin.write(workload + "\n")
+    proc.stdin.flush()
+    return json.loads(proc.stdout.readline())
+
+
+#: --vs-c-limit: run_all's and double_pendulum.py's workloads at full size.
+LIMIT_SIZES = {"full": (2**17, 2000), "double": (2**17, 1000)}
+LIMIT_SIZES_QUICK = {"full": (2**10, 100), "double": (2**10, 50)}
+
+
+def vs_c_limit(designs, rounds: int, quick: bool, log=print) -> dict:
+    """``sweep.run`` with each design against the C limits of ``run_all.py`` (the
+    pendulum) and ``double_pendulum.py``, all timed in one process, round by round: the
+    C limit's build as committed in ``results/run_all.json`` and
+    ``results/double_pendulum.json`` (the minimax sine by Horner) and the same build
+    with sweep's sine (``-DHEAD``); the limit is the faster of the two (best time)."""
+    sys.path.insert(0, str(HERE))
+    import double_pendulum as dp
+
+    from _c_builds import build_c_one, call_c, grid_axes, initial_states
+
+    sizes = LIMIT_SIZES_QUICK if quick else LIMIT_SIZES
+    limits = {"full": json.loads((HERE / "results" / "run_all.json").read_text())
+              ["c_limit"]["flags"],
+              "double": json.loads((HERE / "results" / "double_pendulum.json").read_text())
+              ["c_limit"]["flags"]}
+    th0, om0 = initial_states(*grid_axes(sizes["full"][0]))
+    state = dp.starts(*dp.start_axes(sizes["double"][0]))
+    calls, times = {}, {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for w, flags in limits.items():
+            flags = [f for f in flags if f not in C_BASE_FLAGS_SET]
+            for label, extra in (("C limit (Horner)", []), ("C, sweep's sine", ["-DHEAD"])):
+                if w == "full":
+                    fn = build_c_one(Path(tmp), label, flags + extra)
+                    calls[(w, label)] = (lambda fn=fn: call_c(fn, th0, om0, sizes["full"][1]))
+                else:
+                    fn = dp.build_double(Path(tmp), flags + extra)
+                    calls[(w, label)] = (lambda fn=fn: dp.call_double(fn, state,
+                                                                      sizes["double"][1]))
+                if isinstance(fn, str) or fn is None:
+                    raise RuntimeError(f"{w} {label}: {fn}")
+        workers = {}
+        try:
+            for name in designs:
+                workers[name] = _start_worker(name, sizes, tmp)
+                log(f"  worker {name}: compiled", flush=True)
+            for call in calls.values():
+                call()  # warm
+            for _ in range(rounds):
+                for w in sizes:
+                    for (cw, label), call in calls.items():
+                        if cw == w:
+                            start = time.perf_counter()
+                            call()
+                            times.setdefault((w, label), []).append(
+                                time.perf_counter() - start)
+                    for name, proc in workers.items():
+                        times.setdefault((w, name), []).append(_ask(proc, w)["seconds"])
+        finally:
+            for proc in workers.values():
+                proc.stdin.close()
+                proc.wait()
+    out = {}
+    for w, (n, steps) in sizes.items():
+        c_labels = [label for (cw, label) in calls if cw == w]
+        best_c = min(c_labels, key=lambda label: min(times[(w, label)]))
+        c = np.array(times[(w, best_c)])
+        row = {"trajectories": int(n), "steps": steps, "c_limit": best_c,
+               "c_flags": limits[w], "rows": {}}
+        for label in c_labels + list(designs):
+            t = np.array(times[(w, label)])
+            row["rows"][label] = {
+                "seconds": t.tolist(), "best_M_per_s": n * steps / t.min() / 1e6,
+                "median_M_per_s": float(np.median(n * steps / t / 1e6)),
+                "over_c_limit_best": float(c.min() / t.min()),
+                "over_c_limit_paired_median": float(np.median(c / t)),
+                "over_c_limit_paired_quartiles": [float(q) for q in
+                                                  np.percentile(c / t, [25, 75])]}
+        out[w] = row
+    return out
+
+
+def vs_c_limit_markdown(r: dict) -> list[str]:
+    lines = ["## sweep.run against the C limits, each design (one process, round by "
+             "round)", "",
+             "M trajectory-steps/s (best and median of the rounds) and the ratio to the C "
+             "limit (the faster C build by best time): of the best times, and the median "
+             "[quartiles] of the round-by-round ratios.", ""]
+    for w, row in r.items():
+        lines += [f"### {w} ({row['trajectories']} x {row['steps']}); C limit: "
+                  f"{row['c_limit']}", "", "| what | best | median | vs C limit (best) | "
+                  "vs C limit, paired median [quartiles] |", "|---|---|---|---|---|"]
+        for label, v in row["rows"].items():
+            q = v["over_c_limit_paired_quartiles"]
+            lines.append(f"| {label} | {v['best_M_per_s']:.0f} | {v['median_M_per_s']:.0f} | "
+                         f"{v['over_c_limit_best']:.3f} | "
+                         f"{v['over_c_limit_paired_median']:.3f} [{q[0]:.2f} - {q[1]:.2f}] |")
+        lines.append("")
+    return lines
+
+
+def in_kernels(designs, rounds: int, quick: bool, log=print) -> dict:
+    """sweep.run's kernels on each design: a worker per design (`KERNEL_WORKER`), the
+    designs and workloads interleaved, ``rounds`` timed runs of each; per workload and
+    design the median, min and max rate (M trajectory-steps/s) and the outputs' digest
+    (equal digests: bit-identical results)."""
+    sizes = KERNEL_SIZES_QUICK if quick else KERNEL_SIZES
+    workers, times = {}, {w: {d: [] for d in designs} for w in sizes}
+    digests = {w: {} for w in sizes}
+    with tempfile.TemporaryDirectory() as tmp:
+        try:
+            for name in designs:
+                workers[name] = _start_worker(name, sizes, tmp)
+                log(f"  worker {name}: compiled", flush=True)
+            for _ in range(rounds):
+                for w in sizes:
+                    for name, proc in workers.items():
+                        got = _ask(proc, w)
+                        times[w][name].append(got["seconds"])
+                        digests[w][name] = got["digest"]
+        finally:
+            for proc in workers.values():
+                proc.stdin.close()
+                proc.wait()
+    out = {}
+    for w, (n, steps) in sizes.items():
+        work = n * n * steps * 100 if w == "basins" else n * steps
+        out[w] = {"what": KERNEL_WHAT[w], "trajectories": n * n if w == "basins" else n,
+                  "steps": steps * 100 if w == "basins" else steps, "designs": {}}
+        base = np.array(times[w][designs[0]])
+        for name in designs:
+            t = np.array(times[w][name])
+            rates = work / t / 1e6
+            paired = base / t  # speed over the first design's, round by round
+            out[w]["designs"][name] = {
+                "seconds": t.tolist(), "median_M_per_s": float(np.median(rates)),
+                "min_M_per_s": float(rates.min()), "max_M_per_s": float(rates.max()),
+                "paired_ratio_median": float(np.median(paired)),
+                "paired_ratio_quartiles": [float(q) for q in np.percentile(paired, [25, 75])],
+                "best_ratio": float(base.min() / t.min()), "digest": digests[w][name]}
+    return out
+
+
+def in_kernels_markdown(r: dict, designs) -> list[str]:
+    lines = ["## Inside sweep's kernels (`sweep.run`, a worker per design, interleaved)", "",
+             "M trajectory-steps/s: median and [min - max] of the rounds; speed over the "
+             f"first design (`{designs[0]}`): the median [quartiles] of the ratios taken "
+             "round by round (the designs of a round run back to back, so a burst of the "
+             "other sessions' work hits them alike), and the ratio of the best times; "
+             "digest: the outputs' bits.", ""]
+    lines += [f"- **{d}**: {KERNEL_DESCRIPTION[d]}" for d in designs]
+    for w, row in r.items():
+        lines += ["", f"### {w}: {row['what']} ({row['trajectories']} x {row['steps']})", "",
+                  "| design | median | min - max | paired ratio [quartiles] | best ratio | "
+                  "digest |", "|---|---|---|---|---|---|"]
+        for d in designs:
+            v = row["designs"][d]
+            q = v["paired_ratio_quartiles"]
+            lines.append(f"| {d} | {v['median_M_per_s']:.1f} | {v['min_M_per_s']:.1f} - "
+                         f"{v['max_M_per_s']:.1f} | {v['paired_ratio_median']:.3f} "
+                         f"[{q[0]:.2f} - {q[1]:.2f}] | {v['best_ratio']:.3f} | "
+                         f"`{v['digest']}` |")
+    return lines
+
+
 # ------------------------------------------------------------------------- accuracy
 def _vector(sine, jit=None):
     """``sine`` over an array, in parallel, compiled with ``jit`` (default: the kernels'
@@ -416,79 +795,28 @@ def accuracy(sin, cos, sincos, scale=1.0) -> dict:
     return out
 
 
-# --------------------------------------------------------------------------- the patch
-def _candidate_source() -> str:
-    """The candidate as vecmath would hold it, taken from this file, so that the patch is
-    the code measured: the constants and the Horner polynomial, then ``sin_pi``,
-    ``cos_pi`` and ``sincos_pi`` named ``sin``, ``cos`` and ``sincos`` (vecmath has
-    its own ``PIO2_HI``, ``PIO2_LO`` and ``_MAGIC``)."""
-    text = Path(__file__).read_text()
-    head = text[text.index("INV_PI = "):text.index("@njit(cache=True, **_JIT)\ndef "
-                                                   "_odd_poly_estrin")]
-    head = "".join(line for line in head.splitlines(keepends=True)
-                   if not line.startswith(("PIO2_HI, PIO2_LO = ", "_MAGIC = ")))
-    functions = "\n\n".join(inspect.getsource(f.py_func)
-                             for f in (sin_pi, cos_pi, sincos_pi))
-    return head + re.sub(r"\b(sin|cos|sincos)_pi\b", r"\1", functions)
-
-
-def patch_text() -> str:
-    """A unified diff of sweep/kernels/vecmath.py with sin, cos and sincos replaced by
-    this file's candidate (the module docstring's algorithm notes left to whoever
-    applies it); not applied."""
-    path = HERE.parent / "sweep" / "kernels" / "vecmath.py"
-    src = path.read_text()
-    start = src.index("@njit(cache=True, **_JIT)\ndef _reduce(x):")
-    end = src.index("#: ``x ** -0.2`` read off the bits")
-    new = ("#: One reduction by pi (issue 29; benchmarks/sine_designs.py measured it "
-           "against the\n#: reduction by pi/2 with two polynomials).\n"
-           + _candidate_source() + "\n\n")
-    new_src = src[:start] + new + src[end:]
-    with tempfile.TemporaryDirectory() as tmp:
-        a, b = Path(tmp) / "a.py", Path(tmp) / "b.py"
-        a.write_text(src)
-        b.write_text(new_src)
-        proc = subprocess.run(["diff", "-u", "--label", "a/sweep/kernels/vecmath.py",
-                               "--label", "b/sweep/kernels/vecmath.py", str(a), str(b)],
-                              capture_output=True, text=True, check=False)
-    return PATCH_HEADER + proc.stdout
-
-
-#: Leading text of the diff (``git apply`` and ``patch`` skip it).
-PATCH_HEADER = """\
-Drop-in replacement of sweep.kernels.vecmath's float64 sin/cos/sincos by the
-one-reduction-by-pi design of benchmarks/sine_designs.py (NOT applied; generated by
-`python benchmarks/sine_designs.py --patch PATH`). The module docstring's notes on
-the algorithm (steps 1-4, the measured latency) describe the old design and would
-need rewriting; S1..S6, C1..C6 and TWO_OVER_PI become unused.
-
-What it reaches on tests/test_vecmath.py's inputs (sine_designs.py's accuracy table):
-- sin and cos within 2**-52 = 2.2e-16 of np.sin/np.cos for |x| <= 1e4 and up to 1e12
-  (TOL holds, with no margin: 2 ulps of values near 1, where today's sine has 1 ulp,
-  1.1e-16); 1e12 < |x| <= 3e15: 5.6e-16 (today 1.1e-14);
-- small x: |err| <= 2.3e-16 |x| holds (0 measured); next to k pi: 1.5e-16 relative
-  (bound 4.5e-16); the same bits under a caller's FMA contraction; sincos is
-  (sin, cos) to the bit; NaN/inf give NaN; sin(+-0) = +0;
-- FAILS test_tiny_arguments' `_vcos(x) == np.cos(x)`: cos reduces by the odd multiples
-  of pi/2, so cos of a tiny x is the polynomial's sine near r = -pi/2, which is one
-  ulp below 1 (1 - 1.1e-16) for about 1 % of those arguments (|x| from 3e-16 to 1e-3);
-  within TOL, but not bit-equal. The test would have to become `<= TOL` (or cos keep
-  today's design, but sincos must give cos's bits).
-- The docstring of test_vecmath.py ("Measured: 1.1e-16") would become 2.2e-16.
-
-"""
-
-
 # ------------------------------------------------------------------------------ main
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small sizes: a smoke test")
     parser.add_argument("--repeats", type=int, default=5, help="alternating rounds")
     parser.add_argument("--out", type=Path, default=HERE / "results")
-    parser.add_argument("--patch", type=Path, help="write the drop-in diff of vecmath here")
+    parser.add_argument("--in-kernels", action="store_true",
+                        help="only time sweep's own kernels on each design (issue 38): "
+                             "results/sine_designs_kernels.{json,md}")
+    parser.add_argument("--vs-c-limit", action="store_true",
+                        help="only sweep.run with each design against the C limits of "
+                             "run_all.py and double_pendulum.py: "
+                             "results/sine_designs_limit.{json,md}")
+    parser.add_argument("--designs", nargs="+", default=list(KERNEL_DESIGNS),
+                        choices=list(KERNEL_DESIGNS), help="with --in-kernels, --vs-c-limit")
     args = parser.parse_args(argv)
     sys.path.insert(0, str(HERE))
     from _machine import machine
+    if args.in_kernels:
+        return main_in_kernels(args, machine())
+    if args.vs_c_limit:
+        return main_vs_c_limit(args, machine())
 
     quick = args.quick
     n_vec, n_chain = (2**16, 10**5) if quick else (2**22, 10**7)
@@ -570,6 +898,7 @@ def main(argv=None) -> int:
     # accuracy: tests/test_vecmath.py's checks
     scale = 0.05 if quick else 1.0
     pairs = {"sweep": (vecmath.sin, vecmath.cos, vecmath.sincos),
+             "quadrant": (sin_quadrant, vecmath.cos, sincos_select_twice),
              "pi": (sin_pi, cos_pi, sincos_pi)}
     for name, fns in pairs.items():
         result["accuracy"][name] = acc = accuracy(*fns, scale=scale)
@@ -577,13 +906,53 @@ def main(argv=None) -> int:
         print(f"  {name:10s} accuracy: {len(acc) - len(failed)}/{len(acc)} test_vecmath "
               f"checks pass{'; FAILS ' + ', '.join(failed) if failed else ''}", flush=True)
 
-    if args.patch:
-        args.patch.write_text(patch_text())
-        print(f"wrote {args.patch}")
     args.out.mkdir(parents=True, exist_ok=True)
     stem = "sine_designs_quick" if quick else "sine_designs"
     (args.out / f"{stem}.json").write_text(json.dumps(result, indent=2))
     md = markdown(result)
+    (args.out / f"{stem}.md").write_text(md)
+    print(md)
+    return 0
+
+
+def main_in_kernels(args, machine_text: str) -> int:
+    """--in-kernels: `in_kernels` on ``args.designs``, written to the results folder."""
+    rounds = 1 if args.quick else max(1, args.repeats)
+    print(machine_text, flush=True)
+    result = {"machine": machine_text, "load_1min_start": os.getloadavg()[0],
+              "quick": args.quick, "rounds": rounds,
+              "designs": {d: KERNEL_DESCRIPTION[d] for d in args.designs},
+              "in_kernels": in_kernels(args.designs, rounds, args.quick)}
+    result["load_1min_end"] = os.getloadavg()[0]
+    md = "\n".join([f"# sine designs inside sweep's kernels ({rounds} rounds)", "",
+                     f"Machine: {machine_text}; 1-minute load {result['load_1min_start']:.1f}"
+                     f" at the start, {result['load_1min_end']:.1f} at the end.", ""]
+                    + in_kernels_markdown(result["in_kernels"], args.designs)) + "\n"
+    args.out.mkdir(parents=True, exist_ok=True)
+    stem = "sine_designs_kernels_quick" if args.quick else "sine_designs_kernels"
+    (args.out / f"{stem}.json").write_text(json.dumps(result, indent=2))
+    (args.out / f"{stem}.md").write_text(md)
+    print(md)
+    return 0
+
+
+def main_vs_c_limit(args, machine_text: str) -> int:
+    """--vs-c-limit: `vs_c_limit` on ``args.designs``, written to the results folder."""
+    rounds = 1 if args.quick else max(1, args.repeats)
+    print(machine_text, flush=True)
+    result = {"machine": machine_text, "load_1min_start": os.getloadavg()[0],
+              "quick": args.quick, "rounds": rounds,
+              "designs": {d: KERNEL_DESCRIPTION[d] for d in args.designs},
+              "vs_c_limit": vs_c_limit(args.designs, rounds, args.quick)}
+    result["load_1min_end"] = os.getloadavg()[0]
+    md = "\n".join([f"# sweep.run with each sine against the C limits ({rounds} rounds)", "",
+                     f"Machine: {machine_text}; 1-minute load {result['load_1min_start']:.1f}"
+                     f" at the start, {result['load_1min_end']:.1f} at the end.", ""]
+                    + [f"- **{k}**: {v}" for k, v in result["designs"].items()] + [""]
+                    + vs_c_limit_markdown(result["vs_c_limit"])) + "\n"
+    args.out.mkdir(parents=True, exist_ok=True)
+    stem = "sine_designs_limit_quick" if args.quick else "sine_designs_limit"
+    (args.out / f"{stem}.json").write_text(json.dumps(result, indent=2))
     (args.out / f"{stem}.md").write_text(md)
     print(md)
     return 0

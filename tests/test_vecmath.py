@@ -1,17 +1,22 @@
 """The vectorisable sin of `sweep.kernels.vecmath` against NumPy's (glibc's) sin.
 
 Tolerance: 2**-52 = 2.2e-16 absolute, two ulps of values just below 1: the issue's
-target for |x| <= 1e4. The bound behind it: the reduction's first fused multiply-add is
-exact and its second rounds once, leaving ``r`` within half an ulp of ``x - k pi/2``
-(at most 5.6e-17 for |r| near pi/4, times |cos r| <= 0.88 where |r| >= 0.5), the fdlibm
-polynomials are accurate to 2**-58, their last multiply-add rounds by at most half an
-ulp of the result (5.6e-17) and the rest of their evaluation by less than 2e-17: at most
-~1.3e-16 from the true sine, and glibc's np.sin is within half an ulp (5.6e-17) of it.
-Measured: 1.1e-16.
-The truncated pi/2 (1.5e-33 per unit of k) keeps the same bound up to |x| ~ 1e12 (tested
-to there, hard spots next to multiples of pi/2 included); past ~1e13 the rounded
-``x * 2/pi`` may pick the neighbouring quadrant and the error grows (tested as a bound,
-not as a claim of accuracy).
+target for |x| <= 1e4, sweep's sine contract. The bound behind it, for `sin` (one
+reduction by pi, since 2026-11-27): the reduction's first fused multiply-add is exact
+and its second rounds once, leaving ``r`` (|r| <= pi/2) within half an ulp of ``x - k
+pi`` (up to 1.1e-16 for |r| >= 1, times |cos r| <= 0.54 there), the degree-17 minimax
+polynomial is accurate to 3e-19, the rounding of ``r z`` and of the polynomial's head
+reach at most ~0.3 ulp and its last multiply-add rounds by half an ulp of the result
+(5.6e-17): at most ~1.6e-16 from the true sine, and glibc's np.sin is within half an
+ulp (5.6e-17) of it. Measured: 2.2e-16 (two ulps of values in [0.5, 1), at about 3 in
+1e5 arguments), never more in 2e8 arguments concentrated where |r| is near 1. For
+`cos` (the reduction by pi/2 to |r| <= pi/4 and fdlibm's polynomials, as `sin` was
+until then): ``r`` within 5.6e-17, polynomials within 2**-58: at most ~1.3e-16;
+measured 1.1e-16.
+The truncated pi (3.0e-33 per unit of k; pi/2: 1.5e-33) keeps the same bound up to
+|x| ~ 1e12 (tested to there, hard spots next to multiples of pi/2 included); past ~1e13
+the rounded ``x / pi`` may pick the neighbouring multiple and the error grows (tested
+as a bound, not as a claim of accuracy).
 """
 
 import numpy as np
@@ -138,11 +143,12 @@ def test_beyond_1e4_up_to_1e12(rng):
 
 
 def test_past_1e12_the_error_stays_below_1e_13_up_to_3e15(rng):
-    """Documented degradation, not accuracy: past ~1e13 the rounded ``x * 2/pi`` (off
-    by up to |x| 2**-53) may choose the neighbouring quadrant, so the polynomials run
-    up to |r| ~ pi/4 + 0.17 at 3e15, outside their interval (measured: 1.9e-14 there);
-    1e-13 bounds it with margin. Past 2**51 pi/2 ~ 3.5e15 the quadrant trick fails and
-    the values are not sines (the module docstring)."""
+    """Documented degradation, not accuracy: past ~1e13 the rounded ``x / pi`` (off by
+    up to |x| 2**-53) may choose the neighbouring multiple of pi, so the polynomial
+    runs a little past |r| = pi/2, outside its interval (measured: 1.1e-15 up to 3e15;
+    1.9e-14 with the reduction by pi/2 of the sine before 2026-11-27); 1e-13 bounds it
+    with margin. Past 2**51 pi ~ 7e15 the magic-number rounding fails and the values
+    are not sines (the module docstring)."""
     x = 10.0 ** rng.uniform(12, np.log10(3e15), 1_000_000)
     err = np.abs(_vsin(x) - np.sin(x))
     assert np.all(err <= 1e-13)

@@ -210,3 +210,93 @@ def test_float32_kernels_fill_the_register_and_give_the_same_bits(monkeypatch, t
     for name, variable in runs[False].data_vars.items():
         assert variable.values.tobytes() == runs[True][name].values.tobytes(), name
     assert _user_loop_registers() == before  # the option was reset
+
+
+#: The outputs' bits of every kind of kernel that reads `sweep.kernels.vecmath`, as a
+#: digest per workload: the sine itself (sin, cos, sincos of arguments up to 1e4), the
+#: fixed-step kernel of a damped forced pendulum, one trajectory alone (the narrow
+#: path), the early-stop kernel with lane refill (a forced basins map's strobe), the
+#: tangent dynamics (``lyapunov``: sincos), float32 (sin32) and the double pendulum (two
+#: sines and a sincos per stage).
+_BITS = textwrap.dedent("""
+    import hashlib, json, math
+    import numpy as np, sweep
+    from numba import njit
+    from sweep.kernels import vecmath
+
+    def digest(*arrays):
+        return hashlib.sha1(b"".join(np.ascontiguousarray(a).tobytes()
+                                     for a in arrays)).hexdigest()
+
+    def of(ds):
+        return digest(*(ds[v].values for v in sorted(ds.data_vars)))
+
+    @njit
+    def sines(x):
+        out = np.empty((4, x.size))
+        for i in range(x.size):
+            out[0, i], out[1, i] = vecmath.sin(x[i]), vecmath.cos(x[i])
+            out[2, i], out[3, i] = vecmath.sincos(x[i])
+        return out
+
+    x = np.random.default_rng(38).uniform(-1e4, 1e4, 100_000)
+    scene = sweep.Scene(gravity=1.0, length=1.0, effects=(sweep.Damping(0.5),
+                        sweep.Forcing(1.2, 2 / 3, 0.0)))
+    grid = sweep.Grid(theta0=np.linspace(-3, 3, 32), omega0=np.linspace(-2, 2, 16))
+    kw = dict(t_end=5.0, dt=0.01, observe=("final",), progress=False)
+    period = 2 * math.pi
+    basins = sweep.Scene(gravity=1.0, length=1.0, effects=(sweep.Damping(0.2),
+                         sweep.Forcing(1.66, 1.0, math.pi / 2)))
+    double = sweep.DoublePendulum(mass1=1.0, mass2=1.0, length1=1.0, length2=1.0,
+                                  gravity=9.81)
+    print(json.dumps({
+        "sines": digest(sines(x)),
+        "fixed": of(sweep.run(scene, grid, **kw)),
+        "one trajectory": of(sweep.run(scene, sweep.Grid(theta0=[2.5], omega0=[0.0]),
+                                       **dict(kw, t_end=20.0))),
+        "refill": of(sweep.run(basins, sweep.Grid(theta0=np.linspace(-3, 3, 24),
+                                                  omega0=np.linspace(-4, 4, 24)),
+                               t_end=60 * period, dt=period / 100, t_transient=20 * period,
+                               observe=("strobe",), stop_early=True, progress=False)),
+        "lyapunov": of(sweep.run(scene, grid, t_end=5.0, dt=0.01, observe=("lyapunov",),
+                                 progress=False)),
+        "float32": of(sweep.run(scene, grid, dtype="float32", **kw)),
+        "double pendulum": of(sweep.run(double, sweep.Grid(
+            theta1_0=np.linspace(-3, 3, 16), theta2_0=np.linspace(-3, 3, 8)), **kw)),
+    }))
+""")
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not AVX512, reason="the host has no AVX-512: the Zen 4 and Skylake-X "
+                                       "targets cannot be emulated without running code "
+                                       "it lacks")
+def test_results_are_the_same_bits_on_every_emulated_cpu_with_fma(tmp_path):
+    """A map computed on one machine and extended on another must not change a label
+    (issue 38): every kernel kind's outputs, and the sine's own, have the same bits
+    when LLVM compiles for AMD's Zen 4 (512-bit units), Intel's Skylake-X (AVX-512,
+    tuned for 256-bit vectors) with 256- and 512-bit kernels, and Haswell (AVX2 and
+    FMA, no AVX-512), emulated on this host with ``NUMBA_CPU_NAME`` (fresh caches:
+    each target compiles its own code). The sine's operations are IEEE-rounded
+    arithmetic and explicit fused multiply-adds (`sweep.kernels.vecmath.fma`), with no
+    fast-math flag, so no target may round differently; this checks that no
+    vectorisation, width or instruction choice changes that."""
+    targets = {"znver4": {}, "skylake-avx512, 256": {"SWEEP_VECTOR_WIDTH": "256"},
+               "skylake-avx512, 512": {"SWEEP_VECTOR_WIDTH": "512"}, "haswell": {}}
+    digests = {}
+    for label, extra in targets.items():
+        cache = tmp_path / label.replace(", ", "_")
+        env = dict(os.environ, NUMBA_CPU_NAME=label.split(",")[0],
+                   SWEEP_CACHE_DIR=str(cache), NUMBA_CACHE_DIR=str(cache / "numba"), **extra)
+        env.pop("NUMBA_CPU_FEATURES", None)
+        if not extra:
+            env.pop("SWEEP_VECTOR_WIDTH", None)
+        done = subprocess.run([sys.executable, "-c", _BITS], env=env, capture_output=True,
+                              text=True, timeout=900)
+        assert done.returncode == 0, done.stderr
+        digests[label] = json.loads(done.stdout.splitlines()[-1])
+    first = digests["znver4"]
+    assert len(first) == 7
+    for label, got in digests.items():
+        assert got == first, f"{label} differs from znver4 in " + ", ".join(
+            k for k in first if got[k] != first[k])

@@ -32,15 +32,22 @@
  *                    1  Taylor, degree 21                         3.6e-17
  *                    2  minimax, degree 17 (relative error)       2.9e-19
  *                    3  minimax, degree 15                        1.5e-16
- *                  evaluated by Horner's scheme, or by Estrin's with -DESTRIN; every
- *                  multiply-add written as fma()
+ *                  evaluated by Horner's scheme, or by Estrin's with -DESTRIN, or
+ *                  with -DHEAD (SIN_POLY 2 only) as sweep/kernels/vecmath.py's sin
+ *                  since 2026-11-27: c[1..7] by Estrin's scheme, c[0] added last, the
+ *                  sign applied to r beside z instead of to the result (the same
+ *                  bits); every multiply-add written as fma()
  *
  * vsincos(x, &s, &c), the sine and the cosine of one argument: variants 0 and 1 call
  * sin and cos (libm's, or libmvec's vector versions); 4 and 5 reduce once by pi/2 as
  * vecmath._reduce does and evaluate the sine's and the cosine's polynomial on r once
  * each (fdlibm's coefficients by Estrin's scheme, every multiply-add written as fma()),
- * then pick and sign them by quadrant: the same bits as sweep.kernels.vecmath.sincos,
- * which evaluates its select-by-quadrant polynomial twice (for q and q + 1) instead.
+ * then pick and sign them by quadrant: the bits of sweep.kernels.vecmath.sincos up to
+ * 2026-11-27 (variant 4's sine and cosine). Since then sweep's sincos returns the bits
+ * of its sin (variant 5 -DHEAD) and of its cos (variant 4's), two reductions; with
+ * variant 5 this one is faster than that and its sine is not SIN's, which a C limit
+ * may do and sweep does not (a kernel reading sin and cos must follow the trajectory
+ * of one reading sin alone).
  * Variants 2 and 3 have no vsincos.
  */
 #ifndef SWEEP_C_SINES_H
@@ -188,6 +195,23 @@ static inline double poly_pi(double z) {
     return fma(p, z, CP[0]);
 #endif
 }
+#ifdef HEAD
+#if N_POLY != 8
+#error "-DHEAD needs SIN_POLY 2"
+#endif
+static inline double vsin(double x) {
+    const double y = fma(x, INV_PI, MAGIC);
+    const double kf = y - MAGIC;
+    const double r = fma(-kf, PI_LO, fma(-kf, PI_HI, x));
+    int64_t q;
+    memcpy(&q, &y, sizeof q); /* y = 1.5 * 2**52 + k: k's parity is y's low bit */
+    const double s = (q & 1) ? -r : r; /* sin is odd: the sign on r, beside z */
+    const double z = r * r, z2 = z * z, z4 = z2 * z2;
+    const double t = fma(z4, fma(z2, CP[7], fma(z, CP[6], CP[5])),
+                         fma(z2, fma(z, CP[4], CP[3]), fma(z, CP[2], CP[1])));
+    return fma(s * z, fma(z, t, CP[0]), s);
+}
+#else
 static inline double vsin(double x) {
     const double y = fma(x, INV_PI, MAGIC);
     const double kf = y - MAGIC;
@@ -198,6 +222,7 @@ static inline double vsin(double x) {
     const double v = fma(r * z, poly_pi(z), r);
     return (q & 1) ? -v : v;
 }
+#endif
 #define SIN(x) vsin(x)
 #else
 #define SIN(x) sin(x)

@@ -6,40 +6,57 @@ into libm and the loop is never vectorised. `sin` here is straight-line arithmet
 lane when the kernel's lane loop is innermost; and its dependency chain is short, so
 one trajectory alone (whose steps wait on each other's sines) runs fast too.
 
-Algorithm
----------
-1. Quadrant: ``y = x * 2/pi + 1.5 * 2**52`` rounds ``x * 2/pi`` to the integer ``k``
-   ("magic number"; valid for ``|x * 2/pi| < 2**51``; needs IEEE evaluation order,
-   i.e. no ``reassoc`` fast-math flag): ``kf = y - 1.5 * 2**52`` exactly, and the low
-   bits of ``y``'s IEEE pattern are ``k mod 4`` (two's complement), so the quadrant
-   needs no float-to-integer conversion.
-2. Cody-Waite reduction with two fused multiply-adds (`fma`, LLVM's ``llvm.fma``: one
-   rounding, whatever the fast-math flags or the CPU), ``r = fma(-kf, PIO2_LO,
-   fma(-kf, PIO2_HI, x))`` with ``pi/2 = PIO2_HI + PIO2_LO - ~1.5e-33``. The first
-   FMA is exact (``x`` and ``k PIO2_HI`` are multiples of 2**-52 or finer, and their
-   difference is below 1), the second rounds once, so ``r`` is within half an ulp of
-   ``x - k pi/2`` (|r| <~ pi/4) but for the truncated pi/2, ``|k| * 1.5e-33``. Up to
-   |x| ~ 1e12 that is all (tested); past ~1e13 the rounded ``x * 2/pi`` may choose the
-   neighbouring quadrant, so |r| exceeds pi/4 a little and the error grows (1.9e-14
-   measured at 3e15); past ``2**51 pi/2 ~ 3.5e15`` the quadrant trick fails and the
-   results are not sines (finite up to ~4e39, NaN beyond).
-3. One polynomial, by quadrant: ``sin r = r + r z P_s(z)`` on even quadrants and
-   ``cos r = 1 + z P_c(z)`` on odd ones (``z = r^2``), with fdlibm's minimax
-   coefficients (``__kernel_sin``/``__kernel_cos``, error < 2**-58 on [-pi/4, pi/4]);
-   the coefficients, ``r`` or 1 and ``r z`` or ``z`` are chosen by ternary selects
-   (blend instructions, not branches), so each call evaluates one polynomial, not two.
-   The polynomial of degree 6 in ``z`` is evaluated by Estrin's scheme (pairs, then
-   ``z^2``, ``z^4``): depth 3 multiply-adds instead of Horner's 6.
-4. The sign: negated on quadrants 2 and 3 (a select).
+Algorithm of `sin` (since 2026-11-27, sweep 0.3.0.dev1; issue 38)
+--------------------------------------------------------------
+1. ``y = x / pi + 1.5 * 2**52`` (one `fma`) rounds ``x / pi`` to the integer ``k``
+   ("magic number"; valid for ``|x / pi| < 2**51``; needs IEEE evaluation order, i.e.
+   no ``reassoc`` fast-math flag): ``kf = y - 1.5 * 2**52`` exactly, and the low bit
+   of ``y``'s IEEE pattern is ``k``'s parity, so no float-to-integer conversion.
+2. Cody-Waite reduction by pi in two fused multiply-adds (`fma`, LLVM's ``llvm.fma``:
+   one rounding, whatever the fast-math flags or the CPU), ``r = fma(-kf, PI_LO,
+   fma(-kf, PI_HI, x))`` with ``pi = PI_HI + PI_LO - 3.0e-33``: the first FMA is exact,
+   the second rounds once, so ``r`` (|r| <~ pi/2) is within half an ulp of ``x - k
+   pi`` but for the truncated pi, ``|k| * 3e-33``. Up to |x| ~ 1e12 that is all
+   (tested); past it the rounded ``x / pi`` may choose the neighbouring multiple, |r|
+   exceeds pi/2 a little and the error grows slowly (1.1e-15 measured up to 3e15);
+   past ``2**51 pi ~ 7e15`` the magic number fails and the results are not sines.
+3. ``sin x = (-1)**k sin r``, one odd polynomial on |r| <= pi/2: ``s + s z (M1 + z
+   T(z))`` with ``z = r^2``, ``s = -r`` for odd ``k`` else ``r`` (a select beside
+   ``z``: sin is odd and ``fma(-a, b, -c) = -fma(a, b, c)``, so this gives the bits of
+   negating the result, off the critical path), the minimax coefficients of degree 17
+   of ``benchmarks/fit_sine.py`` (2.9e-19 in mpmath) and ``T = M2 + ... + M8 z^6`` by
+   Estrin's scheme (pairs, then ``z^2``, ``z^4``), ``M1`` added last as by Horner:
+   T is below 0.0084, so its roundings reach the sine at most ``z r z < 10`` times
+   over, below 3e-17, while the roundings that matter (the last two multiply-adds) are
+   Horner's. No select between polynomials, no quadrant arithmetic.
 
-Measured on this project's Zen 4: one call waits about 38 cycles for its argument (the
-previous sine, which reduced with three Cody-Waite terms, converted the quadrant to an
-integer, evaluated both polynomials by Horner and compensated ``1 - z/2``, waited about
-59), and vectorised it gives 1.4x the sines per second (``benchmarks/run_all.py``
-times both inside the kernels). Error: at most 1.1e-16 from ``np.sin`` (one ulp of
-values below 1; the rounding of ``r``, of the polynomial and of its last multiply-add
-add up to at most ~1.3e-16 from the true sine) for |x| <= 1e4, and the same up to 1e12
-(``tests/test_vecmath.py``).
+Measured on this project's Zen 5 (``benchmarks/sine_designs.py``,
+``docs/guide/performance.md``): 41 cycles from argument to result, as the previous
+design (the reduction by pi/2, the sine's or the cosine's fdlibm polynomial on
+[-pi/4, pi/4] chosen by quadrant with seven selects: 40), so one trajectory alone is
+as fast; vectorised about 1.45x the sines per second (no selects). Error: at most
+2**-52 = 2.2e-16 from ``np.sin`` (two ulps of values in [0.5, 1), at about 3 in 1e5
+arguments with |r| near 1; the previous design: 1.1e-16) for |x| <= 1e12, within the
+contract of ``tests/test_vecmath.py``, whose bounds did not change. Horner's scheme
+for the whole polynomial (the C limit's sine in ``benchmarks/run_all.py``) has the
+same error and 56 cycles of latency; Estrin's for the whole polynomial rounds ``M1``
+three times and misses the contract (3 ulps).
+
+`cos` keeps the reduction by pi/2 (`_reduce`: ``k = round(x 2/pi)``, ``r = x - k
+pi/2`` in two FMAs, |r| <= pi/4, quadrant ``k mod 4`` from the bits of the magic sum)
+and fdlibm's polynomials (``__kernel_sin``/``__kernel_cos``, error < 2**-58 on
+[-pi/4, pi/4]), the cosine's on even quadrants and the sine's on odd ones, chosen by
+selects and evaluated by Estrin's scheme (`_sine_of_reduced`): its error stays 1.1e-16
+and ``cos`` of a tiny ``x`` is exactly 1, as ``np.cos`` (a cosine through the
+reduction by pi reaches 1 from the polynomial near pi/2 and misses it by an ulp at
+about 1 % of those arguments). `sincos` returns the bits of both, from their two
+reductions: a kernel that reads ``sin`` and ``cos`` of an angle (the tangent
+dynamics) must follow the trajectory of a kernel that reads ``sin`` alone, bit for bit.
+The results of every kernel whose sine changed moved in their last bits with the
+change (sweep 0.3.0.dev1: a checkpoint of an earlier version is not resumed); they are
+the same on every machine with FMA
+(``tests/test_vector_width.py``: Zen 4, Skylake-X at 256 and 512 bits and Haswell
+targets, emulated).
 
 Compiled on its own with the kernels' fast-math flags (none since 2026-11-25: its
 fused multiply-adds are written as `fma`, so its bits do not depend on what LLVM
@@ -50,9 +67,6 @@ same speed.
 
 NaN and +-inf give NaN (``inf - inf`` in the reduction). The sign of zero is not kept
 (``sin(-0.0)`` gives ``+0.0``), as under the ``nsz`` fast-math flag anyway.
-`cos` is the same polynomial one quadrant on, and `sincos` returns both from one
-reduction with the bits of `sin` and `cos` (the tangent dynamics read the cosine at
-every stage beside the sine).
 """
 
 from __future__ import annotations
@@ -81,16 +95,33 @@ PIO2_LO = 6.123233995736766e-17  # 0x1.1a62633145c07p-54
 P1 = 1.570796325802803        # 0x1.921fb54p+0
 P2 = 9.920935739593517e-10    # 0x1.10b461p-30
 _MAGIC = 6755399441055744.0   # 1.5 * 2**52: adding and subtracting it rounds to integer
+INV_PI = 0.3183098861837907
+#: pi = PI_HI + PI_LO (- 3.0e-33): `sin`'s reduction by pi, in two parts.
+PI_HI = 3.141592653589793         # 0x1.921fb54442d18p+1
+PI_LO = 1.2246467991473532e-16    # 0x1.1a62633145c07p-53
 #: Largest |x| [rad] up to which `sin`/`cos` are guaranteed as accurate as libm's
-#: (within 2**-52, tested to there; past ~1e13 the quadrant may slip, past 3.5e15 the
-#: values are not sines): the kernels refuse starts beyond it and flag a trajectory
+#: (within 2**-52, tested to there; past ~1e13 the rounded multiple of pi or pi/2 may
+#: slip; past 3.5e15 `cos`'s values, past 7e15 `sin`'s, are not cosines or sines): the
+#: kernels refuse starts beyond it and flag a trajectory
 #: whose angle ends beyond it (`sweep.kernels.Status.ANGLE_OUT_OF_RANGE`).
 SIN_RANGE = 1e12
 #: The same for `sin32`/`cos32` and the GPU's float32 sine (their ``P1``/``P2``
 #: reduction is exact and its dropped rest below 1e-9 up to |x| ~ 1e8; tested to there).
 SIN32_RANGE = 1e8
 
-# fdlibm __kernel_sin / __kernel_cos minimax coefficients on [-pi/4, pi/4]
+#: sin r ~ r + r^3 (M1 + M2 r^2 + ... + M8 r^14) on |r| <= pi/2 + 1e-4: the minimax fit
+#: of the relative error, degree 17 (``benchmarks/fit_sine.py``; with these float64
+#: coefficients 2.9e-19, in mpmath): `sin`'s polynomial.
+M1 = -0.16666666666666666
+M2 = 0.008333333333333207
+M3 = -0.0001984126984121248
+M4 = 2.7557319211569482e-06
+M5 = -2.505210690442292e-08
+M6 = 1.6058941002310493e-10
+M7 = -7.643019371886964e-13
+M8 = 2.7214195512770984e-15
+
+# fdlibm __kernel_sin / __kernel_cos minimax coefficients on [-pi/4, pi/4] (`cos`)
 S1 = -1.66666666666666324348e-01
 S2 = 8.33333333332248946124e-03
 S3 = -1.98412698298579493134e-04
@@ -177,25 +208,46 @@ def _sine_of_reduced(r, q):
 
 
 @njit(cache=True, **_JIT)
+def _odd_polynomial(r, s):
+    """sin(r) for |r| <= pi/2 (+1e-4), times the sign of ``s`` (``s`` is ``r`` or
+    ``-r``): ``s + s z (M1 + z T)`` with ``z = r^2`` and ``T = M2 + M3 z + ... + M8
+    z^6`` by Estrin's scheme (pairs, then ``z^2``, ``z^4``). T is below 0.0084, so
+    its roundings reach the sine at most ``z r z < 10`` times over, below 3e-17; M1
+    is added last, as by Horner, and the last multiply-add rounds once. The sign: sin
+    is odd and ``fma(-a, b, -c) = -fma(a, b, c)`` exactly, so negating ``r`` (beside
+    ``z``, off the critical path) gives the bits of negating the result."""
+    z = r * r
+    z2 = z * z
+    z4 = z2 * z2
+    t = fma(z4, fma(z2, M8, fma(z, M7, M6)), fma(z2, fma(z, M5, M4), fma(z, M3, M2)))
+    return fma(s * z, fma(z, t, M1), s)
+
+
+@njit(cache=True, **_JIT)
 def sin(x):
-    """sin(x) in float64, branch-free (vectorisable); accurate for |x| <~ 1e12."""
-    r, q = _reduce(x)
-    return _sine_of_reduced(r, q)
+    """sin(x) in float64, branch-free (vectorisable): one reduction by pi, one odd
+    polynomial; within 2**-52 of libm's for |x| <= 1e12 (`SIN_RANGE`)."""
+    y = fma(x, INV_PI, _MAGIC)
+    kf = y - _MAGIC
+    r = fma(-kf, PI_LO, fma(-kf, PI_HI, x))
+    return _odd_polynomial(r, -r if (_bits_of(y) & 1) else r)
 
 
 @njit(cache=True, **_JIT)
 def cos(x):
-    """cos(x) = sin(x + pi/2): the same reduction, one quadrant on."""
+    """cos(x): the reduction by pi/2, then on even quadrants fdlibm's cosine polynomial,
+    on odd ones its sine polynomial (`_sine_of_reduced`, one quadrant on)."""
     r, q = _reduce(x)
     return _sine_of_reduced(r, q + 1)
 
 
 @njit(cache=True, **_JIT)
 def sincos(x):
-    """(sin(x), cos(x)) from one argument reduction: the same bits as `sin` and `cos`
-    (the tangent dynamics of `sweep.kernels` need both at every stage)."""
-    r, q = _reduce(x)
-    return _sine_of_reduced(r, q), _sine_of_reduced(r, q + 1)
+    """(sin(x), cos(x)): the bits of `sin` and `cos` (a kernel reading both, such as
+    the tangent dynamics of `sweep.kernels` or the double pendulum's ``sin``/``cos``
+    of theta1 - theta2, follows the trajectory of a kernel reading `sin` alone, bit
+    for bit); two reductions, by pi and by pi/2."""
+    return sin(x), cos(x)
 
 
 #: ``x ** -0.2`` read off the bits: a float64's bits are ``2**52 (log2 x + 1023 - s)``
