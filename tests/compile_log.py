@@ -6,17 +6,22 @@ that triggered it, the function (``sweep_kernel_<hash>.blocks`` or ``.grouped`` 
 generated kernel, with its `KernelSpec`), and the seconds it took, wall clock and CPU
 (the compiling thread's: on a busy machine the wall clock also counts the time others
 held the core), nested compiles (the helpers a kernel calls) counted in the outermost
-one. Under pytest-xdist every worker writes
+one. It also writes one line per test with the CPU seconds the whole test took (setup,
+call and teardown: this process's threads and the child processes it waited for, such
+as a benchmark script or a second Python), compiling or not, so that what a warm run
+spends shows too. Under pytest-xdist every worker writes
 ``compile.<worker>.jsonl``. ``python tests/compile_log.py compile*.jsonl`` sums them:
-per test, per spec, and the specs that several tests compiled.
+per test file, per test, per spec, and the specs that several tests compiled.
 
-tests/conftest.py calls its two hooks; they do nothing unless the variable is set.
+tests/conftest.py calls its hooks; they do nothing unless the variable is set.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import resource
 import sys
 import time
 from collections import defaultdict
@@ -95,11 +100,51 @@ def pytest_runtest_setup(item):
         recorder.test = item.nodeid
 
 
+def _cpu_now():
+    """CPU seconds (user + system) of this process and of its waited-for children."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+@contextlib.contextmanager
+def test_cpu(item):
+    """Around one test's setup, call and teardown: log its CPU seconds (a line with
+    ``"test_cpu"``) when the log is on."""
+    recorder = getattr(item.config, "_sweep_compile_log", None)
+    if recorder is None:
+        yield
+        return
+    started, wall = _cpu_now(), time.perf_counter()
+    try:
+        yield
+    finally:
+        recorder.handle.write(json.dumps({
+            "test": item.nodeid, "test_cpu": round(_cpu_now() - started, 4),
+            "test_seconds": round(time.perf_counter() - wall, 4)}) + "\n")
+        recorder.handle.flush()
+
+
 def _summary(paths):
-    rows = []
+    rows, tests = [], []
     for path in paths:
         with open(path) as handle:
-            rows += [json.loads(line) for line in handle]
+            for line in handle:
+                row = json.loads(line)
+                (tests if "test_cpu" in row else rows).append(row)
+    if tests:
+        test_cpu = defaultdict(float)
+        for r in tests:
+            test_cpu[r["test"].split("::")[0]] += r["test_cpu"]
+        print(f"{len(tests)} tests, {sum(test_cpu.values()):.0f} s CPU in all "
+              f"(compiling or not, child processes included)")
+        print("\nper test file: CPU seconds of its tests")
+        for name, c in sorted(test_cpu.items(), key=lambda kv: -kv[1])[:60]:
+            print(f"{c:8.1f}  {name}")
+        print("\nper test: CPU seconds")
+        for r in sorted(tests, key=lambda r: -r["test_cpu"])[:40]:
+            print(f"{r['test_cpu']:8.1f}  {r['test']}")
+        print()
     total = sum(r["seconds"] for r in rows)
     cpu = sum(r.get("cpu", 0.0) for r in rows)
     per_test, per_spec, tests_of = defaultdict(float), defaultdict(float), defaultdict(set)

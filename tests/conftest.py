@@ -41,6 +41,12 @@ def pytest_runtest_setup(item):
     compile_log.pytest_runtest_setup(item)
 
 
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    with compile_log.test_cpu(item):  # SWEEP_COMPILE_LOG: each test's CPU seconds too
+        yield
+
+
 #: The forced Wada map (c = 0.2, A = 1.66, W = 1, cos forcing, g/L = 1; three attractors),
 #: its 21 x 21 pilot and the strict early stop: tests/test_attractor_catalogue.py's SCENE,
 #: _grid(21) and EARLY (its test_pilot_catalogue_thins_the_map_and_finds_its_attractors
