@@ -9,7 +9,9 @@ held the core), nested compiles (the helpers a kernel calls) counted in the oute
 one. It also writes one line per test with the CPU seconds the whole test took (setup,
 call and teardown: this process's threads and the child processes it waited for, such
 as a benchmark script or a second Python), compiling or not, so that what a warm run
-spends shows too. Under pytest-xdist every worker writes
+spends shows too, and one line per test and generated kernel it uses (``"uses"``, from
+the memo of `sweep.kernels.cache` as well as from numba's disk cache), so that a kernel
+only one test needs can be found. Under pytest-xdist every worker writes
 ``compile.<worker>.jsonl``. ``python tests/compile_log.py compile*.jsonl`` sums them:
 per test file, per test, per spec, and the specs that several tests compiled.
 
@@ -39,6 +41,7 @@ class _Recorder:
         self.started = 0.0
         self.started_cpu = 0.0
         self.specs = {}  # generated module name -> repr of its KernelSpec
+        self.used = set()  # (test, generated module name) already logged
 
     def on_start(self, event):
         if self.depth == 0:
@@ -91,6 +94,18 @@ def pytest_configure(config):
         return text
 
     cache.source = recording_source
+    built = cache._build  # the memo: called by cache.build for every kernel a run uses
+
+    def recording_build(spec, *settings):
+        name = "sweep_kernel_" + hashlib.sha1(source(spec).encode()).hexdigest()[:16]
+        if (recorder.test, name) not in recorder.used:
+            recorder.used.add((recorder.test, name))
+            recorder.specs.setdefault(name, repr(spec))
+            recorder.handle.write(json.dumps({"test": recorder.test, "uses": name,
+                                              "spec": recorder.specs[name]}) + "\n")
+        return built(spec, *settings)
+
+    cache._build = recording_build
     config._sweep_compile_log = recorder
 
 
@@ -126,12 +141,12 @@ def test_cpu(item):
 
 
 def _summary(paths):
-    rows, tests = [], []
+    rows, tests, uses = [], [], []
     for path in paths:
         with open(path) as handle:
             for line in handle:
                 row = json.loads(line)
-                (tests if "test_cpu" in row else rows).append(row)
+                (tests if "test_cpu" in row else uses if "uses" in row else rows).append(row)
     if tests:
         test_cpu = defaultdict(float)
         for r in tests:
@@ -171,6 +186,12 @@ def _summary(paths):
     print("\nper spec or function:")
     for name, s in sorted(per_spec.items(), key=lambda kv: -kv[1])[:40]:
         print(f"{s:8.1f}  {name[:300]}  [{', '.join(sorted(tests_of[name]))[:200]}]")
+    if uses:
+        users = defaultdict(set)
+        for r in uses:
+            users[r["uses"]].add(r["test"])
+        alone = [name for name, who in users.items() if len(who) == 1]
+        print(f"\n{len(users)} generated kernels used, {len(alone)} of them by one test only")
 
 
 if __name__ == "__main__":
