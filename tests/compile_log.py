@@ -94,7 +94,7 @@ def pytest_configure(config):
         return text
 
     cache.source = recording_source
-    built = cache._build  # the memo: called by cache.build for every kernel a run uses
+    built = cache._build  # the memo, which cache.build calls for every kernel a run uses
 
     def recording_build(spec, *settings):
         name = "sweep_kernel_" + hashlib.sha1(source(spec).encode()).hexdigest()[:16]
@@ -105,7 +105,13 @@ def pytest_configure(config):
                                               "spec": recorder.specs[name]}) + "\n")
         return built(spec, *settings)
 
-    cache._build = recording_build
+    # cache.build (imported by name everywhere) calls the recorder instead of the memo,
+    # which stays cache._build: pickled by name (build.cache_info, sent to Dask workers),
+    # it must be the module's own
+    cache._recording_build = recording_build
+    code = cache.build.__code__
+    cache.build.__code__ = code.replace(co_names=tuple(
+        "_recording_build" if n == "_build" else n for n in code.co_names))
     config._sweep_compile_log = recorder
 
 
