@@ -178,7 +178,7 @@ def test_a_trajectory_leaving_the_range_is_flagged(method):
 def test_samples_beyond_the_range_are_nan_and_those_before_kept():
     with pytest.warns(RuntimeWarning, match="angle_out_of_range"):
         ds = sweep.run(sweep.Scene(), sweep.Grid(theta0=[0.3], omega0=[1e14]), **RUN,
-                       save_every=25)
+                       save_every=25, observe=EVERY)  # test_oracles' kernel
     theta, omega = ds.theta.values.reshape(-1), ds.omega.values.reshape(-1)
     assert theta[0] == 0.3 and omega[0] == 1e14  # the start, with its sine accurate
     assert np.isnan(theta[1:]).all() and np.isnan(omega[1:]).all()

@@ -128,7 +128,9 @@ def test_torque_is_conservative_for_symplectic_methods():
     for method, tol, ratio in (("verlet", 2e-3, (3, 5)), ("yoshida4", 1e-5, (10, 22))):
         errors = []
         for dt in (0.01, 0.005):
-            ds = sweep.run(scene, grid, t_end=50.0, dt=dt, observe=("final",), method=method)
+            # final and winding: test_methods' symplectic kernel with a torque term
+            ds = sweep.run(scene, grid, t_end=50.0, dt=dt, observe=("final", "winding"),
+                           method=method)
             e0 = energy(0.5, ds.omega0.values)
             e1 = energy(ds.theta_final.values[0], ds.omega_final.values[0])
             errors.append(abs(e1[1] - e0[1]))

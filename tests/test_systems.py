@@ -109,7 +109,8 @@ def test_small_angle_normal_modes_of_equal_masses_and_lengths():
         dt = period / 400
         n = 400 * 20
         ds = sweep.run(system, _points([(amplitude, sign * math.sqrt(2) * amplitude, 0, 0)]),
-                       t_end=n * dt, dt=dt, save_every=1, observe=())
+                       t_end=n * dt, dt=dt, save_every=1,
+                       observe=("final", "winding"))  # test_saved_trajectory's kernel
         theta = ds["theta1"].values[0]
         time = ds["time"].values
         k = np.flatnonzero(np.sign(theta[:-1]) != np.sign(theta[1:]))
