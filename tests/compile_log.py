@@ -6,17 +6,24 @@ that triggered it, the function (``sweep_kernel_<hash>.blocks`` or ``.grouped`` 
 generated kernel, with its `KernelSpec`), and the seconds it took, wall clock and CPU
 (the compiling thread's: on a busy machine the wall clock also counts the time others
 held the core), nested compiles (the helpers a kernel calls) counted in the outermost
-one. Under pytest-xdist every worker writes
+one. It also writes one line per test with the CPU seconds the whole test took (setup,
+call and teardown: this process's threads and the child processes it waited for, such
+as a benchmark script or a second Python), compiling or not, so that what a warm run
+spends shows too, and one line per test and generated kernel it uses (``"uses"``, from
+the memo of `sweep.kernels.cache` as well as from numba's disk cache), so that a kernel
+only one test needs can be found. Under pytest-xdist every worker writes
 ``compile.<worker>.jsonl``. ``python tests/compile_log.py compile*.jsonl`` sums them:
-per test, per spec, and the specs that several tests compiled.
+per test file, per test, per spec, and the specs that several tests compiled.
 
-tests/conftest.py calls its two hooks; they do nothing unless the variable is set.
+tests/conftest.py calls its hooks; they do nothing unless the variable is set.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import resource
 import sys
 import time
 from collections import defaultdict
@@ -34,6 +41,7 @@ class _Recorder:
         self.started = 0.0
         self.started_cpu = 0.0
         self.specs = {}  # generated module name -> repr of its KernelSpec
+        self.used = set()  # (test, generated module name) already logged
 
     def on_start(self, event):
         if self.depth == 0:
@@ -86,6 +94,24 @@ def pytest_configure(config):
         return text
 
     cache.source = recording_source
+    built = cache._build  # the memo, which cache.build calls for every kernel a run uses
+
+    def recording_build(spec, *settings):
+        name = "sweep_kernel_" + hashlib.sha1(source(spec).encode()).hexdigest()[:16]
+        if (recorder.test, name) not in recorder.used:
+            recorder.used.add((recorder.test, name))
+            recorder.specs.setdefault(name, repr(spec))
+            recorder.handle.write(json.dumps({"test": recorder.test, "uses": name,
+                                              "spec": recorder.specs[name]}) + "\n")
+        return built(spec, *settings)
+
+    # cache.build (imported by name everywhere) calls the recorder instead of the memo,
+    # which stays cache._build: pickled by name (build.cache_info, sent to Dask workers),
+    # it must be the module's own
+    cache._recording_build = recording_build
+    code = cache.build.__code__
+    cache.build.__code__ = code.replace(co_names=tuple(
+        "_recording_build" if n == "_build" else n for n in code.co_names))
     config._sweep_compile_log = recorder
 
 
@@ -95,11 +121,51 @@ def pytest_runtest_setup(item):
         recorder.test = item.nodeid
 
 
+def _cpu_now():
+    """CPU seconds (user + system) of this process and of its waited-for children."""
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+@contextlib.contextmanager
+def test_cpu(item):
+    """Around one test's setup, call and teardown: log its CPU seconds (a line with
+    ``"test_cpu"``) when the log is on."""
+    recorder = getattr(item.config, "_sweep_compile_log", None)
+    if recorder is None:
+        yield
+        return
+    started, wall = _cpu_now(), time.perf_counter()
+    try:
+        yield
+    finally:
+        recorder.handle.write(json.dumps({
+            "test": item.nodeid, "test_cpu": round(_cpu_now() - started, 4),
+            "test_seconds": round(time.perf_counter() - wall, 4)}) + "\n")
+        recorder.handle.flush()
+
+
 def _summary(paths):
-    rows = []
+    rows, tests, uses = [], [], []
     for path in paths:
         with open(path) as handle:
-            rows += [json.loads(line) for line in handle]
+            for line in handle:
+                row = json.loads(line)
+                (tests if "test_cpu" in row else uses if "uses" in row else rows).append(row)
+    if tests:
+        test_cpu = defaultdict(float)
+        for r in tests:
+            test_cpu[r["test"].split("::")[0]] += r["test_cpu"]
+        print(f"{len(tests)} tests, {sum(test_cpu.values()):.0f} s CPU in all "
+              f"(compiling or not, child processes included)")
+        print("\nper test file: CPU seconds of its tests")
+        for name, c in sorted(test_cpu.items(), key=lambda kv: -kv[1])[:60]:
+            print(f"{c:8.1f}  {name}")
+        print("\nper test: CPU seconds")
+        for r in sorted(tests, key=lambda r: -r["test_cpu"])[:40]:
+            print(f"{r['test_cpu']:8.1f}  {r['test']}")
+        print()
     total = sum(r["seconds"] for r in rows)
     cpu = sum(r.get("cpu", 0.0) for r in rows)
     per_test, per_spec, tests_of = defaultdict(float), defaultdict(float), defaultdict(set)
@@ -126,6 +192,12 @@ def _summary(paths):
     print("\nper spec or function:")
     for name, s in sorted(per_spec.items(), key=lambda kv: -kv[1])[:40]:
         print(f"{s:8.1f}  {name[:300]}  [{', '.join(sorted(tests_of[name]))[:200]}]")
+    if uses:
+        users = defaultdict(set)
+        for r in uses:
+            users[r["uses"]].add(r["test"])
+        alone = [name for name, who in users.items() if len(who) == 1]
+        print(f"\n{len(users)} generated kernels used, {len(alone)} of them by one test only")
 
 
 if __name__ == "__main__":

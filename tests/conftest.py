@@ -42,6 +42,12 @@ def pytest_runtest_setup(item):
     compile_log.pytest_runtest_setup(item)
 
 
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    with compile_log.test_cpu(item):  # SWEEP_COMPILE_LOG: each test's CPU seconds too
+        yield
+
+
 @pytest.fixture(scope="session")
 def wada_catalogue():
     """The forced Wada map's attractor catalogue, from its 21 x 21 pilot.

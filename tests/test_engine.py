@@ -104,8 +104,9 @@ def test_compiled_kernels_have_the_scene_terms_only_and_vectorised_lanes(tmp_pat
 
 def test_grid_damping_axis_switches_damping_on():
     scene = sweep.Scene()
+    # every observable (tests/shared_kernels.py): test_points' kernel of this scene
     ds = sweep.run(scene, sweep.Grid(damping=[0.0, 2.0], theta0=[1.0]), t_end=5.0, dt=0.01,
-                   observe=("energy",))
+                   observe=EVERY)
     assert ds.attrs["effects"] == "damping"
     energy_lost = ds.energy_initial - ds.energy_final
     # undamped RK4 at dt = 0.01 conserves energy to ~1e-9; c = 2 dissipates most of it
@@ -226,7 +227,7 @@ def test_time_is_t0_plus_n_dt_not_an_accumulated_sum():
 
 def test_transient_boundary_and_steps():
     ds = sweep.run(sweep.Scene(), sweep.Grid(theta0=[0.5]), t_end=300.0, dt=0.01,
-                   t_transient=200.0, observe=("amplitude",))
+                   t_transient=200.0, observe=EVERY)  # a kernel other tests compile
     assert ds.attrs["n_steps"] == 30_000
     # small-amplitude libration from rest keeps its amplitude: |theta| <= theta0
     assert abs(float(ds.amplitude[0]) - 0.5) < 1e-6

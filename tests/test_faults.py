@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from shared_kernels import EVERY_ADAPTIVE
 
 import sweep
 import sweep.distributed
@@ -132,8 +133,9 @@ _CASES = {
     "observables": (SCENE, 150, {"t_end": 1.0, "dt": 0.01, "observe": (
         "final", "winding", "energy", "theta_max", "amplitude")}),
     "save_every": (SCENE, 40, {"t_end": 1.0, "dt": 0.01, "save_every": 5}),
+    # every observable dopri5 takes: test_points' and test_resume's kernel of SCENE
     "adaptive": (SCENE, 100, {"t_end": 1.0, "dt": 0.01, "method": "dopri5", "rtol": 1e-8,
-                              "observe": ("final",)}),
+                              "observe": EVERY_ADAPTIVE}),
     "strobe": (FORCED, 60, {"t_end": 10 * np.pi, "dt": np.pi / 100,
                             "observe": ("final", "strobe")}),
 }

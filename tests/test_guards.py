@@ -9,7 +9,7 @@ import re
 
 import numpy as np
 import pytest
-from shared_kernels import EVERY_ADAPTIVE
+from shared_kernels import EVERY, EVERY_ADAPTIVE
 
 import sweep
 from sweep.kernels import KernelSpec, Status
@@ -25,9 +25,11 @@ def test_a_huge_start_fails_per_trajectory_not_in_the_guard():
     """The regression: omega0 = 1e300 made the energy bound's ``omega0 ** 2`` raise
     OverflowError. Now that trajectory is flagged and the other one is untouched."""
     scene = sweep.Scene(effects=(sweep.Damping(0.5),))
+    # every observable (tests/shared_kernels.py): test_points' kernel of this scene
     with pytest.warns(RuntimeWarning, match="1 of 2 trajectories"):
-        ds = sweep.run(scene, sweep.Grid(theta0=[0.3], omega0=[1.0, 1e300]), **RUN)
-    alone = sweep.run(scene, sweep.Grid(theta0=[0.3], omega0=[1.0]), **RUN)
+        ds = sweep.run(scene, sweep.Grid(theta0=[0.3], omega0=[1.0, 1e300]), **RUN,
+                       observe=EVERY)
+    alone = sweep.run(scene, sweep.Grid(theta0=[0.3], omega0=[1.0]), **RUN, observe=EVERY)
     assert ds.status.values.tolist() == [[Status.OK, Status.NONFINITE]]
     assert np.isnan(ds.theta_final.values[0, 1])
     assert ds.theta_final.values[0, 0] == alone.theta_final.values[0, 0]
@@ -176,7 +178,7 @@ def test_a_trajectory_leaving_the_range_is_flagged(method):
 def test_samples_beyond_the_range_are_nan_and_those_before_kept():
     with pytest.warns(RuntimeWarning, match="angle_out_of_range"):
         ds = sweep.run(sweep.Scene(), sweep.Grid(theta0=[0.3], omega0=[1e14]), **RUN,
-                       save_every=25)
+                       save_every=25, observe=EVERY)  # test_oracles' kernel
     theta, omega = ds.theta.values.reshape(-1), ds.omega.values.reshape(-1)
     assert theta[0] == 0.3 and omega[0] == 1e14  # the start, with its sine accurate
     assert np.isnan(theta[1:]).all() and np.isnan(omega[1:]).all()

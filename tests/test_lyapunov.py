@@ -87,7 +87,9 @@ def test_sum_is_minus_damping_on_every_trajectory_to_order_four():
         dt = period / steps_per_period
         n_steps = 40 * steps_per_period + 7
         assert n_steps % LYAPUNOV_EVERY
-        ds = _run(_chaotic_scene(), grid, t_end=n_steps * dt, dt=dt, t_transient=10 * period)
+        # amplitude too: the kernel of the next test (this scene's terms, 16 lanes)
+        ds = _run(_chaotic_scene(), grid, t_end=n_steps * dt, dt=dt, t_transient=10 * period,
+                  observe=("final", "amplitude", "lyapunov"))
         assert (ds.status == 0).all()
         assert (ds.lyapunov_max > ds.lyapunov_min).all()
         errors.append(float(np.abs(ds.lyapunov_max + ds.lyapunov_min + c).max()))
@@ -108,7 +110,7 @@ def test_periodic_attractor_with_complex_multipliers_gives_half_damping():
     deviation = []
     for window in (400.0, 800.0):
         ds = _run(scene, grid, t_end=200.0 + window, dt=0.05, t_transient=200.0,
-                  observe=("lyapunov", "amplitude"))
+                  observe=("final", "amplitude", "lyapunov"))  # the previous test's kernel
         np.testing.assert_allclose(ds.amplitude, ds.amplitude[0, 0], rtol=1e-6)  # one orbit
         np.testing.assert_allclose(ds.lyapunov_max + ds.lyapunov_min, -c, rtol=0, atol=1e-7)
         deviation.append(float(np.abs(ds.lyapunov_max + c / 2).max()))

@@ -146,7 +146,7 @@ def test_rk4_is_generated_from_its_tableau_and_is_the_classical_step():
     scene = sweep.Scene(effects=(sweep.Damping(0.3), sweep.Forcing(1.1, 0.9, 0.4)))
     dt, n, t0 = 0.01, 300, 0.5
     ds = sweep.run(scene, sweep.Grid(theta0=[1.2], omega0=[-0.4]), t0=t0,
-                   t_end=t0 + n * dt, dt=dt, observe=("final",))
+                   t_end=t0 + n * dt, dt=dt, observe=EVERY)  # test_engine's kernel
     compiled = numba.njit(**_config.jit_options())(_classical_rk4)
     args = (1.2, -0.4, n, t0, dt, 9.81, 0.3, 1.1, 0.9, 0.4)
     th, om = compiled(*args)

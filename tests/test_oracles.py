@@ -452,7 +452,7 @@ def test_rotation_winding_counts_the_tops_passed(omega0, turns, tops, well):
     t_rot = rotation_period(omega0, w0)
     n = 2000  # steps per turn, as above: theta to ~1e-10, a quarter turn from any top
     ds = sweep.run(sweep.Scene(), sweep.Grid(theta0=[2 * math.pi * well], omega0=[omega0]),
-                   t_end=turns * t_rot, dt=t_rot / n, observe=("final", "winding"))
+                   t_end=turns * t_rot, dt=t_rot / n, observe=EVERY)  # a shared kernel
     assert ds["winding"].values.item() == math.copysign(tops, omega0)
 
 

@@ -128,7 +128,9 @@ def test_torque_is_conservative_for_symplectic_methods():
     for method, tol, ratio in (("verlet", 2e-3, (3, 5)), ("yoshida4", 1e-5, (10, 22))):
         errors = []
         for dt in (0.01, 0.005):
-            ds = sweep.run(scene, grid, t_end=50.0, dt=dt, observe=("final",), method=method)
+            # final and winding: test_methods' symplectic kernel with a torque term
+            ds = sweep.run(scene, grid, t_end=50.0, dt=dt, observe=("final", "winding"),
+                           method=method)
             e0 = energy(0.5, ds.omega0.values)
             e1 = energy(ds.theta_final.values[0], ds.omega_final.values[0])
             errors.append(abs(e1[1] - e0[1]))
@@ -379,8 +381,9 @@ def test_a_drag_axis_alone_switches_drag_on():
     """Like damping, drag has one parameter: a grid axis gives all of it. k = 0 keeps the
     undamped energy (RK4, 5 s, dt = 0.01: drift ~1e-9); k = 1 dissipates most of it
     (a swing of 2 rad loses a fraction ~ (4/3pi) k A w0 t >> 1 by averaging)."""
+    # omega_mean too: the kernel of the drag-only run below
     ds = sweep.run(sweep.Scene(), sweep.Grid(drag=[0.0, 1.0], theta0=[2.0]), t_end=5.0,
-                   dt=0.01, observe=("energy",))
+                   dt=0.01, observe=("omega_mean", "energy"))
     assert ds.attrs["effects"] == "drag"
     lost = (ds.energy_initial - ds.energy_final).values.ravel()
     assert abs(lost[0]) < 1e-7 and lost[1] > 0.5 * float(ds.energy_initial.values.ravel()[1])
@@ -404,7 +407,9 @@ def test_stability_guard_bounds_the_speed_by_drag_under_torque():
     np.testing.assert_allclose(right.omega_mean, 10.0, rtol=0.02)
     assert (abs(wrong.omega_mean - 10.0) > 1.0).all()
     # without a force the energy bound (smaller than the terminal speed) still holds
-    sweep.run(sweep.Scene(effects=(sweep.QuadraticDrag(1.0),)), grid, dt=0.2, **kwargs)
+    # (energy too: the kernel of test_a_drag_axis_alone_switches_drag_on)
+    sweep.run(sweep.Scene(effects=(sweep.QuadraticDrag(1.0),)), grid, dt=0.2,
+              **{**kwargs, "observe": ("omega_mean", "energy")})
 
 
 # ================================================================== bad input

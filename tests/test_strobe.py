@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from shared_kernels import EVERY
 
 import sweep
 from sweep import maps
@@ -119,4 +120,4 @@ def test_strobe_refuses_what_it_cannot_sample():
                   observe=("strobe",))
     with pytest.raises(ValueError, match=r"basins of a forced scene need stroboscopic"):
         maps.basins(sweep.run(_forced(), sweep.Grid(theta0=[0.1]), t_end=1.0, dt=0.1,
-                              observe=("final", "energy")))
+                              observe=EVERY))  # every observable but strobe: a shared kernel

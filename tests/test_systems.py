@@ -43,6 +43,11 @@ def dop853(y0, t_end, **params):
 
 FINAL = ("theta1_final", "theta2_final", "omega1_final", "omega2_final")
 
+#: The observables of test_bits_do_not_depend_on_blocks_chunks_or_threads, also run by
+#: the tests that check one of them on fewer than 4 starts (one lane each), so that they
+#: share its kernel (adding observables never changes a trajectory; tests/shared_kernels.py)
+OBSERVE = ("final", "winding", "energy", "flip")
+
 # a regular start, a large-amplitude one and one that flips (all non-chaotic over 2 s)
 STARTS = [(0.3, -0.2, 0.0, 0.0), (2.0, 1.0, 0.5, -0.5), (1.0, 2.5, 0.0, 1.0)]
 
@@ -68,10 +73,9 @@ def test_final_state_matches_dop853_on_the_textbook_equations(params):
         gravity=params.get("g", G),
         effects=(sweep.Damping(params["c"]),) if "c" in params else ())
     t_end, dt = 2.0, 0.002
-    coarse = _finals(sweep.run(system, _points(STARTS), t_end=t_end, dt=dt,
-                               observe=("final",)))
-    fine = _finals(sweep.run(system, _points(STARTS), t_end=t_end, dt=dt / 2,
-                             observe=("final",)))
+    observe = ("final",) if "c" in params else OBSERVE  # undamped: the shared kernel
+    coarse = _finals(sweep.run(system, _points(STARTS), t_end=t_end, dt=dt, observe=observe))
+    fine = _finals(sweep.run(system, _points(STARTS), t_end=t_end, dt=dt / 2, observe=observe))
     reference = np.array([dop853(list(s), t_end, **params) for s in STARTS])
     tol = 2 * np.abs(coarse - fine) + 1e-11  # 2 D (module docstring) + DOP853's error
     assert np.all(tol < 1e-6), "dt resolves the motion, so the bound means something"
@@ -83,7 +87,7 @@ def test_convergence_order_is_4():
     errors = []
     for dt in (0.002, 0.001, 0.0005):
         got = _finals(sweep.run(sweep.DoublePendulum(), _points(STARTS), t_end=2.0, dt=dt,
-                                observe=("final",)))
+                                observe=OBSERVE))
         reference = np.array([dop853(list(s), 2.0) for s in STARTS])
         errors.append(np.max(np.abs(got - reference)))
     orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
@@ -105,7 +109,8 @@ def test_small_angle_normal_modes_of_equal_masses_and_lengths():
         dt = period / 400
         n = 400 * 20
         ds = sweep.run(system, _points([(amplitude, sign * math.sqrt(2) * amplitude, 0, 0)]),
-                       t_end=n * dt, dt=dt, save_every=1, observe=())
+                       t_end=n * dt, dt=dt, save_every=1,
+                       observe=("final", "winding"))  # test_saved_trajectory's kernel
         theta = ds["theta1"].values[0]
         time = ds["time"].values
         k = np.flatnonzero(np.sign(theta[:-1]) != np.sign(theta[1:]))
@@ -122,7 +127,7 @@ def test_energy_error_shrinks_at_rk4_order_without_damping():
     drifts = []
     for dt in (0.01, 0.005):
         ds = sweep.run(sweep.DoublePendulum(), _points(STARTS[:2]), t_end=4.0, dt=dt,
-                       observe=("energy",))
+                       observe=OBSERVE)
         drifts.append(np.max(np.abs(ds.energy_final - ds.energy_initial).values))
     # order 4 (16x), or more: the energy error of RK4 can cancel better than the state's;
     # 10x rejects a second-order error (4x) with margin
@@ -135,7 +140,7 @@ def test_energy_error_shrinks_at_rk4_order_without_damping():
 def test_energy_is_the_textbook_energy():
     m1, m2, l1, l2 = 1.3, 0.7, 0.9, 1.1
     system = sweep.DoublePendulum(mass1=m1, mass2=m2, length1=l1, length2=l2)
-    ds = sweep.run(system, _points(STARTS), t_end=0.01, dt=0.01, observe=("energy",))
+    ds = sweep.run(system, _points(STARTS), t_end=0.01, dt=0.01, observe=OBSERVE)
     th1, th2, w1, w2 = np.array(STARTS).T
     # T + V with V = 0 hanging at rest (sweep's convention, as the single pendulum's)
     expected = (0.5 * m1 * l1 ** 2 * w1 ** 2
@@ -183,7 +188,7 @@ def test_bits_do_not_depend_on_blocks_chunks_or_threads():
     rng = np.random.default_rng(1)
     starts = rng.uniform(-3, 3, size=(200, 4))
     points = _points(starts)
-    kwargs = dict(t_end=1.0, dt=0.01, observe=("final", "winding", "energy", "flip"))
+    kwargs = dict(t_end=1.0, dt=0.01, observe=OBSERVE)
     whole = sweep.run(sweep.DoublePendulum(), points, **kwargs)
     chunked = sweep.run(sweep.DoublePendulum(), points, chunk_size=37, **kwargs)
     alone = sweep.run(sweep.DoublePendulum(), _points(starts[:3]), **kwargs)  # one lane each
