@@ -74,7 +74,7 @@ def test_each_effect_set_gets_its_own_kernel_without_absent_terms():
 def test_compiled_kernels_have_the_scene_terms_only_and_vectorised_lanes(tmp_path):
     """The machine code, not just the source: no sine at all in the linear unforced
     kernel; in the nonlinear one, sweep.kernels.vecmath's inlined polynomial sine (its
-    argument-reduction constant 2/pi), no call to libm's sin, and SIMD vectors.
+    argument-reduction constant 1/pi), no call to libm's sin, and SIMD vectors.
 
     numba cannot inspect code loaded from its disk cache, so this compiles afresh in a
     subprocess with an empty cache folder.
@@ -83,7 +83,7 @@ def test_compiled_kernels_have_the_scene_terms_only_and_vectorised_lanes(tmp_pat
         import re, struct, sweep
         from sweep import kernels as _kernels
         from sweep.kernels import vecmath as _vecmath
-        two_over_pi = "0x" + struct.pack(">d", _vecmath.TWO_OVER_PI).hex().upper()
+        inv_pi = "0x" + struct.pack(">d", _vecmath.INV_PI).hex().upper()
         for model in ("linear", "nonlinear"):
             sweep.run(sweep.Scene(model=model), sweep.Grid(theta0=[0.1 * k for k in range(1, 11)]),
                       t_end=1.0, dt=0.1, observe=("final",))
@@ -93,7 +93,7 @@ def test_compiled_kernels_have_the_scene_terms_only_and_vectorised_lanes(tmp_pat
             ir = "".join(_kernels.compiled(kernel).inspect_llvm().values())
             assert ir, "not compiled in this process"
             print(model, re.search(r"@(llvm\\.sin\\.[fv]|sin)\\(", ir) is not None,
-                  two_over_pi in ir, re.search(r"<\\d+ x double>", ir) is not None)
+                  inv_pi in ir, re.search(r"<\\d+ x double>", ir) is not None)
     """)
     env = dict(os.environ, SWEEP_CACHE_DIR=str(tmp_path))
     result = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,

@@ -463,7 +463,9 @@ def test_controls_come_from_the_declarations():
     damping = e.parameter_controls()[2]
     assert damping.label == "damping c [1/s]" and damping.minimum == 0.0
     assert [c.name for c in e.run_controls()] == ["model", "t_end", "dt", "t_transient",
-                                                  "method", "resolution"]
+                                                  "method", "resolution", "route"]
+    # the route control is the forced basins map's (over the initial state) alone
+    assert [c.name for c in explorer().run_controls()][-1] == "resolution"
 
 
 def test_an_effect_registered_later_gets_its_controls():

@@ -13,7 +13,7 @@ import numba
 import numpy as np
 import pytest
 import xarray as xr
-from conftest import WADA_PILOT, WADA_SCENE
+from shared_kernels import WADA_PILOT, WADA_SCENE
 
 import sweep
 from sweep import _config, maps
