@@ -38,9 +38,15 @@ from ._validate import check_count, check_real
 from .grid import Grid, Points
 from .kernels.spec import DTYPES
 from .maps.fractions import _table, _unresolved_code
-from .maps.labels import UNRESOLVED, basins, check_max_period, check_tolerance, well
+from .maps.labels import UNRESOLVED, basins, well
 from .maps.pilot import pilot_catalogue
-from .maps.refine import _REFUSED, _ForcedAttractors, _label_function, _variables
+from .maps.refine import (
+    _REFUSED,
+    _ForcedAttractors,
+    _label_function,
+    _variables,
+    check_label_options,
+)
 from .physics import Scene
 from .settings import validate_method
 
@@ -116,16 +122,7 @@ def _check_label(label, run_kwargs):
                              "observe=...), or a map function")
         return None, {}
     func, options = found
-    try:
-        inspect.signature(func).bind(None, **options)
-    except TypeError as error:
-        raise ValueError(f"label = {label!r}: {error}; accepted: the map's own keyword "
-                         "options") from None
-    except ValueError:  # no signature (a builtin): called as given
-        pass
-    if func is basins:
-        check_max_period(options.get("max_period", 8))
-        check_tolerance(options.get("tol", 1e-3))
+    check_label_options(label, func, options)
     return func, options
 
 

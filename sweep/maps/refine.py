@@ -204,6 +204,28 @@ def _check_known_cells(known_cells, scene, grid, func, pilot, run_kwargs) -> boo
     return True
 
 
+def check_label_options(label, func, options: dict) -> None:
+    """The options of a labelling ``label`` (``func`` with ``options``, e.g. a
+    ``functools.partial`` of a map) checked before anything runs: they must be the
+    map's own keywords, and `basins`' ``max_period`` and ``tol`` in range.
+
+    Raises
+    ------
+    ValueError
+        Naming the label, the bad option and what is accepted.
+    """
+    try:  # the options must be the map's own keywords
+        inspect.signature(func).bind(None, **options)
+    except TypeError as error:
+        raise ValueError(f"label = {label!r}: {error}; accepted: the map's own keyword "
+                         "options") from None
+    except ValueError:  # no signature (a builtin): called as given
+        pass
+    if func is basins:
+        check_max_period(options.get("max_period", 8))
+        check_tolerance(options.get("tol", 1e-3))
+
+
 def _check(scene, grid, label, step, pilot, run_kwargs):
     """Every argument refine can check before computing anything; returns them checked,
     with the grid's two varying axes."""
@@ -236,16 +258,7 @@ def _check(scene, grid, label, step, pilot, run_kwargs):
                              "observe=...), or a map function")
         return step, pilot, None, {}, varying
     func, options = function
-    try:  # the options must be the map's own keywords
-        inspect.signature(func).bind(None, **options)
-    except TypeError as error:
-        raise ValueError(f"label = {label!r}: {error}; accepted: the map's own keyword "
-                         "options") from None
-    except ValueError:  # no signature (a builtin): called as given
-        pass
-    if func is basins:
-        check_max_period(options.get("max_period", 8))
-        check_tolerance(options.get("tol", 1e-3))
+    check_label_options(label, func, options)
     return step, pilot, func, options, varying
 
 
