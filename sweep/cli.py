@@ -398,6 +398,25 @@ def _command_run(args: argparse.Namespace) -> int:
     if args.dtype is not None:
         kwargs["dtype"] = args.dtype
     pilot = args.pilot if args.pilot is not None else options.get("pilot")
+    known = bool(options.get("known_cells"))
+    if known:  # what it needs, before any compute
+        from .maps.labels import basins
+        from .maps.refine import _check_known_cells
+
+        if folder is not None:
+            return _error("[run] known_cells = true cannot be used with --checkpoint or "
+                          "--resume (the known cells are not kept in a checkpoint); "
+                          "accepted: sweep run without them")
+        _check_known_cells(True, scene, grid, basins, pilot, kwargs)
+        from .maps.known import KNOWN_MIN_POINTS
+
+        small = {d: len(v) for d, v in grid.axes.items() if len(v) < KNOWN_MIN_POINTS}
+        if small:
+            return _error(f"[run] known_cells = true needs {KNOWN_MIN_POINTS} points or "
+                          f"more per axis (the settled cells of coarser maps hide finer "
+                          f"structure: 1 % of the labels differed at 48); the [grid] has "
+                          f"{', '.join(f'{d} {n}' for d, n in small.items())}; accepted: a "
+                          "finer grid, or known_cells = false")
     if options.get("refine"):
         return _command_refine(args, scene, grid, kwargs, options, output, folder, pilot)
     if pilot is not None:
@@ -416,6 +435,14 @@ def _command_run(args: argparse.Namespace) -> int:
         with stop:
             if pilot is not None:  # after the scheduler answered: no pilot for a dead one
                 kwargs["attractors"] = pilot_catalogue(scene, grid, pilot, **kwargs)
+                if known:  # coarse maps of the grid, then stop on their settled cells
+                    from .maps.known import background
+
+                    run = {k: v for k, v in kwargs.items() if k != "attractors"}
+                    cells, _ = background(scene, grid.axes["theta0"], grid.axes["omega0"],
+                                          kwargs["attractors"], **run)
+                    if cells is not None:  # None: a grid too small for a background
+                        kwargs["known_cells"] = cells
                 if not args.no_space_check:
                     check_space(output, scene, grid, **kwargs)
             ds, seconds = _run_quietly(scene, grid, progress=args.progress, client=client,
@@ -463,7 +490,8 @@ def _command_refine(args, scene, grid, kwargs, options, output, folder, pilot) -
         with _Stop(lambda word, what: f"sweep: {word}; no output written"), \
                 _warnings_as_lines():
             labels = refine(scene, grid, label, step=options.get("refine_step", 16),
-                            pilot=41 if pilot is None else pilot, **kwargs)
+                            pilot=41 if pilot is None else pilot,
+                            known_cells=bool(options.get("known_cells")), **kwargs)
     except KeyboardInterrupt as exc:
         word, status = _stopped(exc)
         print(f"sweep: {word}; no output written (a refined map is not resumable)",

@@ -56,6 +56,9 @@ parameter sets, `sweep.Points`)::
     refine = true                # sweep run only: write the labels of a 2-D map (a
                                  # [grid] of two varying axes) computing only what its
                                  # boundaries need (sweep.maps.refine)
+    known_cells = true           # with pilot: coarse maps of the grid first, then stop
+                                 # each trajectory on their settled cells (sweep run
+                                 # only; sweep.run's known_cells; with refine too)
     refine_label = "basins"      # with refine: basins, motion, well, period, inverted,
                                  # or a variable of the run ("basins")
     refine_step = 16             # with refine: cells between lattice lines (>= 2; 16)
@@ -114,11 +117,11 @@ ROWS_TABLES = ("grid", "points", "sample")
 RUN_KEYS = ("t_end", "dt", "t0", "t_transient", "observe", "save_every", "method", "rtol",
             "atol", "chunk_size", "stop_early", "check_stability", "estimate_error",
             "scheduler", "device", "strobe_samples", "dtype", "pilot", "refine",
-            "refine_label", "refine_step")
+            "refine_label", "refine_step", "known_cells")
 
 #: Keys of ``[run]`` that say where the run executes, not what it computes: returned
 #: in ``options`` by `load_run`, never among the keyword arguments of `sweep.run`.
-OPTION_KEYS = ("scheduler", "pilot", "refine", "refine_label", "refine_step")
+OPTION_KEYS = ("scheduler", "pilot", "refine", "refine_label", "refine_step", "known_cells")
 
 #: ``refine_label`` names of `sweep.maps` functions (any other name: a variable).
 REFINE_MAPS = ("basins", "motion", "well", "period", "inverted")
@@ -256,7 +259,7 @@ def parse_run(spec: dict[str, Any], source: str = "run file", options: dict | No
     found = {key: kwargs.pop(key) for key in OPTION_KEYS if key in kwargs}
     if "system" in spec:
         with _context(source, "run"):
-            for key in ("pilot", "refine"):
+            for key in ("pilot", "refine", "known_cells"):
                 if key in found:
                     raise ValueError(f"{key} is for the single pendulum's forced maps "
                                      "([scene]); accepted: [run] without it for a [system]")
@@ -603,6 +606,14 @@ def _run(source: str, table: dict, system: bool = False) -> dict[str, Any]:
                 raise ValueError(f"pilot must be {accepted}, got {kwargs['pilot']!r}")
         if "refine" in kwargs:
             check_flag("refine", kwargs["refine"])
+        if "known_cells" in kwargs:
+            check_flag("known_cells", kwargs["known_cells"])
+            if kwargs["known_cells"] and "pilot" not in kwargs:
+                raise ValueError("known_cells = true stops trajectories on the known cells "
+                                 "of coarse maps labelled by a pilot's attractor "
+                                 "catalogue; accepted: known_cells = true with pilot = N "
+                                 "(and stop_early = true, observe = [\"strobe\"]), or "
+                                 "neither")
         for key in ("refine_label", "refine_step"):
             if key in kwargs and not kwargs.get("refine"):
                 raise ValueError(f"{key} is for refine = true, which this [run] table does "

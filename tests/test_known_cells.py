@@ -218,3 +218,65 @@ def test_refine_with_known_cells_on_a_grid_of_omega0_first(wada_catalogue):
     assert other.dims == ("omega0", "theta0")
     assert other.attrs["cells_stopped_known"] == first.attrs["cells_stopped_known"]
     np.testing.assert_array_equal(other.values.T, first.values)
+
+
+# ---------------------------------------------------------------------- run files
+RUN_FILE = """
+[scene]
+gravity = 1.0
+length = 1.0
+[scene.damping]
+coefficient = 0.2
+[scene.forcing]
+amplitude = 1.66
+frequency = 1.0
+phase = 1.5707963267948966
+[grid]
+theta0 = {{ start = -3.141592653589793, stop = 3.141592653589793, num = {n} }}
+omega0 = {{ start = -4.0, stop = 4.0, num = {n} }}
+[run]
+t_end = 2010.6192982974676
+dt = 0.06283185307179587
+t_transient = 125.66370614359172
+observe = ["strobe"]
+stop_early = true
+{extra}
+"""
+
+
+def test_a_run_file_stops_on_known_cells_and_labels_as_the_catalogue_route(tmp_path):
+    """``[run] known_cells = true`` with ``pilot = 21`` (the conftest catalogue's pilot,
+    so its kernels) on 96 x 96 starts: coarse maps of the grid first, then the map stops
+    on their settled cells; every start gets the label of the catalogue route (measured:
+    none differs; at 64 x 64, 32 of 4096 did, so the route refuses fewer than 96)."""
+    from test_cli import call, write
+
+    paths = {}
+    for name, extra in (("known", "pilot = 21\nknown_cells = true"), ("plain", "pilot = 21")):
+        paths[name] = tmp_path / f"{name}.nc"
+        code, _out, err = call("run", write(tmp_path, RUN_FILE.format(extra=extra, n=96),
+                                           f"{name}.toml"), "-o", paths[name],
+                              "--no-progress")
+        assert (code, err) == (0, ""), err
+    known, plain = sweep.load(paths["known"]), sweep.load(paths["plain"])
+    assert known.attrs["cells_stopped_known"] > 0 and "stopped_known" not in plain
+    np.testing.assert_array_equal(maps.basins(known).values, maps.basins(plain).values)
+
+
+@pytest.mark.parametrize("extra, argv, words", [
+    ("known_cells = true", [], "known_cells = true with pilot = N"),
+    ("known_cells = 1", [], "known_cells"),
+    ("pilot = 21\nknown_cells = true", ["--checkpoint", "ck"], "cannot be used with"),
+    ("pilot = 21\nknown_cells = true", ["--small"], "needs 96 points or more per axis"),
+])
+def test_a_run_files_known_cells_errors_are_one_line_before_any_compute(
+        tmp_path, no_compute, extra, argv, words):
+    from test_cli import call, write
+
+    n = 64 if "--small" in argv else 96
+    argv = [a if a != "ck" else str(tmp_path / "ck") for a in argv if a != "--small"]
+    code, out, err = call("run", write(tmp_path, RUN_FILE.format(extra=extra, n=n)), "-o",
+                          tmp_path / "out.nc", *argv)
+    assert code != 0 and out == ""
+    assert err.startswith("sweep: error:") and words in err and err.count("\n") == 1
+    assert not (tmp_path / "out.nc").exists()

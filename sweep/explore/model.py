@@ -41,6 +41,7 @@ from ..diskspace import layout as run_layout
 from ..engine import run as sweep_run
 from ..grid import Grid
 from ..kernels import Status
+from ..maps.known import KNOWN_MIN_POINTS
 from ..methods import METHODS
 from ..observables import STROBE_SAMPLES_RANGE
 from ..physics import BASE_PARAMETERS, EFFECTS, MODELS, Scene, parameters
@@ -103,12 +104,10 @@ COMPUTE_LOCK = threading.RLock()
 #: `sweep.run` keywords the explorer takes from ``run_kwargs`` and passes on unchanged.
 PASSTHROUGH = ("t0", "rtol", "atol", "dtype", "check_stability", "strobe_samples")
 
-#: Smallest resolution [pixels per axis] at which the explorer stops on known cells: its
-#: background's finest map (`sweep.maps.known.background`, half the resolution) then has
-#: 48 points or more per axis. Measured on the Wada map (c = 0.2, A = 1.66, W = 1; AMD
-#: EPYC Zen 5, 2026-11-27): at 96 and 200 pixels no start labelled differently from the
-#: exact route, home window and a zoom; at 48 (a 24 x 24 background) 1 % did.
-KNOWN_MIN_RESOLUTION = 96
+#: Smallest resolution [pixels per axis] at which the explorer stops on known cells
+#: (`sweep.maps.known.KNOWN_MIN_POINTS`, measured: below it the background's settled
+#: cells are too coarse).
+KNOWN_MIN_RESOLUTION = KNOWN_MIN_POINTS
 
 #: The forced basins' routes (`State.known_cells`): stop on known cells, or the
 #: catalogue alone.
