@@ -269,7 +269,8 @@ def test_a_slow_map_is_cut_into_bands_a_cheap_one_is_one_run():
     n = 400
     assert Explorer.band_count(n) == model.BANDS  # no measure: the size rule alone
     assert Explorer.band_count(n, per_start=1e-7) == 1  # 16 ms: one run
-    assert Explorer.band_count(n, per_start=2e-5) == model.BANDS  # 3.2 s: all bands
+    slow = 2 * model.BANDS * model.BAND_SECONDS / n**2  # twice what all bands take
+    assert Explorer.band_count(n, per_start=slow) == model.BANDS
     middle = Explorer.band_count(n, per_start=3 * model.BAND_SECONDS / n**2)
     assert middle == 3  # three bands of about BAND_SECONDS each
 

@@ -71,7 +71,11 @@ BANDS = 8
 #: (`Explorer.stages`): a cheap map is one run (each band costs a `sweep.run` call:
 #: 8 bands of a 400 x 400 damped-well map took 32 ms against 13 ms in one run, Zen 5),
 #: an expensive one up to `BANDS` bands, so that a newer zoom waits at most about this.
-BAND_SECONDS = 0.25
+#: Each band is a run with its own start-up and its own slowest trajectory: the forced
+#: 400 x 400 Wada window (known cells) reached the page in 1.02 s (1.50) with 0.25 s
+#: bands and 0.85 s (1.36) with 0.5 s bands, its first step at 0.22 against 0.29 s
+#: (`benchmarks/explore.py`, AMD EPYC Zen 5, quiet, 2026-11-27).
+BAND_SECONDS = 0.5
 
 #: Seconds of final map (estimated from the preview's cost per start, its run's fixed
 #: cost included: a 400 x 400 damped-well map is estimated at 0.08-0.15 s and takes
