@@ -194,7 +194,8 @@ def test_numbers_on_request_run_off_the_event_loop_and_show_on_the_page(session)
                     and session.result.state.quantity == "lyapunov_max")
     session._request_numbers()  # a map of continuous values: nothing to count
     assert "refused" in session.on_request_text.object
-    assert "continuous" in session.numbers.object
+    # the panel's text follows the final picture from the worker (not in the same tick)
+    assert wait_for(lambda: "continuous" in session.numbers.object)
 
 
 def test_the_systems_page_sends_float32_values_and_says_they_have_no_numbers():
