@@ -524,22 +524,7 @@ class Explorer:
         if not isinstance(scene, Scene):
             raise TypeError(f"scene must be a sweep.Scene, got {scene!r}")
         check_arguments(grid, run_kwargs)
-        varying = [name for name in grid.dims if grid.axes[name].size > 1]
-        names = list(varying) + [n for n in AXES_INITIAL if n not in varying]
-        x, y = names[0], names[1]
-        ranges = {}
-        for name in (x, y):
-            values = np.asarray(grid.axes[name], dtype=float) if name in grid.axes else None
-            if values is None or values.size < 2:
-                ranges[name] = self._default_range(scene, name)
-            else:
-                lo, hi = float(values.min()), float(values.max())
-                half = 0.5 * (hi - lo) / (values.size - 1)  # the grid's points as centres
-                ranges[name] = (lo - half, hi + half)
-        start = tuple((n, float(grid.axes[n][0]) if n in grid.axes and
-                       grid.axes[n].size == 1 else 0.0) for n in AXES_INITIAL)
-        fixed = {n: float(v[0]) for n, v in grid.axes.items()
-                 if n not in (x, y) and n not in AXES_INITIAL}
+        x, y, ranges, start, fixed = self._home(scene, grid, AXES_INITIAL, AXES_INITIAL)
         if fixed:  # other axes: their first value goes into the scene
             scene = self._with_parameters(scene, fixed)
         # the scene's natural map first; a run whose settings cannot give it (a forced
@@ -575,6 +560,37 @@ class Explorer:
         self._lock = COMPUTE_LOCK
 
     # -- controls --------------------------------------------------------------
+    def _home(self, model, grid: Grid, preferred, initial) -> tuple:
+        """The home window of ``grid`` for ``model`` (a scene or a system): its axes (the
+        varying ones, then ``preferred``), their ranges (the grid's points as pixel
+        centres; `_default_range` for an axis of one value), the start (``initial``
+        names: a one-value axis's value, else 0) and the other one-value axes' values.
+
+        Returns
+        -------
+        x, y : str
+        ranges : dict of str to (float, float)
+        start : tuple of (str, float)
+        fixed : dict of str to float
+        """
+        varying = [name for name in grid.dims if grid.axes[name].size > 1]
+        names = list(varying) + [n for n in preferred if n not in varying]
+        x, y = names[0], names[1]
+        ranges = {}
+        for name in (x, y):
+            values = np.asarray(grid.axes[name], dtype=float) if name in grid.axes else None
+            if values is None or values.size < 2:
+                ranges[name] = self._default_range(model, name)
+            else:
+                lo, hi = float(values.min()), float(values.max())
+                half = 0.5 * (hi - lo) / (values.size - 1)  # the grid's points as centres
+                ranges[name] = (lo - half, hi + half)
+        start = tuple((n, float(grid.axes[n][0]) if n in grid.axes and
+                       grid.axes[n].size == 1 else 0.0) for n in initial)
+        fixed = {n: float(v[0]) for n, v in grid.axes.items()
+                 if n not in (x, y) and n not in initial}
+        return x, y, ranges, start, fixed
+
     @staticmethod
     def _default_range(scene: Scene, name: str) -> tuple[float, float]:
         if name == "theta0":

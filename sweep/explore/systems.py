@@ -190,22 +190,8 @@ class SystemExplorer(Explorer):
                 raise InvalidInput("grid", f"grid axis {name!r} is not an axis of "
                                    f"{type(system).__name__}; accepted: "
                                    f"{', '.join(dict.fromkeys((*offered, *initial)))}")
-        varying = [name for name in grid.dims if grid.axes[name].size > 1]
-        names = varying + [n for n in self._preferred_axes(system) if n not in varying]
-        x, y = names[0], names[1]
-        ranges = {}
-        for name in (x, y):
-            values = np.asarray(grid.axes[name], dtype=float) if name in grid.axes else None
-            if values is None or values.size < 2:
-                ranges[name] = self._default_range(system, name)
-            else:
-                lo, hi = float(values.min()), float(values.max())
-                half = 0.5 * (hi - lo) / (values.size - 1)
-                ranges[name] = (lo - half, hi + half)
-        start = tuple((n, float(grid.axes[n][0]) if n in grid.axes and
-                       grid.axes[n].size == 1 else 0.0) for n in initial)
-        fixed = {n: float(v[0]) for n, v in grid.axes.items()
-                 if n not in (x, y) and n not in initial}
+        x, y, ranges, start, fixed = self._home(system, grid, self._preferred_axes(system),
+                                                initial)
         try:
             if fixed:
                 system = self._with_parameters(system, fixed)
