@@ -938,7 +938,7 @@ def _command_boundary(args: argparse.Namespace) -> int:
     from . import maps
     from .grid import Grid
     from .io import check_output_path
-    from .maps.boundary import describe_boundary
+    from .maps.boundary import describe_boundary, label_grid
     from .toml_spec import REFINE_MAPS, load_run
 
     output = check_output_path(args.output) if args.output is not None else None
@@ -982,8 +982,7 @@ def _command_boundary(args: argparse.Namespace) -> int:
                                                 if n not in observe)
         labels_of = maps.scene_labels(scene, label, **kwargs)
         x, y = grid.axes["theta0"], grid.axes["omega0"]
-        starts = np.stack(np.meshgrid(x, y, indexing="ij"), axis=-1).reshape(-1, 2)
-        labels = labels_of(starts).reshape(x.size, y.size)
+        labels = label_grid(labels_of, x, y)
         report = describe_boundary(labels, x, y, labels_of, sampled=args.sampled,
                                    wada_steps=args.wada, seed=args.seed)
     seconds = time.perf_counter() - start

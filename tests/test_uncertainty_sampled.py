@@ -298,3 +298,15 @@ def test_scene_labels_bad_scene(scene, no_compute):
 def test_scene_labels_run_arguments_are_checked_up_front(run, match, no_compute):
     with pytest.raises(ValueError, match=match):
         maps.scene_labels(DAMPED, maps.well, **run)
+
+
+def test_scene_labels_holds_other_columns_and_refuses_them_on_its_axes(no_compute):
+    """``held``: the columns every start shares (an explorer view's start); one named
+    like an axis, or not a column, is refused before anything is computed."""
+    with pytest.raises(ValueError, match=r"held must name sweep.Points columns other than"):
+        maps.scene_labels(DAMPED, maps.well, held={"theta0": 0.1}, **WELLS_RUN)
+    with pytest.raises(ValueError, match=r"held must name sweep.Points columns other than"):
+        maps.scene_labels(DAMPED, maps.well, held={"nonsense": 0.1}, **WELLS_RUN)
+    labels_of = maps.scene_labels(DAMPED, maps.well, axes=("theta0", "damping"),
+                                  held={"omega0": 0.5}, **WELLS_RUN)
+    assert callable(labels_of)

@@ -179,31 +179,19 @@ def view_labels_of(result: Any, explorer: Any):
     ValueError
         For a systems explorer (its maps are not labelled per start this way yet).
     """
-    from .. import engine
-    from ..grid import Points
+    from ..maps.uncertainty import scene_labels
 
     state = result.state
     if not hasattr(explorer, "quantity_info") or not hasattr(explorer, "uses_pilot"):
         raise ValueError("new starts of the view are labelled for a pendulum scene only, "
                          "not for a system yet")
-    quantity = explorer.quantity_info(state.quantity)
-    kwargs = dict(explorer.run_kwargs(state), progress=False)
-    catalogue = explorer.catalogue(state) if explorer.uses_pilot(state) else None
-    if catalogue is not None:
-        kwargs["attractors"] = catalogue
+    kwargs = dict(explorer.run_kwargs(state))
+    if explorer.uses_pilot(state):
+        kwargs["attractors"] = explorer.catalogue(state)
     x, y = state.view.x, state.view.y
-    fixed = {name: [value] for name, value in state.start if name not in (x, y)}
-
-    def labels_of(starts: np.ndarray) -> np.ndarray:
-        starts = np.asarray(starts, dtype=np.float64)
-        columns = {x: starts[:, 0], y: starts[:, 1],
-                   **{k: np.repeat(v, len(starts)) for k, v in fixed.items()}}
-        ds = engine.run(state.scene, Points(**columns), **kwargs)
-        found = ds["attractor"] if catalogue is not None else quantity.compute(ds)
-        values = np.asarray(found, dtype=np.float64).ravel()
-        return np.where(np.isfinite(values), values, -1).astype(np.int64)
-
-    return labels_of
+    return scene_labels(state.scene, explorer.quantity_info(state.quantity).compute,
+                        axes=(x, y),
+                        held={k: v for k, v in state.start if k not in (x, y)}, **kwargs)
 
 
 def _below_grid(result: Any, explorer: Any) -> str:
@@ -212,15 +200,14 @@ def _below_grid(result: Any, explorer: Any) -> str:
     the Wada test (`sweep.maps.wada`, `BELOW_GRID_STEPS` steps) of a `BELOW_GRID_SIDE`
     x `BELOW_GRID_SIDE` map of the window labelled afresh (`view_labels_of`), by
     `sweep.maps.describe_boundary`: new trajectories, seconds for a forced window."""
-    from ..maps.boundary import describe_boundary
+    from ..maps.boundary import describe_boundary, label_grid
 
     labels_of = view_labels_of(result, explorer)
     v = result.state.view
     side = BELOW_GRID_SIDE
     x = np.linspace(*v.x_range, side)
     y = np.linspace(*v.y_range, side)
-    starts = np.stack(np.meshgrid(x, y, indexing="ij"), axis=-1).reshape(-1, 2)
-    labels = labels_of(starts).reshape(side, side)
+    labels = label_grid(labels_of, x, y)
     report = describe_boundary(labels, x, y, labels_of, sampled=BELOW_GRID_PAIRS,
                                wada_steps=BELOW_GRID_STEPS, seed=0)
     lines = [line for line in report.lines()

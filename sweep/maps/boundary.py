@@ -23,7 +23,7 @@ from .metrics import (
 from .uncertainty import SampledUncertainty, uncertainty_sampled
 from .wada import Wada, wada
 
-__all__ = ["BoundaryReport", "SAMPLED_EPS", "describe_boundary"]
+__all__ = ["BoundaryReport", "SAMPLED_EPS", "describe_boundary", "label_grid"]
 
 #: The perturbations of the sampled uncertainty exponent, as fractions of the box's
 #: side: eight decades from 1e-9 (far below any grid) to 1e-2.
@@ -129,6 +129,25 @@ class BoundaryReport:
                            "trajectories": int(w.trajectories),
                            "W": {str(int(m)): float(v) for m, v in zip(w.m, w.fractions)}}
         return out
+
+
+def label_grid(labels_of, x, y) -> np.ndarray:
+    """The map ``labels_of`` gives on the grid ``x`` x ``y``, in one call.
+
+    Parameters
+    ----------
+    labels_of : callable
+        ``(m, 2) starts -> m int labels``.
+    x, y : array_like of float, shapes (n_x,), (n_y,)
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (n_x, n_y)
+        ``labels[i, j]``: the label of the start ``(x[i], y[j])``.
+    """
+    x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    starts = np.stack(np.meshgrid(x, y, indexing="ij"), axis=-1).reshape(-1, 2)
+    return np.asarray(labels_of(starts)).reshape(x.size, y.size)
 
 
 def describe_boundary(labels, x, y, labels_of=None, *, sampled: int = 0,

@@ -317,6 +317,7 @@ def uncertainty_sampled(
 
 
 def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega0"),
+                 held: dict | None = None,
                  **run_kwargs) -> Callable[[np.ndarray], np.ndarray]:
     """A ``labels_of`` for `uncertainty_sampled`: run ``scene`` from the starts, label.
 
@@ -332,6 +333,9 @@ def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega
         The `sweep.Points` columns the two coordinates of a start set (a box's
         ``(lo0, hi0)`` is the range of ``axes[0]``): initial conditions [rad, rad/s]
         or any other parameter `sweep.Points` accepts.
+    held : dict of str to float, optional
+        Other `sweep.Points` columns, one value for every start (an explorer view's
+        start: ``{"omega0": 0.5}`` beside ``axes=("theta0", "damping")``).
     **run_kwargs
         `sweep.run`'s keywords (``t_end`` and ``dt`` at least; ``progress`` defaults to
         False). For a forced scene pass ``observe=("strobe",)``, and for speed
@@ -381,17 +385,23 @@ def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega
     if len(pair) != 2 or len(set(pair)) != 2 or not set(pair) <= set(names):
         raise ValueError(f"axes must be {accepted}, got {axes!r}")
     axes = pair
+    held = dict(held or {})
+    if set(held) & set(axes) or not set(held) <= set(names):
+        raise ValueError(f"held must name sweep.Points columns other than axes {axes} "
+                         f"(of {names}), got {sorted(held)}")
     run_kwargs.setdefault("progress", False)
     # every run argument checked now, on one start, as sweep.run checks it (the starts'
     # own values are checked again by each call's run)
-    engine.prepare(scene, Points(**{axes[0]: [0.0], axes[1]: [0.0]}), **run_kwargs)
+    engine.prepare(scene, Points(**{axes[0]: [0.0], axes[1]: [0.0]},
+                                 **{k: [v] for k, v in held.items()}), **run_kwargs)
 
     catalogued = label is basins and run_kwargs.get("attractors") is not None
 
     def labels_of(starts: np.ndarray) -> np.ndarray:
         starts = np.asarray(starts, dtype=np.float64)
-        ds = engine.run(scene, Points(**{axes[0]: starts[:, 0], axes[1]: starts[:, 1]}),
-                        **run_kwargs)
+        columns = {k: np.full(len(starts), v, dtype=np.float64) for k, v in held.items()}
+        ds = engine.run(scene, Points(**{axes[0]: starts[:, 0], axes[1]: starts[:, 1]},
+                                      **columns), **run_kwargs)
         found = ds["attractor"] if catalogued else label(ds)
         values = np.asarray(found, dtype=np.float64).ravel()
         return np.where(np.isfinite(values), values, -1).astype(np.int64)
