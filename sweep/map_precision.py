@@ -41,11 +41,11 @@ from .maps.fractions import _table, _unresolved_code
 from .maps.labels import UNRESOLVED, basins, well
 from .maps.pilot import pilot_catalogue
 from .maps.refine import (
-    _REFUSED,
     _ForcedAttractors,
     _label_function,
     _variables,
     check_label_options,
+    check_levels_arguments,
 )
 from .physics import Scene
 from .settings import validate_method
@@ -361,15 +361,7 @@ def map_accuracy(scene: Scene, starts, label=basins, ladder=None, *, repeats: in
                          f"sweep.Grid, got {type(starts).__name__}")
     ladder = _check_ladder(ladder)
     repeats = check_count("repeats", repeats, accepted="an int >= 1 (timed runs per level)")
-    if pilot is not None:
-        pilot = check_count("pilot", pilot, minimum=2,
-                            accepted="None or an int >= 2 (points per initial-condition "
-                                     "axis)")
-    for name in _REFUSED:
-        if run_kwargs.get(name):
-            raise ValueError(f"map_accuracy runs one sweep per level and cannot use {name} "
-                             f"= {run_kwargs[name]!r}; accepted: sweep.run arguments "
-                             f"without {', '.join(_REFUSED)}")
+    pilot = check_levels_arguments("map_accuracy", pilot, run_kwargs)
     for name in ("t_end", "dt"):
         if name not in run_kwargs and name not in ladder:
             raise ValueError(f"map_accuracy needs {name}: accepted: {name}=... (a sweep.run "

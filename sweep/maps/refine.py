@@ -204,6 +204,32 @@ def _check_known_cells(known_cells, scene, grid, func, pilot, run_kwargs) -> boo
     return True
 
 
+def check_levels_arguments(who: str, pilot, run_kwargs: dict):
+    """``pilot`` (None or an int >= 2) and the `sweep.run` arguments of a function that
+    runs one sweep per level (`refine`, `sweep.map_accuracy`): none of `_REFUSED`.
+
+    Returns
+    -------
+    int or None
+        ``pilot``, checked.
+
+    Raises
+    ------
+    ValueError
+        Naming ``who``, the argument and what is accepted.
+    """
+    if pilot is not None:
+        pilot = check_count("pilot", pilot, minimum=2,
+                            accepted="None or an int >= 2 (points per initial-condition "
+                                     "axis)")
+    for name in _REFUSED:
+        if run_kwargs.get(name):
+            raise ValueError(f"{who} runs one sweep per level and cannot use {name} = "
+                             f"{run_kwargs[name]!r}; accepted: sweep.run arguments "
+                             f"without {', '.join(_REFUSED)}")
+    return pilot
+
+
 def check_label_options(label, func, options: dict) -> None:
     """The options of a labelling ``label`` (``func`` with ``options``, e.g. a
     ``functools.partial`` of a map) checked before anything runs: they must be the
@@ -240,15 +266,7 @@ def _check(scene, grid, label, step, pilot, run_kwargs):
                          "accepted: e.g. Grid(theta0=..., omega0=...) (for more axes, "
                          "refine each 2-D slice in a loop)")
     step = check_step(step)
-    if pilot is not None:
-        pilot = check_count("pilot", pilot, minimum=2,
-                            accepted="None or an int >= 2 (points per initial-condition "
-                                     "axis)")
-    for name in _REFUSED:
-        if run_kwargs.get(name):
-            raise ValueError(f"refine runs one sweep per level and cannot use {name} = "
-                             f"{run_kwargs[name]!r}; accepted: refine's own sweep.run "
-                             f"arguments without {', '.join(_REFUSED)}")
+    pilot = check_levels_arguments("refine", pilot, run_kwargs)
     function = _label_function(label)
     if function is None:
         known = _variables(run_kwargs)
