@@ -40,3 +40,28 @@ WADA_SCENE = sweep.Scene(gravity=1.0, length=1.0, effects=(
     sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, np.pi / 2)))
 WADA_PILOT = dict(t_end=320 * 2 * np.pi, dt=2 * np.pi / 100, t_transient=20 * 2 * np.pi,
                   observe=("strobe",), stop_early=True, progress=False)
+
+#: The Wada scene and `WADA_PILOT`'s settings as a run file over an n x n grid of
+#: theta0 in [-pi, pi] and omega0 in [-4, 4] (``{n}``), with ``{extra}`` lines of
+#: ``[run]`` (``pilot = 21``: the ``wada_catalogue`` fixture's pilot, so its kernels).
+WADA_RUN_FILE = """
+[scene]
+gravity = 1.0
+length = 1.0
+[scene.damping]
+coefficient = 0.2
+[scene.forcing]
+amplitude = 1.66
+frequency = 1.0
+phase = 1.5707963267948966
+[grid]
+theta0 = {{ start = -3.141592653589793, stop = 3.141592653589793, num = {n} }}
+omega0 = {{ start = -4.0, stop = 4.0, num = {n} }}
+[run]
+t_end = 2010.6192982974676
+dt = 0.06283185307179587
+t_transient = 125.66370614359172
+observe = ["strobe"]
+stop_early = true
+{extra}
+"""

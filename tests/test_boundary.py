@@ -7,6 +7,7 @@ import json
 
 import numpy as np
 import pytest
+from shared_kernels import WADA_RUN_FILE
 from test_cli import call, write
 from test_wada import label_map
 from test_wada import sector as sectors  # three sectors of 120 degrees: smooth, not Wada
@@ -75,26 +76,6 @@ def test_bad_input_is_refused_before_anything_is_computed(kwargs, words):
                           args.pop("labels_of"), **args)
 
 
-FORCED = """
-[scene]
-gravity = 1.0
-length = 1.0
-[scene.damping]
-coefficient = 0.2
-[scene.forcing]
-amplitude = 1.66
-frequency = 1.0
-phase = 1.5707963267948966
-[grid]
-theta0 = {{ start = -3.141592653589793, stop = 3.141592653589793, num = {n} }}
-omega0 = {{ start = -4.0, stop = 4.0, num = {n} }}
-[run]
-t_end = 2010.6192982974676
-dt = 0.06283185307179587
-t_transient = 125.66370614359172
-observe = ["strobe"]
-stop_early = true
-"""
 
 
 def test_the_command_prints_the_forced_wada_maps_numbers_and_writes_them(tmp_path):
@@ -103,8 +84,9 @@ def test_the_command_prints_the_forced_wada_maps_numbers_and_writes_them(tmp_pat
     at this size (W3 = 0.996 after 6 steps, measured; the full-size map's 0.994 after 6,
     docs/guide/map_accuracy.md)."""
     output = tmp_path / "wada.json"
-    code, out, err = call("boundary", write(tmp_path, FORCED.format(n=48)), "--pilot", 21,
-                          "--sampled", 300, "--wada", 6, "-o", output)
+    run_file = write(tmp_path, WADA_RUN_FILE.format(n=48, extra=""))
+    code, out, err = call("boundary", run_file, "--pilot", 21, "--sampled", 300, "--wada", 6,
+                          "-o", output)
     assert (code, err) == (0, ""), err
     assert "forced basins (pilot catalogue)" in out and "3 basins" in out
     numbers = json.loads(output.read_text())

@@ -13,7 +13,7 @@ import numba
 import numpy as np
 import pytest
 import xarray as xr
-from shared_kernels import WADA_PILOT, WADA_SCENE
+from shared_kernels import WADA_PILOT, WADA_RUN_FILE, WADA_SCENE
 
 import sweep
 from sweep import _config, maps
@@ -221,27 +221,6 @@ def test_refine_with_known_cells_on_a_grid_of_omega0_first(wada_catalogue):
 
 
 # ---------------------------------------------------------------------- run files
-RUN_FILE = """
-[scene]
-gravity = 1.0
-length = 1.0
-[scene.damping]
-coefficient = 0.2
-[scene.forcing]
-amplitude = 1.66
-frequency = 1.0
-phase = 1.5707963267948966
-[grid]
-theta0 = {{ start = -3.141592653589793, stop = 3.141592653589793, num = {n} }}
-omega0 = {{ start = -4.0, stop = 4.0, num = {n} }}
-[run]
-t_end = 2010.6192982974676
-dt = 0.06283185307179587
-t_transient = 125.66370614359172
-observe = ["strobe"]
-stop_early = true
-{extra}
-"""
 
 
 def test_a_run_file_stops_on_known_cells_and_labels_as_the_catalogue_route(tmp_path):
@@ -254,7 +233,7 @@ def test_a_run_file_stops_on_known_cells_and_labels_as_the_catalogue_route(tmp_p
     paths = {}
     for name, extra in (("known", "pilot = 21\nknown_cells = true"), ("plain", "pilot = 21")):
         paths[name] = tmp_path / f"{name}.nc"
-        code, _out, err = call("run", write(tmp_path, RUN_FILE.format(extra=extra, n=96),
+        code, _out, err = call("run", write(tmp_path, WADA_RUN_FILE.format(extra=extra, n=96),
                                            f"{name}.toml"), "-o", paths[name],
                               "--no-progress")
         assert (code, err) == (0, ""), err
@@ -275,7 +254,7 @@ def test_a_run_files_known_cells_errors_are_one_line_before_any_compute(
 
     n = 64 if "--small" in argv else 96
     argv = [a if a != "ck" else str(tmp_path / "ck") for a in argv if a != "--small"]
-    code, out, err = call("run", write(tmp_path, RUN_FILE.format(extra=extra, n=n)), "-o",
+    code, out, err = call("run", write(tmp_path, WADA_RUN_FILE.format(extra=extra, n=n)), "-o",
                           tmp_path / "out.nc", *argv)
     assert code != 0 and out == ""
     assert err.startswith("sweep: error:") and words in err and err.count("\n") == 1
