@@ -62,6 +62,10 @@ __all__ = ["DERIVE_VERSION", "FUNCTIONS", "derive"]
 #: so a change here (a different printer, another simplification) misses old entries.
 DERIVE_VERSION = 1
 
+#: The built-in systems' derivations shipped with sweep (package data; written by
+#: `sweep.physics.shipped`), read before the disk cache.
+SHIPPED_FOLDER = Path(__file__).parent / "derived"
+
 #: Functions a declaration's expressions may call (and the constant ``pi``).
 FUNCTIONS = ("sin", "cos", "sqrt")
 
@@ -135,8 +139,7 @@ def _derive(declaration: SystemDeclaration, jacobian: bool) -> DerivedSystem:
     """`derive` after the structure checks: shipped with sweep (`sweep.physics.shipped`),
     from the disk cache, or derived and stored."""
     key = _key(declaration, jacobian)
-    shipped = _read(Path(__file__).parent / "derived" / f"system_{key}.json", declaration,
-                    jacobian)
+    shipped = _read(SHIPPED_FOLDER / f"system_{key}.json", declaration, jacobian)
     if shipped is not None:
         return shipped
     folder = _folder()

@@ -16,13 +16,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .derive import SHIPPED_FOLDER
 from .system import SystemDeclaration
 from .systems import COUPLINGS, coupled_pendula, double_pendulum
 
 __all__ = ["FOLDER", "built_ins", "path_of", "write"]
 
-#: The folder of the shipped derivations (package data).
-FOLDER = Path(__file__).parent / "derived"
+#: The folder of the shipped derivations (package data), where `derive` looks first.
+FOLDER = SHIPPED_FOLDER
 
 
 def built_ins() -> list[tuple[SystemDeclaration, bool]]:
