@@ -208,10 +208,11 @@ def describe_boundary(labels, x, y, labels_of=None, *, sampled: int = 0,
         raise ValueError(f"sampled must be 0 or >= 100 pairs per eps level, got "
                          f"{sampled!r}; accepted: 0 or an int >= 100")
     fractions = basin_fractions(labels)
+    basins = sum(1 for k in fractions if k >= 0)
     entropy = basin_entropy(labels, box_size=min(5, *labels.shape))
     fractality, note = None, ""
     radius = max(3, min(20, min(labels.shape) // 10))
-    if sum(1 for k in fractions if k >= 0) < 2:
+    if basins < 2:
         note = "one basin"
     elif 2 * radius + 1 > min(labels.shape):
         note = f"the map is smaller than a ball of radius {radius} cells"
@@ -226,7 +227,7 @@ def describe_boundary(labels, x, y, labels_of=None, *, sampled: int = 0,
         box = ((float(x[0]), float(x[-1])), (float(y[0]), float(y[-1])))
         found = uncertainty_sampled(labels_of, box, eps=SAMPLED_EPS, n=sampled, seed=seed)
     tested = None
-    if wada_steps and sum(1 for k in fractions if k >= 0) >= 3:
+    if wada_steps and basins >= 3:
         tested = wada(labels, labels_of, x, y, max_steps=wada_steps)
     return BoundaryReport(shape=tuple(int(n) for n in labels.shape), fractions=fractions,
                           entropy=entropy, fractality=fractality, fractality_note=note,
