@@ -194,6 +194,33 @@ def test_sincos_is_sin_and_cos_from_one_reduction(rng):
     assert np.max(np.abs(c - np.cos(x))) <= TOL
 
 
+@njit(parallel=True, cache=True, fastmath=KERNEL_FLAGS)
+def _vsincos_quadrant(x):
+    s = np.empty_like(x)
+    c = np.empty_like(x)
+    for i in prange(x.size):
+        s[i], c[i] = _vecmath.sincos_quadrant(x[i])
+    return s, c
+
+
+def test_sincos_quadrant_keeps_the_contract_from_one_reduction(rng):
+    """The systems' sincos (one reduction by pi/2, both fdlibm polynomials): its cosine
+    is exactly `cos`'s bits (the same reduction and polynomial), and both halves are
+    within TOL of NumPy's on every quadrant, next to multiples of pi/2 (where the
+    reduction cancels most), at large arguments up to SIN_RANGE and at zero; its sine
+    is not `sin`'s (it differs in last bits somewhere, which is why the single
+    pendulum's tangent dynamics keep `sincos`)."""
+    near = _neighbours(np.arange(-6366, 6367) * (np.pi / 2))
+    x = np.concatenate([rng.uniform(-1e4, 1e4, 1_000_000), near,
+                        rng.uniform(-_vecmath.SIN_RANGE, _vecmath.SIN_RANGE, 100_000),
+                        [0.0, -0.0, 1e-300]])
+    s, c = _vsincos_quadrant(x)
+    np.testing.assert_array_equal(c, _vcos(x))
+    assert np.max(np.abs(s - np.sin(x))) <= TOL
+    assert np.max(np.abs(c - np.cos(x))) <= TOL
+    assert np.any(s != _vsin(x))
+
+
 # ------------------------------------------------------------------ float32 (dtype="float32")
 @njit(parallel=True, cache=True, fastmath=KERNEL_FLAGS)
 def _float32_sines(x):

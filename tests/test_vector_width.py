@@ -213,11 +213,12 @@ def test_float32_kernels_fill_the_register_and_give_the_same_bits(monkeypatch, t
 
 
 #: The outputs' bits of every kind of kernel that reads `sweep.kernels.vecmath`, as a
-#: digest per workload: the sine itself (sin, cos, sincos of arguments up to 1e4), the
+#: digest per workload: the sine itself (sin, cos, sincos, sincos_quadrant of
+#: arguments up to 1e4), the
 #: fixed-step kernel of a damped forced pendulum, one trajectory alone (the narrow
 #: path), the early-stop kernel with lane refill (a forced basins map's strobe), the
 #: tangent dynamics (``lyapunov``: sincos), float32 (sin32) and the double pendulum (two
-#: sines and a sincos per stage).
+#: sines and a sincos_quadrant per stage).
 _BITS = textwrap.dedent("""
     import hashlib, json, math
     import numpy as np, sweep
@@ -233,10 +234,11 @@ _BITS = textwrap.dedent("""
 
     @njit
     def sines(x):
-        out = np.empty((4, x.size))
+        out = np.empty((6, x.size))
         for i in range(x.size):
             out[0, i], out[1, i] = vecmath.sin(x[i]), vecmath.cos(x[i])
             out[2, i], out[3, i] = vecmath.sincos(x[i])
+            out[4, i], out[5, i] = vecmath.sincos_quadrant(x[i])
         return out
 
     x = np.random.default_rng(38).uniform(-1e4, 1e4, 100_000)

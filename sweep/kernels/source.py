@@ -77,6 +77,11 @@ _VECMATH_DIGEST = hashlib.sha1(
 
 _VECMATH_IMPORT = ("from sweep.kernels.vecmath import cos as vcos, fma as vfma, sin as vsin, "
                    "sincos as vsincos")
+#: A system's kernels pair the sine and cosine of one argument from one reduction
+#: (`sweep.kernels.vecmath.sincos_quadrant`; the accelerations and the tangent dynamics
+#: read the same statements, so the pairing keeps them on one trajectory).
+_SYSTEM_VECMATH_IMPORT = _VECMATH_IMPORT.replace("sincos as vsincos",
+                                                 "sincos_quadrant as vsincos")
 
 
 def source(spec: KernelSpec) -> str:
@@ -189,8 +194,9 @@ from sweep.grid import GridRows
 
 
 '''))
-    return _tidy(system_source(spec, _cpu_header(spec, _jit_options()))) + \
-        _compile_with(False)
+    header = _cpu_header(spec, _jit_options()).replace(_VECMATH_IMPORT,
+                                                       _SYSTEM_VECMATH_IMPORT, 1)
+    return _tidy(system_source(spec, header)) + _compile_with(False)
 
 
 def _precision(spec: KernelSpec, text: str) -> str:

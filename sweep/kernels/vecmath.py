@@ -83,7 +83,8 @@ from .. import _config
 _JIT = _config.jit_options()
 
 __all__ = ["P1", "P2", "PIO2_HI", "PIO2_LO", "SIN32_RANGE", "SIN_RANGE", "cos", "cos32", "fma",
-           "inverse_fifth_root", "sin", "sin32", "sincos", "sincos32"]
+           "inverse_fifth_root", "sin", "sin32", "sincos", "sincos32",
+           "sincos_quadrant"]
 
 TWO_OVER_PI = 0.6366197723675814
 #: pi/2 = PIO2_HI + PIO2_LO (- 1.5e-33): the float64 reduction's two parts.
@@ -248,6 +249,35 @@ def sincos(x):
     of theta1 - theta2, follows the trajectory of a kernel reading `sin` alone, bit
     for bit); two reductions, by pi and by pi/2."""
     return sin(x), cos(x)
+
+
+@njit(cache=True, **_JIT)
+def sincos_quadrant(x):
+    """(sin(x), cos(x)) from one reduction by pi/2: the systems' ``vsincos``.
+
+    The reduction of `cos` (`_reduce`), then fdlibm's sine and cosine polynomials on
+    ``r`` once each, picked and signed by quadrant (the C limit's ``vsincos`` in
+    ``benchmarks/c_reference/sines.h``, variant 4). The cosine is `cos`'s bits; the
+    sine is the previous design's (sweep < 0.3.0.dev1), not `sin`'s: within 1.1e-16
+    of libm's either way (the same contract, ``tests/test_vecmath.py``), one reduction
+    and two short polynomials instead of `sincos`'s two reductions. Only the systems'
+    kernels (`sweep.kernels.system`) call it, where a state's accelerations read the
+    sine and the cosine of one argument (the double pendulum's theta1 - theta2) and
+    the tangent dynamics read the accelerations' own statements, so their trajectory
+    is the plain kernel's bit for bit; the single pendulum's tangent dynamics use
+    `sincos` (its plain kernel reads `sin` alone)."""
+    r, q = _reduce(x)
+    z = r * r
+    z2 = z * z
+    z4 = z2 * z2
+    ps = fma(z4, fma(z, S6, S5), fma(z2, fma(z, S4, S3), fma(z, S2, S1)))
+    pc = fma(z4, fma(z2, C6, fma(z, C5, C4)), fma(z2, fma(z, C3, C2), fma(z, C1, -0.5)))
+    sr = fma(z * r, ps, r)
+    cr = fma(z, pc, 1.0)
+    odd = (q & 1) != 0
+    s = cr if odd else sr
+    c = sr if odd else cr
+    return (-s if (q & 2) else s), (-c if ((q + 1) & 2) else c)
 
 
 #: ``x ** -0.2`` read off the bits: a float64's bits are ``2**52 (log2 x + 1023 - s)``
