@@ -13,6 +13,7 @@ import warnings
 import numpy as np
 import xarray as xr
 
+from . import _config
 from .execution import RunContext, execute
 from .execution.progress import progress_bar
 from .grid import ParameterRows
@@ -148,7 +149,8 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
                       derived=system.derived(jacobian="lyapunov" in names), observe=names,
                       damping=damping, save=save_every is not None, method=settings.method,
                       stop_early=bool(stop_early), block=_block(grid.size, bool(stop_early)),
-                      flip_energy=system.flip_energy, device=device)
+                      flip_energy=system.flip_energy, device=device,
+                      refill=bool(stop_early) and _config.REFILL)
     if "energy" in names and not spec.derived.energy_lines:
         raise ValueError(f"observable 'energy' needs the energy of {type(system).__name__}, "
                          "which its declaration does not give; accepted: observe without "

@@ -74,6 +74,10 @@ class SystemSpec:
         parameters' symbols (`sweep.physics.System.flip_energy`). With ``stop_early``
         a start whose energy is below it is settled at once: energy never grows (no
         drive; damping only removes it), so it can never flip.
+    refill : bool
+        With ``stop_early`` on the CPU in blocks of more than one lane: a lane whose
+        trajectory has stopped takes the next one (`sweep.kernels.system_refill`),
+        bit-identical to ``refill=False``; ignored otherwise.
     """
 
     system: SystemDeclaration
@@ -87,6 +91,7 @@ class SystemSpec:
     device: str = "cpu"
     dtype: str = "float64"
     flip_energy: str | None = None
+    refill: bool = False
 
     def __post_init__(self) -> None:
         if self.device == "cuda":  # one thread per trajectory: no lanes
@@ -94,6 +99,8 @@ class SystemSpec:
         object.__setattr__(self, "block", check_block(self.block))
         if not self.stop_early:  # it changes nothing then: one kernel either way
             object.__setattr__(self, "flip_energy", None)
+        object.__setattr__(self, "refill", bool(self.refill and self.stop_early
+                                                and self.block > 1))
 
     @property
     def columns(self) -> tuple[str, ...]:
@@ -105,7 +112,8 @@ class SystemSpec:
         return (f"system={self.system.name!r}, coordinates="
                 f"{tuple(c.name for c in self.system.coordinates)!r}, damping={self.damping!r}, "
                 f"observe={self.observe!r}, save={self.save!r}, method={self.method!r}, "
-                f"stop_early={self.stop_early!r}, block={self.block!r}")
+                f"stop_early={self.stop_early!r}, block={self.block!r}"
+                + (", refill=True" if self.refill else ""))
 
 
 def n_outputs(spec: SystemSpec) -> int:
@@ -423,6 +431,11 @@ def system_kernel(spec: SystemSpec) -> str:
     """The kernel body (see the module docstring)."""
     parts = _parts(spec)
     state, symbols, lane = parts.state, parts.symbols, parts.lane
+    if spec.refill:
+        from .system_refill import system_refill_kernel
+
+        finish = _finish(spec, state, symbols, index="")
+        return system_refill_kernel(spec, parts, finish), parts.physics
     constants = parts.constants
     first = ["i = min(base + j, n - 1)  # padding lanes repeat the last trajectory"]
     first += [f"{x} = params[i, {k}]" for k, x in enumerate(state + symbols)]
