@@ -32,7 +32,7 @@ __all__ = ["allocate_system", "prepare_system", "run_system", "system_dataset",
 #: `sweep.run`'s arguments that a system run does not take yet, with the value that
 #: means "not used"; any other value is refused before any compute.
 _NOT_YET = {"rtol": None, "atol": None, "specialize": True, "estimate_error": None,
-            "checkpoint": None, "resume": False, "dtype": "float64", "attractors": None}
+            "checkpoint": None, "resume": False, "attractors": None}
 
 
 def _check_not_yet(system: System, given: dict) -> None:
@@ -90,7 +90,7 @@ def _prepare_network(network, grid, settings, observe, save_every, stop_early):
 def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
                    t_transient=0.0, observe=None, save_every=None,
                    method="rk4", chunk_size=None, stop_early=False, strobe_samples=None,
-                   check_stability=True, device="cpu", **not_yet):
+                   check_stability=True, device="cpu", dtype="float64", **not_yet):
     """Validate a system run (before any compute); return its settings, kernel spec and
     chunk size.
 
@@ -118,10 +118,16 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
                          f"method; got method {integrator.name!r}; accepted: {accepted}")
     check_flag("stop_early", stop_early)
     _check_device(device, settings.integrator)
+    from .kernels.spec import check_dtype
+
+    check_dtype(dtype, integrator)
     if chunk_size is None:
         chunk_size = default_chunk_size(settings) if device != "cuda" else CUDA_CHUNK
     check_positive_int("chunk_size", chunk_size)
     if isinstance(system, SwingNetwork):
+        if dtype != "float64":
+            raise ValueError(f"dtype={dtype!r} is not available for a SwingNetwork yet; "
+                             "accepted: dtype='float64'")
         if device != "cpu":
             raise ValueError(f"device={device!r} is not available for a SwingNetwork yet; "
                              "accepted: device='cpu'")
@@ -149,13 +155,36 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
                       derived=system.derived(jacobian="lyapunov" in names), observe=names,
                       damping=damping, save=save_every is not None, method=settings.method,
                       stop_early=bool(stop_early), block=_block(grid.size, bool(stop_early)),
-                      flip_energy=system.flip_energy, device=device,
+                      flip_energy=system.flip_energy, device=device, dtype=dtype,
                       refill=bool(stop_early) and _config.REFILL)
+    if dtype != "float64":
+        _check_single(system, spec)
     if "energy" in names and not spec.derived.energy_lines:
         raise ValueError(f"observable 'energy' needs the energy of {type(system).__name__}, "
                          "which its declaration does not give; accepted: observe without "
                          "'energy'")
     return settings, spec, int(chunk_size)
+
+
+def _check_single(system: System, spec: SystemSpec) -> None:
+    """Refuse float32 where a system's kernel does not have it yet: on the GPU, with
+    the tangent dynamics, and for dynamics that read the time (a driven pivot: its
+    phase would need the float64 clock that the single pendulum's drives keep)."""
+    from .kernels.system import uses_time
+
+    where = type(system).__name__
+    if spec.device != "cpu":
+        raise ValueError(f"dtype='float32' for a system ({where}) runs on the CPU only yet; "
+                         f"got device={spec.device!r}; accepted: device='cpu', or "
+                         "dtype='float64'")
+    if "lyapunov" in spec.observe:
+        raise ValueError(f"observable 'lyapunov' is not available in float32 for a system "
+                         f"({where}) yet; accepted: dtype='float64', or observe without "
+                         "'lyapunov'")
+    if uses_time(spec):
+        raise ValueError(f"dtype='float32' is not available for a system whose dynamics read "
+                         f"the time ({where} with a driven pivot) yet; accepted: "
+                         "dtype='float64', or no drive")
 
 
 def run_system(system: System, grid: ParameterRows, *, progress=None, client=None,
@@ -260,7 +289,7 @@ def _time(settings, n_saved: int) -> xr.Variable:
 
 def _attributes(system, grid, settings, spec, fixed: dict) -> dict:
     """The attributes every system dataset has: provenance and how to reproduce it."""
-    return {
+    attrs = {
         **origin_attributes(f"{system.title} parameter sweep"),
         **{name: float(value) for name, value in fixed.items()},
         "system": json.dumps(system.to_dict(), sort_keys=True),
@@ -268,6 +297,9 @@ def _attributes(system, grid, settings, spec, fixed: dict) -> dict:
         **run_attributes(settings, spec),
         **device_attributes(spec),
     }
+    if getattr(spec, "dtype", "float64") != "float64":  # as the single pendulum's
+        attrs["dtype"] = spec.dtype
+    return attrs
 
 
 def to_network_dataset(*, system: SwingNetwork, grid, settings, spec: NetworkSpec, out,

@@ -37,6 +37,7 @@ NaN outputs (its saved samples from the failure on are NaN).
 from __future__ import annotations
 
 import hashlib
+import re
 from pathlib import Path
 
 from .. import _config
@@ -196,7 +197,29 @@ from sweep.grid import GridRows
 '''))
     header = _cpu_header(spec, _jit_options()).replace(_VECMATH_IMPORT,
                                                        _SYSTEM_VECMATH_IMPORT, 1)
-    return _tidy(system_source(spec, header)) + _compile_with(False)
+    text = system_source(spec, header)
+    if spec.dtype == "float32":
+        text = _system_single(spec, text)
+    return _tidy(text) + _compile_with(spec.dtype == "float32")
+
+
+_HOISTED = re.compile(r"(hoisted_values = np\.empty\(\(\d+, BLOCK\))\)")
+_FLIP_TIME = re.compile(r"^(\s*at_\w+ = t0 \+ \(.*\)) \* dt$", re.MULTILINE)
+
+
+def _system_single(spec: SystemSpec, text: str) -> str:
+    """A system's CPU module in float32 (`sweep.kernels.precision`, as the single
+    pendulum's): float literals and parameter loads as float32, the float32 sine, the
+    step in float32 on a float64 clock; the angles, ``2 pi``, the flip's thresholds
+    and times, and the observables' accumulators stay float64."""
+    angles = {c.symbol for c in spec.system.coordinates if c.angular}
+    text = text.replace(_SYSTEM_VECMATH_IMPORT, HEADER, 1).replace(
+        "import numpy as np\n", "import numpy as np\nF = np.float32\n", 1)
+    text = clock(single_loads(single(text), angles))
+    text = text.replace("F(math.pi)", "math.pi").replace("TWO_PI = F(2.0) * math.pi",
+                                                         "TWO_PI = 2.0 * math.pi")
+    text = _HOISTED.sub(r"\1, dtype=np.float32)", text)
+    return _FLIP_TIME.sub(r"\1 * dt_clock", text)
 
 
 def _precision(spec: KernelSpec, text: str) -> str:

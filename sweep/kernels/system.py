@@ -300,9 +300,9 @@ def _finish(spec: SystemSpec, state: list[str], symbols: list[str],
     angles = [c.symbol for c in _angles(spec)]
     limit = None
     if angles:
-        from .vecmath import SIN_RANGE
+        from .vecmath import SIN32_RANGE, SIN_RANGE
 
-        limit = SIN_RANGE
+        limit = SIN_RANGE if spec.dtype == "float64" else SIN32_RANGE
     ok = finite + "".join(f" and abs({q}) <= {limit!r}" for q in angles)
     col, writes = 0, []
     for name in spec.observe:
@@ -385,7 +385,9 @@ def _parts(spec: SystemSpec) -> _Parts:
                                 for k, x in enumerate(fast.names))]
     flip = "flip" in spec.observe
     angles = [c.symbol for c in _angles(spec)]
-    lane = {x: "float64" for x in state + symbols}
+    # float32 (`sweep.kernels.precision`): the angles stay float64, as the single
+    # pendulum's, so that their float32 increments do not round a growing angle
+    lane = {x: "float64" if x in angles else spec.dtype for x in state + symbols}
     first = []
     if "winding" in spec.observe or flip:
         first += [f"well_{q} = round({q} / TWO_PI)" for q in angles]
