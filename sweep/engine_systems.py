@@ -70,7 +70,8 @@ def _check_network_grid(network: SwingNetwork, grid: ParameterRows) -> None:
                              f"accepted: node indices 0 to {network.n_nodes - 1}, or -1 (none)")
 
 
-def _prepare_network(network, grid, settings, observe, save_every, stop_early):
+def _prepare_network(network, grid, settings, observe, save_every, stop_early,
+                     device="cpu"):
     if stop_early:
         raise ValueError("stop_early is not available for a SwingNetwork; accepted: "
                          "stop_early=False")
@@ -84,7 +85,7 @@ def _prepare_network(network, grid, settings, observe, save_every, stop_early):
                        power=tuple(network.power.tolist()),
                        synchronous=tuple(network.synchronous_state(coupling).tolist()),
                        observe=names, save=save_every is not None, method=settings.method,
-                       block=_block(grid.size, False))
+                       block=_block(grid.size, False), device=device)
 
 
 def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
@@ -128,14 +129,11 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
         if dtype != "float64":
             raise ValueError(f"dtype={dtype!r} is not available for a SwingNetwork yet; "
                              "accepted: dtype='float64'")
-        if device != "cpu":
-            raise ValueError(f"device={device!r} is not available for a SwingNetwork yet; "
-                             "accepted: device='cpu'")
         if strobe_samples is not None:
             raise ValueError(f"strobe_samples={strobe_samples!r} is not available for a "
                              "SwingNetwork; accepted: strobe_samples=None")
         return settings, _prepare_network(system, grid, settings, observe, save_every,
-                                          stop_early), int(chunk_size)
+                                          stop_early, device), int(chunk_size)
     names = resolve_system_observe(("final", "winding") if observe is None else observe)
     if not names and save_every is None:
         raise ValueError("observe is empty and save_every is None -- nothing would be "

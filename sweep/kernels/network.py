@@ -28,7 +28,8 @@ from .lanes import blocks_head, indent
 from .spec import Status, check_block
 from .steppers import fused
 
-__all__ = ["NETWORK_OBSERVABLES", "NetworkSpec", "network_outputs", "network_source"]
+__all__ = ["NETWORK_OBSERVABLES", "NetworkSpec", "network_cuda_source", "network_outputs",
+           "network_source"]
 
 NL = "\n"
 
@@ -70,6 +71,8 @@ class NetworkSpec:
     dtype: str = "float64"
 
     def __post_init__(self) -> None:
+        if self.device == "cuda":  # one thread per trajectory: no lanes
+            object.__setattr__(self, "block", 1)
         object.__setattr__(self, "block", check_block(self.block))
 
     @property
@@ -80,7 +83,8 @@ class NetworkSpec:
         """A one-line description for the generated module's docstring."""
         return (f"swing network of {self.n_nodes} nodes and {len(self.edges)} edges, "
                 f"observe={self.observe!r}, save={self.save!r}, method={self.method!r}, "
-                f"block={self.block!r}")
+                f"block={self.block!r}"
+                + (f", device={self.device!r}" if self.device != "cpu" else ""))
 
 
 def network_outputs(spec: NetworkSpec) -> int:
@@ -92,50 +96,70 @@ def _array(values, dtype: str) -> str:
     return f"np.array([{', '.join(repr(v) for v in values)}], dtype=np.{dtype})"
 
 
-def network_source(spec: NetworkSpec, header: str) -> str:
-    """The module text: ``header`` (imports and ``JIT``), the network as constants, the
-    accelerations and the kernel."""
+def _method(spec: NetworkSpec):
     method = _methods.METHODS.get(spec.method)
     if method is None or method.adaptive or method.kind != "explicit":
         raise ValueError(f"a swing network integrates with a fixed-step explicit "
                          f"Runge-Kutta method, got {spec.method!r}")
-    from .vecmath import SIN_RANGE
+    return method
 
-    constants: dict[str, str] = {}
+
+def _stages(method, constants: dict[str, str], *, lanes: bool) -> list[str]:
+    """One step of every node: the stages' states, ``accel`` and the update, over
+    ``[q, j]`` (node, lane) on the CPU or ``[q]`` in a GPU thread (``lanes=False``)."""
+    at = "[q, j]" if lanes else "[q]"
+    over = "for q in range(N):\n" + ("    for j in range(BLOCK):\n        " if lanes
+                                      else "    ")
+    pad = "        " if lanes else "    "
     stages = []
     for s in range(method.stages):
         row = method.a[s][:s]
-        kx = [f"k{j + 1}_th[q, j]" for j in range(s)]
-        kv = [f"k{j + 1}_om[q, j]" for j in range(s)]
+        kx = [f"k{j + 1}_th{at}" for j in range(s)]
+        kv = [f"k{j + 1}_om{at}" for j in range(s)]
         if s == 0:
             stages.append("accel(th, om, k1_th, k1_om, alpha, coupling)")
             continue
         stages.append(
-            "for q in range(N):\n    for j in range(BLOCK):\n"
-            f"        ths[q, j] = {fused('th[q, j]', row, kx, 'dt', constants)}\n"
-            f"        oms[q, j] = {fused('om[q, j]', row, kv, 'dt', constants)}\n"
+            f"{over}ths{at} = {fused(f'th{at}', row, kx, 'dt', constants)}\n"
+            f"{pad}oms{at} = {fused(f'om{at}', row, kv, 'dt', constants)}\n"
             f"accel(ths, oms, k{s + 1}_th, k{s + 1}_om, alpha, coupling)")
-    kx = [f"k{j + 1}_th[q, j]" for j in range(method.stages)]
-    kv = [f"k{j + 1}_om[q, j]" for j in range(method.stages)]
+    kx = [f"k{j + 1}_th{at}" for j in range(method.stages)]
+    kv = [f"k{j + 1}_om{at}" for j in range(method.stages)]
     stages.append(
-        "for q in range(N):\n    for j in range(BLOCK):\n"
-        f"        th[q, j] = {fused('th[q, j]', method.b, kx, 'dt', constants)}\n"
-        f"        om[q, j] = {fused('om[q, j]', method.b, kv, 'dt', constants)}")
-    n = spec.n_nodes
-    writes, col = [], 0
+        f"{over}th{at} = {fused(f'th{at}', method.b, kx, 'dt', constants)}\n"
+        f"{pad}om{at} = {fused(f'om{at}', method.b, kv, 'dt', constants)}")
+    return stages
+
+
+def _writes(spec: NetworkSpec, at: str) -> list[str]:
+    """The observables' writes into ``out[i]`` from ``th{at}``, ``om{at}``."""
+    n, writes, col = spec.n_nodes, [], 0
     for name in spec.observe:
         if name == "final":
-            writes += [f"for q in range(N):\n    out[i, {col} + q] = th[q, j]\n"
-                       f"    out[i, {col + n} + q] = om[q, j]"]
+            writes += [f"for q in range(N):\n    out[i, {col} + q] = th{at}\n"
+                       f"    out[i, {col + n} + q] = om{at}"]
             col += 2 * n
         else:
             writes += ["spread = 0.0\nsum_cos = 0.0\nsum_sin = 0.0\nfor q in range(N):\n"
-                       "    spread = max(spread, abs(om[q, j]))\n"
-                       "    sum_cos += vcos(th[q, j])\n    sum_sin += vsin(th[q, j])",
+                       f"    spread = max(spread, abs(om{at}))\n"
+                       f"    sum_cos += vcos(th{at})\n    sum_sin += vsin(th{at})",
                        f"out[i, {col}] = spread",
                        f"out[i, {col + 1}] = math.sqrt(sum_cos * sum_cos + sum_sin * sum_sin) "
                        "/ N"]
             col += 2
+    return writes
+
+
+def network_source(spec: NetworkSpec, header: str) -> str:
+    """The module text: ``header`` (imports and ``JIT``), the network as constants, the
+    accelerations and the kernel."""
+    method = _method(spec)
+    from .vecmath import SIN_RANGE
+
+    constants: dict[str, str] = {}
+    stages = _stages(method, constants, lanes=True)
+    n = spec.n_nodes
+    writes = _writes(spec, "[q, j]")
     width = network_outputs(spec)
     save_first = save_step = ""
     if spec.save:
@@ -229,3 +253,76 @@ def accel(x, v, kx, kv, alpha, coupling):
                     out[i, col] = math.nan
 {indent(failed_samples, 4)}
 '''
+
+
+def network_cuda_source(spec: NetworkSpec, header: str) -> str:
+    """The module text for ``device="cuda"``: one GPU thread per trajectory (the
+    contract of `sweep.kernels.cuda`), its nodes' state in thread-local arrays, the same
+    stages, edge loop and observables as the CPU lanes (`_stages`, `_writes`) with
+    CUDA's sine (so the CPU's results to rounding, not bit for bit)."""
+    from .cuda import cuda_module, device_functions
+    from .vecmath import SIN_RANGE
+
+    method = _method(spec)
+    constants: dict[str, str] = {}
+    stages = _stages(method, constants, lanes=False)
+    arrays = ["th", "om", "ths", "oms"] + [f"k{s + 1}_{x}" for s in range(method.stages)
+                                           for x in ("th", "om")]
+    loads = [f"{name} = _param({k}, params, flat, columns, strides, sizes, offsets, values)"
+             for k, name in enumerate(("node_value", "delta_theta", "delta_omega", "alpha",
+                                       "coupling"))]
+    save_first = save_step = []
+    if spec.save:
+        save_first = ["for q in range(N):", "    saved[i, q, 0] = th[q]",
+                      "    saved[i, N + q, 0] = om[q]"]
+        save_step = ["if (step + 1) % save_every == 0:",
+                     "    for q in range(N):",
+                     "        saved[i, q, (step + 1) // save_every] = th[q]",
+                     "        saved[i, N + q, (step + 1) // save_every] = om[q]"]
+    width = network_outputs(spec)
+    finish = ["ok = True", "finite = True", "for q in range(N):",
+              "    if not (math.isfinite(th[q]) and math.isfinite(om[q])):",
+              "        finite = False", f"    if not abs(th[q]) <= {SIN_RANGE!r}:",
+              "        ok = False", "ok = ok and finite", "if ok:",
+              f"    status[i] = {int(Status.OK)}", indent(NL.join(_writes(spec, "[q]")), 1),
+              "else:",
+              f"    status[i] = {int(Status.ANGLE_OUT_OF_RANGE)} if finite else "
+              f"{int(Status.NONFINITE)}",
+              f"    for col in range({width}):", "        out[i, col] = math.nan"]
+    if spec.save:
+        finish += ["    for k_save in range(saved.shape[2]):", "        for q in range(2 * N):",
+                   "            if not (math.isfinite(saved[i, q, k_save]) and (q >= N or "
+                   f"abs(saved[i, q, k_save]) <= {SIN_RANGE!r})):",
+                   "                saved[i, q, k_save] = math.nan"]
+    body = NL.join(
+        ["i = cuda.grid(1)", "if i >= out.shape[0]:", "    return", "flat = first + i"]
+        + loads + list(constants.values())
+        + [f"{name} = cuda.local.array(N, np.float64)" for name in arrays]
+        + ["for q in range(N):", "    th[q] = SYNC[q]", "    om[q] = 0.0",
+           "node = int(node_value)", "if node >= 0:", "    th[node] += delta_theta",
+           "    om[node] += delta_omega"] + save_first
+        + ["for step in range(n_steps):", indent(NL.join(stages + save_step), 1)] + finish)
+    edges = spec.edges
+    return header + device_functions("") + f'''
+N = {spec.n_nodes}
+SRC = {_array([int(e[0]) for e in edges], "int64")}
+DST = {_array([int(e[1]) for e in edges], "int64")}
+WEIGHT = {_array([float(e[2]) for e in edges], "float64")}
+POWER = {_array([float(p) for p in spec.power], "float64")}
+SYNC = {_array([float(x) for x in spec.synchronous], "float64")}
+
+
+@cuda.jit(device=True)
+def accel(x, v, kx, kv, alpha, coupling):
+    """kx = v; kv = P - alpha v + K sum_edges A sin(x_other - x_self), edge by edge."""
+    for q in range(N):
+        kx[q] = v[q]
+        kv[q] = vfma(-alpha, v[q], POWER[q])
+    for e in range(SRC.shape[0]):
+        a = SRC[e]
+        c = DST[e]
+        w = WEIGHT[e]
+        f = w * coupling * vsin(x[c] - x[a])
+        kv[a] += f
+        kv[c] -= f
+''' + cuda_module(body)
