@@ -26,6 +26,10 @@ The table gives the declaration in text, in the user's own names::
     [system.damping]                    # optional: every acceleration gains - c v_i
     coefficient = 0.1
 
+Instead of ``lagrangian``, every coordinate's table may give its ``acceleration`` (an
+expression), with an optional ``potential`` in ``[system]`` for the energy (kinetic
+energy ``sum(v**2) / 2``).
+
 Expressions (the Lagrangian, the forces) name the coordinates, their velocities, the
 parameters and ``t`` (time), with numbers, ``+ - * / **``, ``sin``, ``cos``, ``sqrt``
 and ``pi``. They are read from Python's syntax tree into SymPy
@@ -46,13 +50,14 @@ from .physics.effect import Parameter
 from .physics.system import Coordinate, SystemDeclaration
 
 __all__ = ["COORDINATE_KEYS", "PARAMETER_KEYS", "SYSTEM_KEYS", "declaration_from_table",
-           "declared_system", "kernel_symbol"]
+           "declared_system", "kernel_symbol", "system_lines"]
 
 #: Keys of ``[system]`` for a declared system.
-SYSTEM_KEYS = ("kind", "name", "lagrangian", "coordinates", "parameters", "damping")
+SYSTEM_KEYS = ("kind", "name", "lagrangian", "potential", "coordinates", "parameters",
+               "damping")
 #: Keys of one ``[[system.coordinates]]`` table.
 COORDINATE_KEYS = ("name", "velocity", "units", "velocity_units", "angular", "long_name",
-                   "force")
+                   "force", "acceleration")
 #: Keys of a parameter given as a table in ``[system.parameters]``.
 PARAMETER_KEYS = ("value", "units", "minimum", "long_name")
 #: Names an expression reads that no declaration may take.
@@ -112,7 +117,7 @@ def declaration_from_table(table: dict[str, Any]) -> tuple[SystemDeclaration, di
     if unknown:
         raise ValueError(f"unknown key {unknown[0]!r}; accepted for DeclaredSystem: "
                          f"{', '.join(SYSTEM_KEYS)}")
-    for key in ("name", "lagrangian", "coordinates"):
+    for key in ("name", "coordinates"):
         if key not in table:
             raise ValueError(f"DeclaredSystem needs {key}; accepted: name = \"...\", "
                              "lagrangian = \"...\" (an expression), [[system.coordinates]] "
@@ -121,30 +126,96 @@ def declaration_from_table(table: dict[str, Any]) -> tuple[SystemDeclaration, di
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z][\w\-]*", name):
         raise ValueError(f"name = {name!r}; accepted: a word of letters, digits, _ and - "
                          "starting with a letter")
-    lagrangian = _expression("lagrangian", table["lagrangian"])
-    coordinates, forces = _coordinates(table["coordinates"])
+    coordinates, forces, accelerations = _coordinates(table["coordinates"])
+    given = [a is not None for a in accelerations]
+    if ("lagrangian" in table) == all(given) or (any(given) and not all(given)):
+        raise ValueError("DeclaredSystem takes either lagrangian = \"...\" or an "
+                         "acceleration = \"...\" in every [[system.coordinates]] table; "
+                         f"got {'both' if 'lagrangian' in table and any(given) else 'neither'}"
+                         f" (accelerations on {sum(given)} of {len(given)} coordinates)")
+    lagrangian = (_expression("lagrangian", table["lagrangian"]) if "lagrangian" in table
+                  else None)
+    potential = (_expression("potential", table["potential"]) if "potential" in table
+                 else None)
     parameters, values = _parameters(table.get("parameters", {}))
     seen: dict[str, str] = {}
-    for what, given in [*((f"coordinate {c.name!r}", (c.name, c.velocity)) for c in coordinates),
+    for what, items in [*((f"coordinate {c.name!r}", (c.name, c.velocity)) for c in coordinates),
                         *((f"parameter {p.axis!r}", (p.axis,)) for p in parameters)]:
-        for item in given:
+        for item in items:
             if item in seen:
                 raise ValueError(f"the name {item!r} is given twice (by {seen[item]} and "
                                  f"{what}); accepted: distinct names for the coordinates, "
                                  "their velocities and the parameters")
             seen[item] = what
     names = list(seen)
-    for what, text in [("lagrangian", lagrangian),
-                       *((f"force on {c.name!r}", f) for c, f in zip(coordinates, forces)
-                         if f is not None)]:
-        _check_names(what, text, names)
+    for what, text in [("lagrangian", lagrangian), ("potential", potential),
+                       *((f"force on {c.name!r}", f) for c, f in zip(coordinates, forces)),
+                       *((f"acceleration of {c.name!r}", a)
+                         for c, a in zip(coordinates, accelerations))]:
+        if text is not None:
+            _check_names(what, text, names)
     rename = {n: kernel_symbol(n) for n in names}
     declaration = SystemDeclaration(
         name=name, coordinates=coordinates, parameters=parameters,
-        lagrangian=_renamed(lagrangian, rename),
+        lagrangian=None if lagrangian is None else _renamed(lagrangian, rename),
         forces=tuple(_renamed(f or "0", rename) for f in forces)
-        if any(f is not None for f in forces) else ())
+        if any(f is not None for f in forces) else (),
+        accelerations=tuple(_renamed(a, rename) for a in accelerations)
+        if all(given) else (),
+        potential=None if potential is None else _renamed(potential, rename))
     return declaration, values
+
+
+def system_lines(system, value_text) -> list[str]:
+    """The ``[system]`` table (and its subtables) that declares ``system`` in a run
+    file: the inverse of `declared_system`, for the explorer's run files.
+
+    Parameters
+    ----------
+    system : sweep.DeclaredSystem
+        Its declaration's kernel symbols are written back as the names (a declaration
+        made in Python with other symbols reads back as the same equations with the
+        symbols ``u_<name>``).
+    value_text : callable
+        A value (str, float, bool, dict) as TOML text.
+
+    Returns
+    -------
+    list of str
+        Lines, from ``[system]`` to the last subtable.
+    """
+    declaration = system.declaration
+    names = _names(declaration)
+    out = ["[system]", f"kind = {value_text('DeclaredSystem')}",
+           f"name = {value_text(declaration.name)}"]
+    if declaration.lagrangian is not None:
+        out.append(f"lagrangian = {value_text(_renamed(declaration.lagrangian, names))}")
+    if declaration.potential is not None:
+        out.append(f"potential = {value_text(_renamed(declaration.potential, names))}")
+    for k, c in enumerate(declaration.coordinates):
+        out += ["", "[[system.coordinates]]", f"name = {value_text(c.name)}",
+                f"velocity = {value_text(c.velocity)}", f"units = {value_text(c.units)}",
+                f"velocity_units = {value_text(c.velocity_units)}",
+                f"angular = {value_text(c.angular)}"]
+        if c.long_name:
+            out.append(f"long_name = {value_text(c.long_name)}")
+        if declaration.forces:
+            out.append(f"force = {value_text(_renamed(declaration.forces[k], names))}")
+        if declaration.accelerations:
+            out.append("acceleration = "
+                       f"{value_text(_renamed(declaration.accelerations[k], names))}")
+    if declaration.parameters:
+        out += ["", "[system.parameters]"]
+    for p in declaration.parameters:
+        entry = {"value": float(getattr(system, p.axis)), "units": p.units}
+        if p.minimum is not None:
+            entry["minimum"] = float(p.minimum)
+        if p.long_name:
+            entry["long_name"] = p.long_name
+        out.append(f"{p.axis} = {value_text(entry)}")
+    if system.damping is not None:
+        out += ["", "[system.damping]", f"coefficient = {value_text(system.damping)}"]
+    return out
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -163,13 +234,14 @@ def _expression(what: str, value: Any) -> str:
     return value
 
 
-def _coordinates(value: Any) -> tuple[tuple[Coordinate, ...], list[str | None]]:
+def _coordinates(value: Any) -> tuple[tuple[Coordinate, ...], list[str | None],
+                                      list[str | None]]:
     accepted = ("one [[system.coordinates]] table per coordinate with name, velocity "
-                "(and units, velocity_units, angular, long_name, force)")
+                "(and units, velocity_units, angular, long_name, force or acceleration)")
     if not isinstance(value, list) or not value or not all(isinstance(c, dict)
                                                           for c in value):
         raise TypeError(f"coordinates = {value!r}; accepted: {accepted}")
-    coordinates, forces = [], []
+    coordinates, forces, accelerations = [], [], []
     for index, entry in enumerate(value):
         where = f"coordinates[{index}]"
         unknown = [key for key in entry if key not in COORDINATE_KEYS]
@@ -200,7 +272,9 @@ def _coordinates(value: Any) -> tuple[tuple[Coordinate, ...], list[str | None]]:
                                       angular=angular))
         forces.append(_expression(f"{where} force", entry["force"])
                       if "force" in entry else None)
-    return tuple(coordinates), forces
+        accelerations.append(_expression(f"{where} acceleration", entry["acceleration"])
+                             if "acceleration" in entry else None)
+    return tuple(coordinates), forces, accelerations
 
 
 def _parameters(value: Any) -> tuple[tuple[Parameter, ...], dict[str, float]]:
@@ -232,8 +306,7 @@ def _parameters(value: Any) -> tuple[tuple[Parameter, ...], dict[str, float]]:
             if not isinstance(text, str):
                 raise TypeError(f"parameters.{name} {key} must be a string, got {text!r}")
         parameters.append(Parameter(name, name, kernel_symbol(name), units, units, long_name,
-                                    minimum=None if minimum is None else float(minimum),
-                                    default=float(number)))
+                                    minimum=None if minimum is None else float(minimum)))
         values[name] = float(number)
     return tuple(parameters), values
 

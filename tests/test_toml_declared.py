@@ -24,21 +24,20 @@ EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "pendulum_on_cart.t
 def cart_in_python() -> SystemDeclaration:
     """The example's declaration written by hand with the documented kernel symbols
     (``u_<name>``, `sweep.toml_declared.kernel_symbol`)."""
-    def parameter(name, units, long_name, minimum=0.0, value=None):
-        return Parameter(name, name, f"u_{name}", units, units, long_name, minimum=minimum,
-                         default=value)
+    def parameter(name, units, long_name, minimum=0.0):  # values: the system's, no default
+        return Parameter(name, name, f"u_{name}", units, units, long_name, minimum=minimum)
     return SystemDeclaration(
         name="pendulum_on_cart",
         coordinates=(Coordinate("theta", "omega", "u_theta", "u_omega",
                                 long_name="pendulum angle"),
                      Coordinate("x", "v", "u_x", "u_v", units="m", velocity_units="m s-1",
                                 long_name="cart position", angular=False)),
-        parameters=(parameter("M", "kg", "cart mass", value=2.0),
-                    parameter("m", "kg", "bob mass", value=1.0),
-                    parameter("l", "m", "rod length", value=1.0),
-                    parameter("g", "m s-2", "gravity", minimum=None, value=9.81),
-                    parameter("k", "N m-1", "spring constant", value=20.0),
-                    parameter("b", "N m s", "joint damping", value=0.1)),
+        parameters=(parameter("M", "kg", "cart mass"),
+                    parameter("m", "kg", "bob mass"),
+                    parameter("l", "m", "rod length"),
+                    parameter("g", "m s-2", "gravity", minimum=None),
+                    parameter("k", "N m-1", "spring constant"),
+                    parameter("b", "N m s", "joint damping")),
         lagrangian="(u_M + u_m) * u_v ** 2 / 2 + u_m * u_l * u_v * u_omega * cos(u_theta) + "
                    "u_m * u_l ** 2 * u_omega ** 2 / 2 - u_k * u_x ** 2 / 2 + "
                    "u_m * u_g * u_l * cos(u_theta)",
@@ -61,7 +60,8 @@ def test_the_shipped_example_runs_and_plots_through_the_cli_as_python_does(tmp_p
     assert ds.sizes == {"theta_0": 81, "k": 60}
     np.testing.assert_allclose(ds.theta_0, np.deg2rad(np.linspace(-170, 170, 81)))
     # the oracle: the same declaration built in Python, run on the same axes
-    system = sweep.DeclaredSystem(cart_in_python())
+    system = sweep.DeclaredSystem(cart_in_python(), M=2.0, m=1.0, l=1.0, g=9.81, k=20.0,
+                                  b=0.1)
     assert system.declaration == load_run(EXAMPLE)[0].declaration
     expected = sweep.run(system, sweep.Grid(theta_0=ds.theta_0.values, k=ds.k.values),
                          t_end=20.0, dt=0.005, observe=("final", "energy"), progress=False)
