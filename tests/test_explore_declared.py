@@ -79,7 +79,7 @@ def test_any_two_axes_a_parameter_and_a_velocity():
 
 def test_a_click_and_the_reproducing_run_file_and_python(tmp_path):
     e = cart_explorer()
-    e.update(quantity="var:x_final", b=0.5)
+    e.update(quantity="var:x_final", b=0.5, damping=0.2)
     result = e.compute()
     traj = e.trajectory(1.0, 0.2, result)
     assert isinstance(traj, SystemTrajectory)
@@ -92,7 +92,8 @@ def test_a_click_and_the_reproducing_run_file_and_python(tmp_path):
     path = tmp_path / "map.toml"
     path.write_text(e.toml_text())
     system, grid, kwargs = load_run(path, {})
-    assert system == e.state.scene  # the same declaration and values, b = 0.5 included
+    assert system == e.state.scene  # the same declaration and values, b, damping too
+    assert system.damping == 0.2 and "[system.damping]" in e.toml_text()
     ds = sweep.run(system, grid, progress=False, **kwargs)
     np.testing.assert_array_equal(plane(ds.x_final, "x_0", "theta_0"), result.values)
     scope = {}

@@ -146,6 +146,11 @@ _DELETE = object()
                                              r"identifier"),
     (_set("system/parameters/k", {"value": -1.0, "minimum": 0.0}), r"k.*-1"),
     (_set("system/parameters/k", {"units": "N m-1"}), r"parameters.k needs value"),
+    (_set("system/coordinates/1/acceleration", "-k*x"),
+     r"either lagrangian .* or an acceleration .* in every \[\[system.coordinates\]\] "
+     r"table; got both \(accelerations on 1 of 2 coordinates\)"),
+    (_set("system/lagrangian", _DELETE),
+     r"either lagrangian .*; got neither \(accelerations on 0 of 2 coordinates\)"),
     (_set("system/mass", 1.0), r"unknown key 'mass'; accepted for DeclaredSystem: kind, "
                                r"name, lagrangian"),
     (_set("grid", {"y_0": [0.0]}), r"unknown key 'y_0' in \[grid\]; accepted: theta_0"),

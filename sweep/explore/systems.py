@@ -170,9 +170,24 @@ def _system_python(system: System) -> list[str]:
         arguments += f", effects=(sweep.Damping({system.damping!r}),)"
     if isinstance(system, DeclaredSystem):
         return ["from sweep.physics import Coordinate, Parameter, SystemDeclaration",
-                f"declaration = {system.declaration!r}",
+                *_declaration_python(system.declaration),
                 f"system = sweep.DeclaredSystem(declaration, {arguments})"]
     return [f"system = sweep.{type(system).__name__}({arguments})"]
+
+
+def _declaration_python(declaration) -> list[str]:
+    """``declaration = SystemDeclaration(...)``, a field per line and a coordinate or
+    parameter per line."""
+    out = ["declaration = SystemDeclaration("]
+    for field in dataclasses.fields(declaration):
+        value = getattr(declaration, field.name)
+        if field.name in ("coordinates", "parameters"):
+            out.append(f"    {field.name}=(")
+            out += [f"        {item!r}," for item in value]
+            out.append("    ),")
+        else:
+            out.append(f"    {field.name}={value!r},")
+    return [*out, ")"]
 
 
 def _system_toml(system: System) -> list[str]:
