@@ -156,3 +156,23 @@ def test_the_command_line_explores_a_run_files_declared_system(monkeypatch):
     assert (s.view.x, s.view.y) == ("theta_0", "k")
     assert isinstance(sweep.explore(sweep.DeclaredSystem(two_wells()), sweep.Grid(
         q1_0=np.linspace(-1, 1, N), q2_0=np.linspace(-1, 1, N)), **RUN), SystemExplorerApp)
+
+
+def test_the_page_labels_its_axes_in_the_coordinates_units():
+    pytest.importorskip("panel")
+    from sweep.explore.system_app import SystemExplorerApp, _SystemSession
+
+    system, _, _ = load_run(EXAMPLE)
+    app = SystemExplorerApp(system, sweep.Grid(theta_0=np.linspace(-3, 3, N),
+                                               x_0=np.linspace(-0.5, 0.5, N)),
+                            resolution=N, **RUN)
+    page = _SystemSession(app)  # no document: the callbacks draw at once
+    try:
+        assert page.requests.idle(120)
+        assert page.trajectory.yaxis.axis_label == "coordinates [rad, m], velocities " \
+                                                   "[rad/s, m/s]"
+        assert (page.phase.xaxis.axis_label, page.phase.yaxis.axis_label) == \
+            ("coordinate [rad, m]", "velocity [rad/s, m/s]")
+        assert page.map.yaxis.axis_label == "x_0 [m]"
+    finally:
+        page.requests.close()
