@@ -76,6 +76,10 @@ of ``[scene]``: ``kind`` names it, the other keys are its constructor's argument
     theta1_0 = {start = -3, stop = 3, num = 201}
     theta2_0 = {start = -3, stop = 3, num = 201}
 
+``kind = "DeclaredSystem"`` declares a system in the file itself: its coordinates, its
+parameters with their values and its Lagrangian as text (`sweep.toml_declared`); its
+axes are ``<coordinate>_0``, ``<velocity>_0`` and the parameters' names.
+
 ``units = "deg"`` is accepted for the angle-like axes ``theta0`` (deg),
 ``omega0`` (deg/s), ``forcing_phase`` (deg) and any effect parameter declared as an
 angle; values are converted to radians
@@ -108,7 +112,7 @@ __all__ = ["OPTION_KEYS", "REFINE_MAPS", "RUN_KEYS", "SYSTEM_KINDS", "TABLES", "
 TABLES = ("scene", "grid", "run", "points", "sample", "system")
 
 #: ``[system] kind`` -> the system's class name in `sweep.physics`.
-SYSTEM_KINDS = ("DoublePendulum", "CoupledPendula", "SwingNetwork")
+SYSTEM_KINDS = ("DoublePendulum", "CoupledPendula", "SwingNetwork", "DeclaredSystem")
 
 #: The tables that say which trajectories run (one of them).
 ROWS_TABLES = ("grid", "points", "sample")
@@ -333,6 +337,10 @@ def _system(source: str, table: dict):
         if kind not in SYSTEM_KINDS:
             raise ValueError(f"kind = {kind!r}; accepted: "
                              f"{', '.join(map(repr, SYSTEM_KINDS))}")
+        if kind == "DeclaredSystem":
+            from .toml_declared import declared_system
+
+            return declared_system(table)
         cls = getattr(physics, kind)
         fields = [f.name for f in dataclasses.fields(cls) if f.name != "effects"]
         if kind == "SwingNetwork":

@@ -112,10 +112,11 @@ def test_bad_declared_systems_are_refused_before_any_grid_or_compile():
         sweep.DeclaredSystem(unknown)
 
 
-def test_the_explorer_refuses_a_declared_system_naming_what_it_takes():
+def test_the_explorer_takes_a_declared_system():
     from sweep.explore.systems import SystemExplorer
 
     grid = sweep.Grid(theta_0=np.linspace(-3, 3, 4), omega_0=np.linspace(-3, 3, 4))
-    with pytest.raises(TypeError, match=r"takes a DoublePendulum or a CoupledPendula, got "
-                                        r"DeclaredSystem.*runs in sweep\.run"):
-        SystemExplorer(sweep.DeclaredSystem(cart_declaration()), grid)
+    e = SystemExplorer(sweep.DeclaredSystem(cart_declaration()), grid, resolution=8,
+                       t_end=0.1, dt=0.01)  # tests/test_explore_declared.py: its maps
+    assert (e.state.view.x, e.state.view.y) == ("theta_0", "omega_0")
+    assert [c.name for c in e.parameter_controls()] == ["stiffness", "damping", "x_0", "v_0"]

@@ -26,6 +26,7 @@ ARGUMENTS = {
     "double_pendulum_flip": ["--size", "121", "--t-max", "30"],
     "forced_basins": ["--size", "61", "--periods", "100", "--pilot", "21"],
     "frequency_response": ["--points", "41"],
+    "huygens_clocks": ["--size", "61"],
     "kapitza": ["--size", "41"],
     "lyapunov_map": ["--size", "41"],
     "mathieu_chart": ["--size", "61"],

@@ -28,18 +28,32 @@ class _SystemSession(_Session):
             fig.renderers = []
             for legend in fig.legend:
                 legend.items = []
-        self.trajectory.yaxis.axis_label = "coordinates [rad], velocities [rad/s]"
+        position_units, velocity_units = self._units()
+        self.trajectory.yaxis.axis_label = (f"coordinates [{position_units}], "
+                                            f"velocities [{velocity_units}]")
         for k, name in enumerate(names):
             self.trajectory.line("t", name, source=self.series_source, legend_label=name,
                                  color=Category10_10[k % 10],
                                  line_dash="solid" if k < len(positions) else "dashed")
-        self.phase.xaxis.axis_label = "theta_i [rad]"
-        self.phase.yaxis.axis_label = "omega_i [rad/s]"
+        self.phase.xaxis.axis_label = f"coordinate [{position_units}]"
+        self.phase.yaxis.axis_label = f"velocity [{velocity_units}]"
         for k, (position, velocity) in enumerate(zip(positions, velocities, strict=True)):
             self.phase.line(position, velocity, source=self.series_source,
                             legend_label=f"({position}, {velocity})",
                             color=Category10_10[k % 10])
         self._label_axes()
+
+    def _units(self) -> tuple[str, str]:
+        """The coordinates' units and the velocities' (each distinct one, in order)."""
+        from ..plot import units_text
+
+        scene = self.explorer.state.scene
+        coordinates = getattr(getattr(scene, "declaration", None), "coordinates", None)
+        if not coordinates:  # a network: its nodes' phases
+            return "rad", "rad/s"
+        return tuple(", ".join(dict.fromkeys(units_text(getattr(c, key))
+                                             for c in coordinates))
+                     for key in ("units", "velocity_units"))
 
     def _label_axes(self) -> None:
         from ..plot import units_text

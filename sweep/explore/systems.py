@@ -1,6 +1,6 @@
 """The explorer's model for systems with several coordinates (`sweep.DoublePendulum`,
-`sweep.CoupledPendula`): `SystemExplorer`, the single pendulum's `Explorer` with what
-depends on the system read from its declaration.
+`sweep.CoupledPendula`, `sweep.DeclaredSystem`): `SystemExplorer`, the single
+pendulum's `Explorer` with what depends on the system read from its declaration.
 
 - the quantities are the variables of the system's observables
   (`sweep.system_observables`: ``final``, ``winding``, ``energy``, ``flip``,
@@ -30,6 +30,7 @@ from ..grid import Grid
 from ..kernels import Status
 from ..methods import METHODS
 from ..physics.coupled import CoupledPendula
+from ..physics.declared import DeclaredSystem
 from ..physics.double import DoublePendulum
 from ..physics.system import SYSTEM_DAMPING, System, initial_parameters
 from ..system_observables import SYSTEM_OBSERVABLES, variables
@@ -66,16 +67,26 @@ def _log10(ds, name: str):
 def system_quantities(system: System) -> dict[str, Quantity]:
     """Every map of ``system``: one per variable of each of its observables
     (`sweep.system_observables.variables`, in their order), a time [s] also as its
-    log10 (first, as ``log10:<name>``: flip times span decades).
+    log10 (first, as ``log10:<name>``: flip times span decades). A system without an
+    angle has no flip map, one declared by accelerations without a potential no
+    energy map.
 
     Returns
     -------
     dict of str to sweep.explore.model.Quantity
         Keys ``var:<variable>`` (``var:theta1_final``) and ``log10:<variable>``.
     """
-    coordinates = system.declaration.coordinates
+    declaration = system.declaration
+    coordinates = declaration.coordinates
+    meaningless = set()
+    if not any(c.angular for c in coordinates):
+        meaningless.add("flip")  # no angle can pass an upright position
+    if declaration.lagrangian is None and declaration.potential is None:
+        meaningless.add("energy")  # accelerations without a potential: no energy
     out: dict[str, Quantity] = {}
     for observable in SYSTEM_OBSERVABLES.values():
+        if observable.name in meaningless:
+            continue
         for name, units, _ in variables(observable.name, coordinates, system.energy_units):
             if units == "s":
                 out[f"log10:{name}"] = Quantity(
@@ -132,11 +143,64 @@ class SystemTrajectory:
 
 
 def _constructor(system: System) -> dict:
-    """``system``'s constructor arguments except ``effects`` and those left out (None:
-    a term it does not have, such as a double pendulum's joint damping)."""
+    """``system``'s constructor arguments except ``effects`` (and a declared system's
+    declaration) and those left out (None: a term it does not have, such as a double
+    pendulum's joint damping)."""
+    if isinstance(system, DeclaredSystem):
+        return {p.axis: float(getattr(system, p.axis))
+                for p in system.declaration.parameters}
     return {f.name: (value.tolist() if isinstance(value, np.ndarray) else value)
             for f in dataclasses.fields(system) if f.name != "effects"
             for value in (getattr(system, f.name),) if value is not None}
+
+
+def _replaced(system: System, changes: dict) -> System:
+    """``system`` with the constructor arguments ``changes`` (validated by it)."""
+    if isinstance(system, DeclaredSystem):
+        values = {**_constructor(system), **changes}
+        effects = values.pop("effects", system.effects)
+        return DeclaredSystem(system.declaration, effects=effects, **values)
+    return dataclasses.replace(system, **changes)
+
+
+def _system_python(system: System) -> list[str]:
+    """Lines of Python that make ``system`` (as ``system``)."""
+    arguments = ", ".join(f"{k}={v!r}" for k, v in _constructor(system).items())
+    if system.effects:
+        arguments += f", effects=(sweep.Damping({system.damping!r}),)"
+    if isinstance(system, DeclaredSystem):
+        return ["from sweep.physics import Coordinate, Parameter, SystemDeclaration",
+                *_declaration_python(system.declaration),
+                f"system = sweep.DeclaredSystem(declaration, {arguments})"]
+    return [f"system = sweep.{type(system).__name__}({arguments})"]
+
+
+def _declaration_python(declaration) -> list[str]:
+    """``declaration = SystemDeclaration(...)``, a field per line and a coordinate or
+    parameter per line."""
+    out = ["declaration = SystemDeclaration("]
+    for field in dataclasses.fields(declaration):
+        value = getattr(declaration, field.name)
+        if field.name in ("coordinates", "parameters"):
+            out.append(f"    {field.name}=(")
+            out += [f"        {item!r}," for item in value]
+            out.append("    ),")
+        else:
+            out.append(f"    {field.name}={value!r},")
+    return [*out, ")"]
+
+
+def _system_toml(system: System) -> list[str]:
+    """The run file's ``[system]`` table (and subtables) of ``system``."""
+    if isinstance(system, DeclaredSystem):
+        from ..toml_declared import system_lines
+
+        return system_lines(system, _toml_value)
+    out = ["[system]", f"kind = {_toml_value(type(system).__name__)}"]
+    out += [f"{k} = {_toml_value(v)}" for k, v in _constructor(system).items()]
+    if system.effects:
+        out += ["", "[system.damping]", f"coefficient = {_toml_value(system.damping)}"]
+    return out
 
 
 #: Pixels per axis of a system's maps by default: the double pendulum's flip map of
@@ -150,7 +214,7 @@ class SystemExplorer(Explorer):
 
     Parameters
     ----------
-    system : sweep.DoublePendulum or sweep.CoupledPendula
+    system : sweep.DoublePendulum, sweep.CoupledPendula or sweep.DeclaredSystem
     grid : sweep.Grid
         Its first two axes with more than one value are the map's x and y (else the
         first two angles' initial values); every axis must be one of the system's
@@ -179,8 +243,8 @@ class SystemExplorer(Explorer):
             raise TypeError(f"{type(self).__name__} takes a "
                             f"{' or a '.join(t.__name__ for t in takes)}, got "
                             f"{type(system).__name__}; sweep.explore takes a sweep.Scene, "
-                            "a sweep.DoublePendulum, a sweep.CoupledPendula or a "
-                            "sweep.SwingNetwork (a sweep.DeclaredSystem runs in sweep.run)")
+                            "a sweep.DoublePendulum, a sweep.CoupledPendula, a "
+                            "sweep.DeclaredSystem or a sweep.SwingNetwork")
         check_arguments(grid, run_kwargs)
         self._registry = self._quantities_of(system)
         initial = self._start_names(system)
@@ -217,7 +281,7 @@ class SystemExplorer(Explorer):
         self._lock = COMPUTE_LOCK
 
     #: The systems this explorer takes.
-    takes = (DoublePendulum, CoupledPendula)
+    takes = (DoublePendulum, CoupledPendula, DeclaredSystem)
 
     # -- what the declaration gives ------------------------------------------------
     @staticmethod
@@ -339,7 +403,7 @@ class SystemExplorer(Explorer):
             else:
                 raise ValueError(f"{name}: not a parameter of {type(system).__name__}; "
                                  f"accepted: {', '.join(names + ['damping'])}")
-        return dataclasses.replace(system, **changes)
+        return _replaced(system, changes)
 
     # -- validation and updates ------------------------------------------------------
     def _check_quantity(self, state: State) -> None:
@@ -414,15 +478,10 @@ class SystemExplorer(Explorer):
                 pilot: Grid | None = None, trajectory: bool = False) -> str:
         from .model import _grid_text
 
-        system = state.scene
-        arguments = ", ".join(f"{k}={v!r}" for k, v in _constructor(system).items())
-        if system.effects:
-            arguments += f", effects=(sweep.Damping({system.damping!r}),)"
         lines = ["import numpy as np", "import sweep"]
         if quantity is not None and "maps." in quantity.expression:
             lines.append("from sweep import maps")
-        lines += ["",
-                 f"system = sweep.{type(system).__name__}({arguments})",
+        lines += ["", *_system_python(state.scene),
                  f"grid = {_grid_text(grid)}",
                  f"kwargs = dict({', '.join(f'{k}={v!r}' for k, v in kwargs.items())})",
                  "ds = sweep.run(system, grid, **kwargs)"]
@@ -434,13 +493,8 @@ class SystemExplorer(Explorer):
 
     @staticmethod
     def _toml(state: State, axes: dict, kwargs: dict, *, pilot: bool, comment: str) -> str:
-        system = state.scene
         out = [f"# {comment}", "# written by sweep explore; run: sweep run THIS.toml -o OUT.nc",
-               "", "[system]", f"kind = {_toml_value(type(system).__name__)}"]
-        out += [f"{k} = {_toml_value(v)}" for k, v in _constructor(system).items()]
-        if system.effects:
-            out += ["", "[system.damping]", f"coefficient = {_toml_value(system.damping)}"]
-        out += ["", "[grid]"]
+               "", *_system_toml(state.scene), "", "[grid]"]
         for name, value in axes.items():
             if isinstance(value, np.ndarray):
                 value = float(value[0]) if value.size == 1 else [float(x) for x in value]

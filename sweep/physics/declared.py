@@ -60,8 +60,9 @@ class DeclaredSystem(System):
     Every coordinate is integrated; ``winding`` and ``flip`` read the angular ones
     (`sweep.physics.Coordinate.angular`). ``energy`` is the Lagrangian's Jacobi function
     (kinetic plus potential energy for a time-independent one), in the declaration's
-    units (``energy_units``, default "J"). Run files and the dataset's reload
-    (`sweep.io.scene_from`) do not take a declared system: it lives in Python.
+    units (``energy_units``, default "J"). A run file declares one with ``[system]
+    kind = "DeclaredSystem"`` (`sweep.toml_declared`); `sweep.explore` takes it. The
+    dataset's reload (`sweep.io.scene_from`) does not.
 
     Examples
     --------
