@@ -53,7 +53,8 @@ class CoupledPendula(System):
     effects : tuple
         `sweep.Damping(c)`: every pendulum's acceleration gains ``- c theta_i'`` (c in
         1/s; the same as a damping torque ``- c m l^2 theta_i'`` at each pivot).
-        With ``on="theta<i>"``, `sweep.Damping`, `sweep.Torque` and `sweep.Forcing` act on
+        With ``on="theta<i>"``, `sweep.Damping`, `sweep.Torque`, `sweep.Forcing` and
+        `sweep.QuadraticDrag` act on
         pendulum i alone, as a torque at its pivot [N m]
         (`sweep.physics.coordinate_effects`; grid axes ``damping_theta<i>``, ...).
 

@@ -41,7 +41,8 @@ class DeclaredSystem(System):
         here, before any grid or compile.
     effects : tuple, default ()
         `sweep.Damping(c)`: every acceleration gains ``- c v_i`` (c in 1/s). With
-        ``on="<coordinate>"``, `sweep.Damping`, `sweep.Torque` and `sweep.Forcing` are a
+        ``on="<coordinate>"``, `sweep.Damping`, `sweep.Torque`, `sweep.Forcing` and
+        `sweep.QuadraticDrag` are a
         generalized force on that coordinate (`sweep.physics.coordinate_effects`).
     **values : float
         A value for each of the declaration's parameters, by its axis name, in the

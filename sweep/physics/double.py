@@ -61,8 +61,9 @@ class DoublePendulum(System):
         `sweep.Damping(c)`: mass-proportional damping, every angular acceleration gains
         ``- c theta_i'`` (the generalized force ``- c M(q) q'``; c in 1/s).
         ``sweep.Damping(c, on="theta1")``, ``sweep.Torque(tau, on="theta2")``,
-        ``sweep.Forcing(A, W, on="theta1")``: a generalized force on that angle alone,
-        ``-c omega1`` [N m, c in N m s], ``tau`` [N m], ``A sin(W t)`` [N m]
+        ``sweep.Forcing(A, W, on="theta1")``, ``sweep.QuadraticDrag(k, on="theta2")``: a
+        generalized force on that angle alone, ``-c omega1`` [N m, c in N m s], ``tau``
+        [N m], ``A sin(W t)`` [N m], ``-k omega2 |omega2|`` [N m, k in N m s^2]
         (`sweep.physics.coordinate_effects`; grid axes ``damping_theta1``, ...).
         ``Damping(c1, on="theta1")`` is the pivot's damping ``damping1`` without the
         middle joint's.

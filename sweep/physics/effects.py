@@ -6,8 +6,8 @@ present, in the order they are registered here::
     theta'' = - (g/L) f(theta) - c theta' + A sin(W t + phase) + tau - k theta'|theta'|
               + (a nu^2 / L) cos(nu t + psi) f(theta)
 
-On a system of several coordinates (`sweep.DoublePendulum`, ...), `Damping`, `Forcing`
-and `Torque` given ``on="<coordinate>"`` are a generalized force ``Q`` on that
+On a system of several coordinates (`sweep.DoublePendulum`, ...), `Damping`, `Forcing`,
+`Torque` and `QuadraticDrag` given ``on="<coordinate>"`` are a generalized force ``Q`` on that
 coordinate (``M(q) q'' = F + Q``; their ``generalized_force``), in the units of a
 generalized force (N m on an angle) rather than per unit ``m L^2``; see
 `sweep.physics.coordinate_effects`.
@@ -137,7 +137,7 @@ class Torque(Effect):
 
 
 @register
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class QuadraticDrag(Effect):
     """Air drag, the term ``- k theta' |theta'|``.
 
@@ -145,9 +145,14 @@ class QuadraticDrag(Effect):
     ----------
     coefficient : float
         ``k`` in 1/rad; finite and >= 0.
+    on : str, optional, keyword only
+        Only on a system (and there required): the coordinate it acts on, as the
+        generalized force ``Q = -k v |v|`` on it, ``k`` in N m s^2 on an angle (grid
+        axis ``drag_<coordinate>``).
     """
 
     coefficient: float
+    on: str | None = on_field()
 
     declaration: ClassVar[EffectDeclaration] = EffectDeclaration(
         name="drag",
@@ -162,6 +167,7 @@ class QuadraticDrag(Effect):
         # faster than the terminal speed, drag beats every force: theta'' opposes theta'
         speed_bound="math.sqrt(force_max / kd) if kd > 0 else math.inf",
         switched_on_by_grid=True,  # like damping: a drag axis alone switches it on
+        generalized_force="-kd*v*abs(v)",
     )
 
 

@@ -24,8 +24,8 @@ Kernel-source conventions of `DerivedSystem` (what the generator relies on):
 - names: position ``<coordinate.symbol>`` (``th1``), velocity
   ``<coordinate.velocity_symbol>`` (``om1``), each parameter's ``symbol``, time ``t``;
 - functions: ``vsin``, ``vcos``, ``vsincos`` (returns ``(sin x, cos x)`` from one
-  argument reduction), ``vfma(a, b, c)`` (``a * b + c``, one rounding), ``math.sqrt``;
-  no other call;
+  argument reduction), ``vfma(a, b, c)`` (``a * b + c``, one rounding), ``math.sqrt``,
+  ``abs`` (a quadratic drag's); no other call;
 - ``accel_lines``: statements; temporaries are named ``x<k>`` (SymPy's ``cse``); the
   last statements assign ``acc_<symbol>`` for every coordinate, in coordinate order;
 - ``energy_lines``: statements ending with ``energy_value = ...`` (kinetic plus
@@ -196,7 +196,8 @@ class System:
     #: Effects a system accepts: `sweep.Damping` without ``on`` (mass-proportional) and,
     #: with ``on="<coordinate>"``, every effect of
     #: `sweep.physics.coordinate_effects.acting_effects` (a generalized force on it).
-    ACCEPTED_EFFECTS = ("Damping", "Damping(on=...)", "Forcing(on=...)", "Torque(on=...)")
+    ACCEPTED_EFFECTS = ("Damping", "Damping(on=...)", "Forcing(on=...)", "Torque(on=...)",
+                        "QuadraticDrag(on=...)")
 
     #: UDUNITS units of its energy (its Lagrangian's).
     energy_units = "J"
