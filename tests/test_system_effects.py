@@ -341,3 +341,23 @@ def _vee():
 def test_bad_effects_are_refused_before_any_compute(make, match):
     with pytest.raises((ValueError, TypeError), match=match):
         make()
+
+
+def test_a_run_file_takes_effects_on_coordinates():
+    """``[system.<effect>]`` with ``on``, or ``[[system.<effect>]]`` one per coordinate;
+    ``[system.damping]`` without ``on`` stays the mass-proportional damping."""
+    from sweep.toml_spec import parse_run
+
+    spec = {"system": {"kind": "CoupledPendula", "n": 3,
+                       "damping": [{"coefficient": 0.1}, {"coefficient": 0.2, "on": "theta1"}],
+                       "torque": {"value": 0.5, "on": "theta3"}},
+            "grid": {"theta1_0": [0.1, 0.2], "damping_theta2": [0.0, 0.3]},
+            "run": {"t_end": 1.0, "dt": 0.1}}
+    system, grid, _ = parse_run(spec)
+    assert system == sweep.CoupledPendula(3, effects=(
+        sweep.Damping(0.1), sweep.Damping(0.2, on="theta1"), sweep.Torque(0.5, on="theta3")))
+    assert grid.dims == ("theta1_0", "damping_theta2")
+    spec["system"]["torque"] = {"value": 0.5, "coordinate": "theta3"}
+    with pytest.raises(ValueError, match=r"run.toml: \[system\] unknown key 'coordinate' "
+                                         r"in \[system.torque\]; accepted: value, on"):
+        parse_run(spec, source="run.toml")
