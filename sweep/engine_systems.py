@@ -149,7 +149,7 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
             f"'flip' and saves nothing; got observe={names!r}, save_every={save_every!r}; "
             "accepted: observe=('flip',) and save_every=None, or stop_early=False")
     damping = "damping" in grid.effects(system)
-    spec = SystemSpec(system=system.declaration,
+    spec = SystemSpec(system=system.declaration_with_effects,
                       derived=system.derived(jacobian="lyapunov" in names), observe=names,
                       damping=damping, save=save_every is not None, method=settings.method,
                       stop_early=bool(stop_early), block=_block(grid.size, bool(stop_early)),
@@ -273,10 +273,19 @@ def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
     attrs = _attributes(system, grid, settings, spec, fixed)
     attrs.update(system_name=spec.system.name,
                  coordinates_names=" ".join(c.name for c in coordinates),
-                 effects="damping" if spec.damping else "none")
+                 effects=_effects_attribute(system, spec))
     if spec.stop_early:
         attrs["stop_early"] = "at the first flip"
     return xr.Dataset(data_vars, coords, attrs)
+
+
+def _effects_attribute(system, spec: SystemSpec) -> str:
+    """The dataset's ``effects``: ``damping`` (mass-proportional) and ``<effect>_<coordinate>``
+    of the effects on one coordinate (``damping_theta1 torque_theta2``), or ``none``."""
+    names = ["damping"] if spec.damping else []
+    names += [f"{e.declaration.name}_{e.coordinate}" for e in system.effects
+              if e.coordinate is not None]
+    return " ".join(names) or "none"
 
 
 def _time(settings, n_saved: int) -> xr.Variable:

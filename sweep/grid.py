@@ -186,6 +186,9 @@ class ParameterRows:
         """Refuse an axis that names no coordinate or parameter of ``system``."""
         columns = system.accepted_axes()
         for name in self._axes:
+            hint = None if name in columns else system.axis_hint(name)
+            if hint is not None:  # an effect on a coordinate: say what it needs
+                raise ValueError(f"{self._what} {name!r} {hint}")
             if name not in columns:
                 raise ValueError(
                     f"{self._what} {name!r} names no coordinate or parameter of "

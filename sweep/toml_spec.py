@@ -327,10 +327,13 @@ def _scene(source: str, table: dict) -> Scene:
 
 def _system(source: str, table: dict):
     """``[system]`` -> a `sweep.physics.System`: ``kind`` names its class, the other keys
-    are its constructor's arguments, ``[system.damping]`` a `sweep.Damping`."""
+    are its constructor's arguments, ``[system.damping]`` a `sweep.Damping` (without
+    ``on``: mass-proportional), and ``[system.<effect>]`` with ``on = "<coordinate>"``
+    an effect on one coordinate (`_system_effects`)."""
     import dataclasses
 
     from . import physics
+    from .physics.coordinate_effects import acting_effects
 
     with _context(source, "system"):
         kind = table.get("kind")
@@ -345,7 +348,8 @@ def _system(source: str, table: dict):
         fields = [f.name for f in dataclasses.fields(cls) if f.name != "effects"]
         if kind == "SwingNetwork":
             fields = ["edges"] + fields
-        accepted = ["kind"] + fields + (["damping"] if kind != "SwingNetwork" else [])
+        effects = {cls.declaration.name: cls for cls in acting_effects()}
+        accepted = ["kind"] + fields + (list(effects) if kind != "SwingNetwork" else [])
         unknown = [key for key in table if key not in accepted]
         if unknown:
             raise ValueError(f"unknown key {unknown[0]!r}; accepted for {kind}: "
@@ -356,12 +360,34 @@ def _system(source: str, table: dict):
                 raise ValueError("a SwingNetwork needs edges = [[i, j], ...] or adjacency "
                                  "= [[...], ...]; accepted: one of them")
             arguments["adjacency"] = arguments.pop("edges", arguments.get("adjacency"))
-        elif isinstance(arguments.get("damping"), dict):
-            arguments["effects"] = (physics.Damping(**arguments.pop("damping")),)
-        elif "damping" in arguments:
-            raise TypeError(f"damping must be a table [system.damping] with coefficient "
-                            f"= c (1/s), got {arguments['damping']!r}")
+        else:
+            arguments["effects"] = _system_effects(arguments, effects)
         return cls(**arguments)
+
+
+def _system_effects(arguments: dict, effects: dict) -> tuple:
+    """The effects of ``[system]`` (popped from ``arguments``): each ``[system.<name>]``
+    a table of the effect's arguments (``on`` among them), or ``[[system.<name>]]`` an
+    array of such tables (one per coordinate)."""
+    found = []
+    for name, cls in effects.items():
+        if name not in arguments:
+            continue
+        value = arguments.pop(name)
+        keys = [p.field for p in cls.declaration.parameters] + ["on"]
+        accepted = (f"a table [system.{name}] with {', '.join(keys)} (on: a coordinate's "
+                    f"name" + (", or none for the mass-proportional damping with "
+                               "coefficient = c in 1/s" if name == "damping" else "")
+                    + f"), or an array of them [[system.{name}]]")
+        for entry in value if isinstance(value, list) else [value]:
+            if not isinstance(entry, dict):
+                raise TypeError(f"{name} must be {accepted}, got {entry!r}")
+            unknown = [key for key in entry if key not in keys]
+            if unknown:
+                raise ValueError(f"unknown key {unknown[0]!r} in [system.{name}]; accepted: "
+                                 f"{', '.join(keys)}")
+            found.append(cls(**entry))
+    return tuple(found)
 
 
 def _grid(source: str, table: dict, names=None) -> Grid:

@@ -397,7 +397,10 @@ class SystemExplorer(Explorer):
         names = [p.axis for p in system.declaration.parameters]
         for name, value in values.items():
             if name == "damping":
-                changes["effects"] = (Damping(value),) if value else ()
+                # the mass-proportional damping; effects on one coordinate stay
+                changes["effects"] = tuple(e for e in system.effects
+                                           if e.coordinate is not None) + \
+                    ((Damping(value),) if value else ())
             elif name in names:
                 changes[name] = value
             else:

@@ -11,7 +11,6 @@ from dataclasses import dataclass, field
 
 from .effect import Parameter
 from .system import (
-    DerivedSystem,
     System,
     SystemDeclaration,
     initial_parameters,
@@ -54,6 +53,10 @@ class CoupledPendula(System):
     effects : tuple
         `sweep.Damping(c)`: every pendulum's acceleration gains ``- c theta_i'`` (c in
         1/s; the same as a damping torque ``- c m l^2 theta_i'`` at each pivot).
+        With ``on="theta<i>"``, `sweep.Damping`, `sweep.Torque`, `sweep.Forcing` and
+        `sweep.QuadraticDrag` act on
+        pendulum i alone, as a torque at its pivot [N m]
+        (`sweep.physics.coordinate_effects`; grid axes ``damping_theta<i>``, ...).
 
     Notes
     -----
@@ -93,9 +96,3 @@ class CoupledPendula(System):
             return found[name]
         return {p.axis: p for p in system_parameters(_declaration(2, "spring", "chain"),
                                                      True)}.get(name)
-
-    def derived(self, jacobian: bool = False) -> DerivedSystem:
-        """Its equations of motion and energy as kernel source (`sweep.physics.derive`)."""
-        from .derive import derive
-
-        return derive(self.declaration, jacobian=jacobian)

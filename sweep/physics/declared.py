@@ -16,7 +16,6 @@ import math
 
 from .effect import Parameter
 from .system import (
-    DerivedSystem,
     System,
     SystemDeclaration,
     register_system,
@@ -41,7 +40,10 @@ class DeclaredSystem(System):
         ``systems``, unless derived before on this machine): a bad declaration raises
         here, before any grid or compile.
     effects : tuple, default ()
-        `sweep.Damping(c)`: every acceleration gains ``- c v_i`` (c in 1/s).
+        `sweep.Damping(c)`: every acceleration gains ``- c v_i`` (c in 1/s). With
+        ``on="<coordinate>"``, `sweep.Damping`, `sweep.Torque`, `sweep.Forcing` and
+        `sweep.QuadraticDrag` are a
+        generalized force on that coordinate (`sweep.physics.coordinate_effects`).
     **values : float
         A value for each of the declaration's parameters, by its axis name, in the
         parameter's units; a parameter left out takes its ``default`` (an error if it
@@ -155,11 +157,10 @@ class DeclaredSystem(System):
                 return found
         return None
 
-    def derived(self, jacobian: bool = False) -> DerivedSystem:
-        """Its equations of motion and energy as kernel source (`sweep.physics.derive`)."""
-        from .derive import derive
-
-        return derive(self._declaration, jacobian=jacobian)
+    def _with_effects(self, effects: tuple) -> DeclaredSystem:
+        """This system with ``effects`` instead of its own."""
+        return _rebuild(self._declaration, tuple(effects),
+                        {p.axis: getattr(self, p.axis) for p in self._declaration.parameters})
 
     def to_dict(self) -> dict:
         """A JSON-able description (dataset attribute ``system``), with the declaration."""

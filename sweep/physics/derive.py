@@ -66,8 +66,11 @@ DERIVE_VERSION = 1
 #: `sweep.physics.shipped`), read before the disk cache.
 SHIPPED_FOLDER = Path(__file__).parent / "derived"
 
-#: Functions a declaration's expressions may call (and the constant ``pi``).
-FUNCTIONS = ("sin", "cos", "sqrt")
+#: Functions a declaration's expressions may call (and the constant ``pi``); ``abs``
+#: serves a quadratic drag ``-k*v*abs(v)`` (the kernels' ``abs``): where its derivative
+#: ``sign(x)`` multiplies ``x`` (a drag's Jacobian) it is written ``abs(x)``, and a
+#: ``sign`` left over is refused.
+FUNCTIONS = ("sin", "cos", "sqrt", "abs")
 
 #: Names a declaration's symbols must not take: the conventions' functions and outputs,
 #: the expressions' functions and constants, time.
@@ -426,7 +429,8 @@ def _parse(sp, declaration: SystemDeclaration, names: dict, what: str, text: str
                     or len(node.args) != 1 or node.keywords):
                 raise bad(node, "calls a function that is not accepted (or not with one "
                                 "argument)")
-            return getattr(sp, node.func.id)(convert(node.args[0]))
+            function = sp.Abs if node.func.id == "abs" else getattr(sp, node.func.id)
+            return function(convert(node.args[0]))
         raise bad(node, "holds something that is not accepted")
 
     expr = convert(tree)
@@ -588,12 +592,35 @@ def _jacobian(sp, mass, rhs, inverse, accelerations, state):
         column = [sp.diff(rhs[j], z) for j in range(n)]
         for j, k in moving:
             column[j] -= sp.diff(mass[j][k], z) * accelerations[k]
-        columns[z] = column
+        columns[z] = [_unsigned(sp, entry) for entry in column]
     for i in range(n):
         for z in state:
             entries.append(sum((inverse[i][j] * columns[z][j] for j in range(n)
                                 if inverse[i][j] != 0), sp.S.Zero))
     return entries
+
+
+def _unsigned(sp, expr):
+    """``expr`` with every product ``x * sign(x)`` written ``abs(x)`` (equal for every
+    real x, 0 included): the derivative of a drag ``-k*v*abs(v)`` is
+    ``-k*abs(v) - k*v*sign(v)``, which the kernels then evaluate without a sign."""
+    if not expr.has(sp.sign):
+        return expr
+
+    def paired(e):
+        return e.is_Mul and any(isinstance(f, sp.sign) and f.args[0] in e.args
+                                for f in e.args)
+
+    def unsign(e):
+        factors = list(e.args)
+        for f in list(factors):
+            if isinstance(f, sp.sign) and f.args[0] in factors:
+                factors.remove(f)
+                factors.remove(f.args[0])
+                factors.append(sp.Abs(f.args[0]))
+        return sp.Mul(*factors)
+
+    return sp.expand(expr).replace(paired, unsign)
 
 
 # ---------------------------------------------------------------- printing
@@ -662,6 +689,8 @@ class _Printer:
             return f"vsin({self(e.args[0])})", self.ATOM
         if isinstance(e, sp.cos):
             return f"vcos({self(e.args[0])})", self.ATOM
+        if isinstance(e, sp.Abs):
+            return f"abs({self(e.args[0])})", self.ATOM
         raise ValueError(f"{self.who}: the derived equations hold {e}, which the kernels "
                          f"cannot evaluate; accepted: {', '.join(FUNCTIONS)}, integer and "
                          "half-integer powers")

@@ -15,7 +15,6 @@ from dataclasses import dataclass, field
 
 from .effect import Parameter
 from .system import (
-    DerivedSystem,
     System,
     SystemDeclaration,
     register_system,
@@ -61,11 +60,19 @@ class DoublePendulum(System):
     effects : tuple, default ()
         `sweep.Damping(c)`: mass-proportional damping, every angular acceleration gains
         ``- c theta_i'`` (the generalized force ``- c M(q) q'``; c in 1/s).
+        ``sweep.Damping(c, on="theta1")``, ``sweep.Torque(tau, on="theta2")``,
+        ``sweep.Forcing(A, W, on="theta1")``, ``sweep.QuadraticDrag(k, on="theta2")``: a
+        generalized force on that angle alone, ``-c omega1`` [N m, c in N m s], ``tau``
+        [N m], ``A sin(W t)`` [N m], ``-k omega2 |omega2|`` [N m, k in N m s^2]
+        (`sweep.physics.coordinate_effects`; grid axes ``damping_theta1``, ...).
+        ``Damping(c1, on="theta1")`` is the pivot's damping ``damping1`` without the
+        middle joint's.
 
     Notes
     -----
     Grid axes: ``theta1_0``, ``theta2_0`` [rad], ``omega1_0``, ``omega2_0`` [rad/s], and
-    ``mass1``, ``mass2``, ``length1``, ``length2``, ``gravity``, ``damping``. Outputs:
+    ``mass1``, ``mass2``, ``length1``, ``length2``, ``gravity``, ``damping``, and
+    ``<effect axis>_<angle>`` of the effects on one angle. Outputs:
     ``theta1_final`` ... with ``observe=("final",)``, ``theta1`` ... over ``time`` with
     ``save_every``, ``flip_time`` with ``observe=("flip",)``
     (`sweep.system_observables`).
@@ -101,8 +108,9 @@ class DoublePendulum(System):
         """With V = 0 hanging at rest: the first arm upright needs V >= 2 (m1 + m2) g l1
         (second arm down), the second arm upright V >= 2 m2 g l2 (first arm down).
         Energy never grows (damping only removes it), so below the smaller no angle can
-        ever be upright; a driven pivot feeds energy in: then None."""
-        if self.pivot_amplitude is not None:
+        ever be upright; a driven pivot, a torque or a forcing on a coordinate feed
+        energy in: then None."""
+        if self.pivot_amplitude is not None or self.feeds_energy:
             return None
         return "2.0 * min((m1 + m2) * grav * l1, m2 * grav * l2)"
 
@@ -115,24 +123,19 @@ class DoublePendulum(System):
 
     def accepted_axes(self) -> tuple[str, ...]:
         """Every axis of any double pendulum (a joint damping or pivot axis switches
-        its term on)."""
-        return system_columns(_declaration(True, True), True)
+        its term on), and those of its effects on a coordinate."""
+        axes = system_columns(_declaration(True, True), True)
+        return axes + tuple(a for a in super().accepted_axes() if a not in axes)
 
     def switched_on(self, axes) -> DoublePendulum:
-        """With the terms whose parameters are among ``axes`` switched on."""
+        """With the terms whose parameters are among ``axes`` switched on (and the
+        effects on a coordinate: `sweep.physics.System.switched_on`)."""
         given = {name: 0.0 for names in _OPTIONAL.values() for name in names
                  if name in axes and getattr(self, name) is None}
-        return dataclasses.replace(self, **given) if given else self
+        return super(DoublePendulum, dataclasses.replace(self, **given) if given
+                     else self).switched_on(axes)
 
     @classmethod
     def axis_parameter(cls, name: str) -> Parameter | None:
         return {p.axis: p for p in system_parameters(_declaration(True, True),
                                                      True)}.get(name)
-
-    def derived(self, jacobian: bool = False) -> DerivedSystem:
-        """Its equations of motion and energy (with ``jacobian``: and the Jacobian of
-        the accelerations) as kernel source (`sweep.physics.derive`; SymPy only on the
-        first derivation on a machine, then read from the cache)."""
-        from .derive import derive
-
-        return derive(self.declaration, jacobian=jacobian)

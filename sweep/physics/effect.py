@@ -17,7 +17,10 @@ class attribute ``declaration`` says, once, everything the rest of sweep needs:
 - its Jacobian: the derivatives of its term with respect to ``theta`` and ``theta'``
   (``jacobian_theta``, ``jacobian_omega``), which the tangent dynamics of the
   ``lyapunov`` observable read;
-- whether it is conservative (symplectic methods accept only conservative effects).
+- whether it is conservative (symplectic methods accept only conservative effects);
+- its generalized force on one coordinate of a system (``generalized_force``), for the
+  effects a system takes per coordinate (``sweep.Damping(0.1, on="theta1")``: see
+  `sweep.physics.coordinate_effects`).
 
 `register` adds an effect to `EFFECTS`; the kernel generator (`sweep.kernels`), the
 grid, the dataset attributes, the TOML reader and the stability guard then take it
@@ -44,7 +47,7 @@ from __future__ import annotations
 import keyword
 import math
 import re
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar
 
 import numpy as np
@@ -52,7 +55,7 @@ import numpy as np
 from .._validate import check_real
 
 __all__ = ["Drive", "Effect", "EffectDeclaration", "EFFECTS", "Parameter", "RESERVED_SYMBOLS",
-           "register", "unregister"]
+           "on_field", "register", "unregister"]
 
 _IDENTIFIER = re.compile(r"\b[A-Za-z_]\w*\b")
 
@@ -190,6 +193,11 @@ class EffectDeclaration:
         nonzero force, the smaller of that and ``max(|omega0|, speed_bound)``; with
         forces, ``max(|omega0|, speed_bound)`` (nonlinear model; the linear model keeps
         the energy bound, which forces can exceed).
+    generalized_force : str
+        Its generalized force on one coordinate of a system, in its symbols, the
+        coordinate ``q``, its velocity ``v`` and time ``t`` (SymPy syntax: ``"-c*v"``);
+        "" (the default) where it does not act on a system's coordinate. An effect that
+        declares one has a keyword field ``on`` (`on_field`).
     """
 
     name: str
@@ -206,6 +214,7 @@ class EffectDeclaration:
     speed_bound: str = ""
     jacobian_theta: str | None = None
     jacobian_omega: str | None = None
+    generalized_force: str = ""
 
     def jacobian(self, variable: str) -> str:
         """Source of d(term)/d(``variable``) (``"th"`` or ``"om"``), ``""`` for zero.
@@ -274,11 +283,23 @@ def _evaluate(expression: str, values: dict[str, float], empty):
                       dict(values)))
 
 
+def on_field():
+    """The keyword field ``on`` of an effect that declares a ``generalized_force``:
+    the name of the system coordinate it acts on (``"theta1"``), or None (default: on a
+    `sweep.Scene`, its one coordinate; `sweep.Damping` on a system: mass-proportional).
+
+    Keyword-only, so the effect's positional arguments stay its parameters, and left
+    out of the generated ``repr`` (`Effect.__repr__` shows it only when given)."""
+    return field(default=None, kw_only=True, repr=False)
+
+
 class Effect:
     """Base class of the effects: a frozen dataclass with a ``declaration``.
 
     Every field is validated from its `Parameter` (a finite real number above the
-    declared bound); the subclass declares the fields in the order of its parameters.
+    declared bound); the subclass declares the fields in the order of its parameters,
+    then, if it declares a ``generalized_force``, the keyword field ``on``
+    (`on_field`).
     """
 
     declaration: ClassVar[EffectDeclaration]
@@ -289,6 +310,24 @@ class Effect:
             object.__setattr__(self, p.field, check_real(
                 f"{owner}.{p.field}", getattr(self, p.field), minimum=p.minimum,
                 strict=p.strict, accepted=p.accepted()))
+        on = getattr(self, "on", None)
+        if on is not None and (not isinstance(on, str) or not on.isidentifier()):
+            raise ValueError(f"{owner}.on={on!r} is not accepted; accepted: None, or the "
+                             "name of a system's coordinate (a string such as 'theta1')")
+
+    @property
+    def coordinate(self) -> str | None:
+        """The system coordinate it acts on (its ``on``), or None."""
+        return getattr(self, "on", None)
+
+    def __repr__(self) -> str:
+        """``Damping(coefficient=0.1)``; with ``on``: ``Damping(coefficient=0.1,
+        on='theta1')`` (for the effects whose dataclass repr is switched off)."""
+        shown = [f"{f.name}={getattr(self, f.name)!r}" for f in fields(self)
+                 if f.name != "on"]
+        if self.coordinate is not None:
+            shown.append(f"on={self.coordinate!r}")
+        return f"{type(self).__name__}({', '.join(shown)})"
 
     def values(self) -> dict[str, float]:
         """Its parameter values by grid axis name."""
@@ -297,7 +336,8 @@ class Effect:
     @classmethod
     def signature(cls) -> str:
         """``sweep.Forcing(amplitude, frequency, phase)``, for messages."""
-        return f"sweep.{cls.__name__}({', '.join(f.name for f in fields(cls))})"
+        return (f"sweep.{cls.__name__}("
+                f"{', '.join(f.name for f in fields(cls) if f.name != 'on')})")
 
 
 #: Registered effects by name, in canonical order (the order of their terms in the
@@ -314,9 +354,14 @@ def _check_declaration(cls: type) -> EffectDeclaration:
         raise ValueError(f"an effect named {declaration.name!r} is already registered "
                          f"({EFFECTS[declaration.name].__name__})")
     field_names = [f.name for f in fields(cls)]
-    if field_names != [p.field for p in declaration.parameters]:
+    expected = [p.field for p in declaration.parameters]
+    if declaration.generalized_force:
+        expected.append("on")
+    if field_names != expected:
         raise ValueError(f"{cls.__name__}: fields {field_names} must be its parameters' "
-                         f"fields {[p.field for p in declaration.parameters]}, in order")
+                         f"fields {expected[:len(declaration.parameters)]}, in order"
+                         + (", then on (on_field())" if declaration.generalized_force
+                            else ""))
     taken_axes = {p.axis for other in EFFECTS.values() if other is not cls
                   for p in other.declaration.parameters}
     taken_symbols = {s for other in EFFECTS.values() if other is not cls

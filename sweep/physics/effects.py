@@ -5,6 +5,12 @@ present, in the order they are registered here::
 
     theta'' = - (g/L) f(theta) - c theta' + A sin(W t + phase) + tau - k theta'|theta'|
               + (a nu^2 / L) cos(nu t + psi) f(theta)
+
+On a system of several coordinates (`sweep.DoublePendulum`, ...), `Damping`, `Forcing`,
+`Torque` and `QuadraticDrag` given ``on="<coordinate>"`` are a generalized force ``Q`` on that
+coordinate (``M(q) q'' = F + Q``; their ``generalized_force``), in the units of a
+generalized force (N m on an angle) rather than per unit ``m L^2``; see
+`sweep.physics.coordinate_effects`.
 """
 
 from __future__ import annotations
@@ -12,23 +18,30 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from .effect import Drive, Effect, EffectDeclaration, Parameter, register
+from .effect import Drive, Effect, EffectDeclaration, Parameter, on_field, register
 
 __all__ = ["Damping", "Forcing", "PivotDrive", "QuadraticDrag", "Torque"]
 
 
 @register
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Damping(Effect):
     """Linear viscous damping, the term ``-c theta'``.
 
     Parameters
     ----------
     coefficient : float
-        ``c = C/m`` in 1/s (the seed's ``ksi``); finite and >= 0.
+        ``c = C/m`` in 1/s (the seed's ``ksi``); finite and >= 0. With ``on``: the
+        damping coefficient of that coordinate, in N m s on an angle.
+    on : str, optional, keyword only
+        Only on a system: the coordinate it acts on (``"theta1"``), as the generalized
+        force ``Q = -c v`` on it (damping at that joint; grid axis
+        ``damping_<coordinate>``). Without it, on a system: mass-proportional damping
+        (every acceleration gains ``- c v_i``, c in 1/s).
     """
 
     coefficient: float
+    on: str | None = on_field()
 
     declaration: ClassVar[EffectDeclaration] = EffectDeclaration(
         name="damping",
@@ -40,11 +53,12 @@ class Damping(Effect):
         linear_damping="c",
         switched_on_by_grid=True,
         jacobian_omega="- c",
+        generalized_force="-c*v",
     )
 
 
 @register
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Forcing(Effect):
     """Harmonic forcing, the term ``A sin(W t + phase)``.
 
@@ -56,11 +70,16 @@ class Forcing(Effect):
         ``W`` in rad/s; finite and >= 0.
     phase : float, default 0
         In rad; ``phase = pi/2`` gives ``A cos(W t)``, the convention of most literature.
+    on : str, optional, keyword only
+        Only on a system (and there required): the coordinate it drives, as the
+        generalized force ``Q = A sin(W t + phase)`` on it, ``A`` in N m on an angle
+        (grid axes ``forcing_amplitude_<coordinate>``, ...).
     """
 
     amplitude: float
     frequency: float
     phase: float = 0.0
+    on: str | None = on_field()
 
     declaration: ClassVar[EffectDeclaration] = EffectDeclaration(
         name="forcing",
@@ -77,11 +96,12 @@ class Forcing(Effect):
         conservative=False,
         drive=Drive(value="f", amplitude="A", frequency="W", phase="phi"),
         force_bound="abs(A)",
+        generalized_force="A*sin(W*t + phi)",
     )
 
 
 @register
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Torque(Effect):
     """A constant applied torque per unit ``m L^2``, the term ``+ tau``.
 
@@ -95,9 +115,14 @@ class Torque(Effect):
     ----------
     value : float
         ``tau`` in rad/s^2; finite (either sign).
+    on : str, optional, keyword only
+        Only on a system (and there required): the coordinate it acts on, as the
+        constant generalized force ``Q = tau`` on it, in N m on an angle (grid axis
+        ``torque_<coordinate>``).
     """
 
     value: float
+    on: str | None = on_field()
 
     declaration: ClassVar[EffectDeclaration] = EffectDeclaration(
         name="torque",
@@ -107,11 +132,12 @@ class Torque(Effect):
         equation="+ tau",
         conservative=True,  # the potential -tau theta: energy is conserved without damping
         force_bound="abs(tau)",  # conservative, but its potential has no floor
+        generalized_force="tau",
     )
 
 
 @register
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class QuadraticDrag(Effect):
     """Air drag, the term ``- k theta' |theta'|``.
 
@@ -119,9 +145,14 @@ class QuadraticDrag(Effect):
     ----------
     coefficient : float
         ``k`` in 1/rad; finite and >= 0.
+    on : str, optional, keyword only
+        Only on a system (and there required): the coordinate it acts on, as the
+        generalized force ``Q = -k v |v|`` on it, ``k`` in N m s^2 on an angle (grid
+        axis ``drag_<coordinate>``).
     """
 
     coefficient: float
+    on: str | None = on_field()
 
     declaration: ClassVar[EffectDeclaration] = EffectDeclaration(
         name="drag",
@@ -136,6 +167,7 @@ class QuadraticDrag(Effect):
         # faster than the terminal speed, drag beats every force: theta'' opposes theta'
         speed_bound="math.sqrt(force_max / kd) if kd > 0 else math.inf",
         switched_on_by_grid=True,  # like damping: a drag axis alone switches it on
+        generalized_force="-kd*v*abs(v)",
     )
 
 

@@ -223,6 +223,19 @@ class SwingNetwork(System):
         """The parameter table's columns (every run of a network has all of them)."""
         return tuple(_AXES)
 
+    def accepted_axes(self) -> tuple[str, ...]:
+        """Every grid axis of a network run (`columns`: it takes no effects)."""
+        return self.columns()
+
+    def switched_on(self, axes) -> SwingNetwork:
+        """Itself: no axis switches a term on (it takes no effects)."""
+        return self
+
+    def axis_hint(self, name: str) -> None:
+        """None: a network takes no effects on its nodes (the grid's message lists its
+        axes)."""
+        return None
+
     def parameters(self) -> dict[str, float]:
         """Values of every table column except the perturbation (none by default)."""
         return {"perturbed_node": -1.0, "delta_theta": 0.0, "delta_omega": 0.0,

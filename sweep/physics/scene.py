@@ -140,6 +140,13 @@ class Scene:
             if not isinstance(effect, order):
                 raise TypeError(f"effects: {effect!r} is not an effect; accepted: "
                                 f"{_accepted_effects()}")
+            if effect.coordinate is not None:
+                raise ValueError(
+                    f"effects: {effect!r} names a coordinate (on={effect.coordinate!r}), but "
+                    "a sweep.Scene has one coordinate, theta, that every effect acts on; "
+                    f"accepted: {type(effect).__name__} without on= in a Scene, or on= in "
+                    "the effects of a system with several coordinates (sweep.DoublePendulum, "
+                    "sweep.CoupledPendula, sweep.DeclaredSystem)")
             if type(effect) in seen:
                 raise ValueError(
                     f"effects: {type(effect).__name__} given twice; accepted: at most one of each"

@@ -24,8 +24,8 @@ Kernel-source conventions of `DerivedSystem` (what the generator relies on):
 - names: position ``<coordinate.symbol>`` (``th1``), velocity
   ``<coordinate.velocity_symbol>`` (``om1``), each parameter's ``symbol``, time ``t``;
 - functions: ``vsin``, ``vcos``, ``vsincos`` (returns ``(sin x, cos x)`` from one
-  argument reduction), ``vfma(a, b, c)`` (``a * b + c``, one rounding), ``math.sqrt``;
-  no other call;
+  argument reduction), ``vfma(a, b, c)`` (``a * b + c``, one rounding), ``math.sqrt``,
+  ``abs`` (a quadratic drag's); no other call;
 - ``accel_lines``: statements; temporaries are named ``x<k>`` (SymPy's ``cse``); the
   last statements assign ``acc_<symbol>`` for every coordinate, in coordinate order;
 - ``energy_lines``: statements ending with ``energy_value = ...`` (kinetic plus
@@ -37,6 +37,7 @@ Kernel-source conventions of `DerivedSystem` (what the generator relies on):
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 from .._validate import check_real
@@ -170,12 +171,16 @@ def register_system(cls: type) -> type:
 
 
 def system_axis(name: str) -> Parameter | None:
-    """The parameter of any registered system whose axis is ``name``, or None."""
+    """The parameter of any registered system whose axis is ``name``, or None; an axis
+    of an effect on one coordinate (``damping_theta1``:
+    `sweep.physics.coordinate_effects`) too."""
     for cls in SYSTEMS.values():
         found = cls.axis_parameter(name)
         if found is not None:
             return found
-    return None
+    from .coordinate_effects import coordinate_axis
+
+    return coordinate_axis(name)
 
 
 class System:
@@ -188,8 +193,11 @@ class System:
     pendula) and `axis_parameter`.
     """
 
-    #: Effects a system accepts (only `sweep.Damping` so far: mass-proportional).
-    ACCEPTED_EFFECTS = ("Damping",)
+    #: Effects a system accepts: `sweep.Damping` without ``on`` (mass-proportional) and,
+    #: with ``on="<coordinate>"``, every effect of
+    #: `sweep.physics.coordinate_effects.acting_effects` (a generalized force on it).
+    ACCEPTED_EFFECTS = ("Damping", "Damping(on=...)", "Forcing(on=...)", "Torque(on=...)",
+                        "QuadraticDrag(on=...)")
 
     #: UDUNITS units of its energy (its Lagrangian's).
     energy_units = "J"
@@ -208,6 +216,15 @@ class System:
     def declaration(self) -> SystemDeclaration:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    @property
+    def declaration_with_effects(self) -> SystemDeclaration:
+        """`declaration` with the generalized forces of its effects on one coordinate
+        (`sweep.physics.coordinate_effects.with_effects`): what is derived and run;
+        `declaration` itself when no effect names a coordinate."""
+        from .coordinate_effects import with_effects
+
+        return with_effects(self.declaration, self.effects, self.energy_units)
+
     @classmethod
     def axis_parameter(cls, name: str) -> Parameter | None:  # pragma: no cover
         """The parameter of any instance of this class whose grid axis is ``name``."""
@@ -222,56 +239,175 @@ class System:
                 accepted=p.accepted()))
         object.__setattr__(self, "effects", self._check_effects())
 
+    def _coordinate_names(self) -> tuple[str, ...]:
+        return tuple(c.name for c in self.declaration.coordinates)
+
     def _check_effects(self) -> tuple:
-        """``effects`` as a tuple, each accepted, at most one of each kind."""
+        """``effects`` as a tuple, each accepted, at most one of each kind per
+        coordinate (and one mass-proportional `sweep.Damping`), in canonical order (the
+        mass-proportional damping, then by coordinate, then in `sweep.physics.EFFECTS`
+        order), so that equal systems compare and hash equal."""
+        from .coordinate_effects import acting_effects
+        from .effect import EFFECTS, Effect
         from .effects import Damping
 
+        who = type(self).__name__
+        names = self._coordinate_names()
+        listed = ", ".join(map(repr, names))
+        acting = acting_effects()
+        accepted = (f"Damping(coefficient) (mass-proportional: every acceleration gains "
+                    f"- c v_i) and, on one coordinate (on= one of {listed}), "
+                    + ", ".join(f"{cls.__name__}(..., on=...)" for cls in acting))
         effects = self.effects
         if not isinstance(effects, (tuple, list)):
             effects = (effects,)
         seen = set()
         for effect in effects:
-            if not isinstance(effect, Damping):
-                raise TypeError(f"{type(self).__name__} accepts the effects "
-                                f"{', '.join(self.ACCEPTED_EFFECTS)} (Damping(coefficient): "
-                                f"mass-proportional, every acceleration gains - c v_i); got "
-                                f"{effect!r}")
-            if type(effect) in seen:
-                raise ValueError(f"{type(self).__name__} got {type(effect).__name__} twice; "
-                                 "accepted: at most one of each effect")
-            seen.add(type(effect))
-        return tuple(effects)
+            if not isinstance(effect, Effect) or (type(effect) not in acting):
+                raise TypeError(f"{who} accepts the effects {accepted}; got {effect!r}")
+            on = effect.coordinate
+            if on is None and type(effect) is not Damping:
+                raise TypeError(
+                    f"{who} accepts the effects {accepted}; got {effect!r} without on=: on "
+                    f"a system a {type(effect).__name__} acts on one coordinate; accepted: "
+                    f"{type(effect).__name__}(..., on=...) with on one of {listed}")
+            if on is not None and on not in names:
+                raise ValueError(f"{who}: {effect!r} acts on {on!r}, which is not a "
+                                 f"coordinate of {who}; accepted: on= one of {listed}")
+            if (type(effect), on) in seen:
+                where = f" on {on!r}" if on is not None else " (mass-proportional)"
+                raise ValueError(f"{who} got {type(effect).__name__}{where} twice; "
+                                 "accepted: at most one of each effect per coordinate")
+            seen.add((type(effect), on))
+        order = list(EFFECTS.values())
+        return tuple(sorted(effects, key=lambda e: (
+            -1 if e.coordinate is None else names.index(e.coordinate),
+            order.index(type(e)))))
+
+    def _with_effects(self, effects: tuple) -> System:
+        """This system with ``effects`` instead of its own."""
+        return dataclasses.replace(self, effects=tuple(effects))
+
+    @property
+    def feeds_energy(self) -> bool:
+        """True where an effect on a coordinate can feed energy in (a torque, a forcing:
+        their declarations' ``force_bound``), so that the energy can grow."""
+        return any(e.coordinate is not None and e.declaration.force_bound
+                   for e in self.effects)
 
     @property
     def damping(self) -> float | None:
-        """The damping rate c [1/s] of its `sweep.Damping`, or None without one."""
-        found = [e for e in self.effects if type(e).__name__ == "Damping"]
+        """The rate c [1/s] of its mass-proportional `sweep.Damping` (without ``on``),
+        or None without one."""
+        found = [e for e in self.effects
+                 if type(e).__name__ == "Damping" and e.coordinate is None]
         return found[0].coefficient if found else None
 
     def parameters(self) -> dict[str, float]:
         """Values of every table column except the initial state (the damping rate
-        0 where there is no damping: read only where a grid axis switches it on)."""
+        0 where there is no damping: read only where a grid axis switches it on), the
+        effects on coordinates' parameters included (``damping_theta1``)."""
         values = {p.axis: float(getattr(self, p.axis)) for p in self.declaration.parameters}
         values["damping"] = self.damping or 0.0
+        for effect in self.effects:
+            if effect.coordinate is not None:
+                values.update({f"{axis}_{effect.coordinate}": float(value)
+                               for axis, value in effect.values().items()})
         return values
 
     def columns(self, damping: bool) -> tuple[str, ...]:
-        """The parameter table's columns (`system_columns`)."""
-        return system_columns(self.declaration, damping)
+        """The parameter table's columns (`system_columns` of
+        `declaration_with_effects`)."""
+        return system_columns(self.declaration_with_effects, damping)
 
     def accepted_axes(self) -> tuple[str, ...]:
         """Every grid axis a run of this system accepts (some switch a term on:
         `switched_on`)."""
-        return self.columns(True)
+        return self.columns(True) + self._coordinate_axes()
+
+    def _coordinate_axes(self) -> tuple[str, ...]:
+        """The axes of effects on coordinates that a grid may name beyond `columns`:
+        those that switch their effect on (``damping_theta1`` switches on a
+        ``Damping(0, on="theta1")``; `switched_on`)."""
+        from .coordinate_effects import acting_effects
+
+        present = set(self.columns(True))
+        return tuple(f"{p.axis}_{name}" for name in self._coordinate_names()
+                     for cls in acting_effects() if cls.declaration.switched_on_by_grid
+                     for p in cls.declaration.parameters
+                     if f"{p.axis}_{name}" not in present)
+
+    def axis_hint(self, name: str) -> str | None:
+        """Why ``name``, an axis of an effect on a coordinate that this system does not
+        accept, is refused (for the grid's message), or None for another axis."""
+        from .coordinate_effects import split_axis
+
+        found = split_axis(name)
+        if found is None:
+            return None
+        cls, _, on = found
+        who, names = type(self).__name__, self._coordinate_names()
+        if on not in names:
+            return (f"names {on!r}, which is not a coordinate of {who}; accepted: "
+                    f"{name[:-len(on)]}<coordinate> with a coordinate among "
+                    f"{', '.join(names)}")
+        arguments = ", ".join(p.field for p in cls.declaration.parameters
+                              if p.default is None)
+        return (f"needs a sweep.{cls.__name__}({arguments}, on={on!r}) in the effects of "
+                f"{who} to supply its other parameters (the axis alone does not switch it "
+                f"on); accepted: add sweep.{cls.__name__}({arguments}, on={on!r}) to its "
+                "effects")
 
     def switched_on(self, axes) -> System:
-        """This system with the terms that the grid ``axes`` (names) switch on; itself
-        when they switch nothing on."""
-        return self
+        """This system with the terms that the grid ``axes`` (names) switch on (an
+        effect on a coordinate whose axis switches it on, ``damping_theta1``: added
+        with its parameters 0); itself when they switch nothing on."""
+        from .coordinate_effects import split_axis
+
+        present = set(self.columns(True))
+        added = []
+        for name in axes:
+            found = split_axis(name)
+            if found is None or name in present:
+                continue
+            cls, _, on = found
+            if cls.declaration.switched_on_by_grid and on in self._coordinate_names() \
+                    and all(type(e) is not cls or e.coordinate != on for e in added):
+                added.append(cls(**{p.field: 0.0 if p.default is None else p.default
+                                    for p in cls.declaration.parameters}, on=on))
+        return self._with_effects(self.effects + tuple(added)) if added else self
+
+    def derived(self, jacobian: bool = False):
+        """Its equations of motion and energy (with ``jacobian``: and the Jacobian of
+        the accelerations) as kernel source, its effects on coordinates included
+        (`sweep.physics.derive.derive` of `declaration_with_effects`: SymPy only on the
+        first derivation on a machine, then read from the cache; the built-in systems'
+        common declarations are shipped derived).
+
+        Raises
+        ------
+        ImportError
+            Where the equations must be derived and SymPy is not installed.
+        """
+        from .derive import derive
+
+        declaration = self.declaration_with_effects
+        try:
+            return derive(declaration, jacobian=jacobian)
+        except ImportError as error:
+            if declaration is self.declaration:
+                raise
+            acting = ", ".join(repr(e) for e in self.effects if e.coordinate is not None)
+            raise ImportError(
+                f"{type(self).__name__} with {acting}: an effect on one coordinate changes "
+                "the equations of motion, which sweep derives again with SymPy (once per "
+                "machine and combination, then cached); " + str(error)) from error
 
     def to_dict(self) -> dict:
         """A JSON-able description (dataset attribute ``system``)."""
         return {"system": type(self).__name__,
                 **{p.axis: float(getattr(self, p.axis))
                    for p in self.declaration.parameters},
-                "effects": [{"effect": type(e).__name__, **e.values()} for e in self.effects]}
+                "effects": [{"effect": type(e).__name__, **e.values(),
+                             **({"on": e.coordinate} if e.coordinate is not None else {})}
+                            for e in self.effects]}
