@@ -240,7 +240,7 @@ def test_dataset_round_trips_through_netcdf(tmp_path):
     (lambda: sweep.DoublePendulum(mass1=0.0), "mass1"),
     (lambda: sweep.DoublePendulum(effects=(sweep.Forcing(1.0, 1.0),)), "accepts the effects"),
     (lambda: sweep.run(sweep.DoublePendulum(), sweep.Grid(theta1_0=[0.1]), t_end=1, dt=0.1,
-                       dtype="float32"), "dtype='float32' is not available for a system"),
+                       dtype="float32", device="cuda"), "runs on the CPU only"),
     (lambda: sweep.run(sweep.DoublePendulum(), sweep.Grid(theta1_0=[0.1]), t_end=1, dt=0.1,
                        method="dopri5"), "fixed-step explicit Runge-Kutta"),
     (lambda: sweep.run(sweep.DoublePendulum(), sweep.Grid(theta1_0=[0.1]), t_end=1, dt=0.1,
