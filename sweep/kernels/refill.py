@@ -33,7 +33,7 @@ from .snippets import KNOWN_STATE, known_head, known_source, snippets, stop_sour
 from .spec import KernelSpec, n_columns
 from .steppers import STEPPERS
 
-__all__ = ["refill_kernel"]
+__all__ = ["groups_head", "refill_kernel"]
 
 _STEP = re.compile(r"\bstep\b")  # the fixed kernel's block step, in a drive's expression
 
@@ -55,6 +55,33 @@ def _sine_table(spec: KernelSpec, drives, shared: list[str]) -> tuple[str, list[
         [f"    {line}" for line in drives.step] +
         [f"    tab_{name}[step] = {name}" for name in names])
     return table, lines
+
+
+def groups_head(block: int, extra: str = "") -> str:
+    """The head of a refill kernel module's body: ``BLOCK``, the Python ``kernel`` (the
+    contract of `sweep.kernels.source`) that runs one group of lanes per thread
+    (`sweep.kernels.threads.run_blocks`), and the signature of the compiled
+    ``grouped``, whose body follows (``extra``: arguments after ``saved``); shared by
+    the single pendulum's and the systems' refill kernels."""
+    return f'''
+BLOCK = {block}
+
+
+def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra}):
+    """One group of lanes per thread, but no more groups than n // BLOCK (one group
+    when n < BLOCK), each group on a thread of its own (`sweep.kernels.threads`)."""
+    if n_steps < 1:  # every lane steps before its first stop test
+        raise ValueError(f"n_steps must be >= 1 for a refill kernel, got {{n_steps!r}}")
+    n = params.shape[0]
+    n_groups = min(max(n // BLOCK, 1), n, get_num_threads())
+    run_blocks(grouped, n_groups, params, t0, dt, n_steps, n_transient, save_every, out,
+               status, saved{extra}, n_groups)
+
+
+@njit(nogil=True, **JIT)
+def grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra},
+            n_groups, g_first, g_stop):
+'''
 
 
 def refill_kernel(spec: KernelSpec, method) -> str:
@@ -132,24 +159,7 @@ finished = False"""
     refill_loop = lane_loop(refill, lane, level=4,
                             head=skip_unless("finished"))
     extra = KNOWN_ARGUMENTS if spec.known_cells else ""
-    return f'''
-BLOCK = {spec.block}
-
-
-def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra}):
-    """One group of lanes per thread, but no more groups than n // BLOCK (one group
-    when n < BLOCK), each group on a thread of its own (`sweep.kernels.threads`)."""
-    if n_steps < 1:  # every lane steps before its first stop test
-        raise ValueError(f"n_steps must be >= 1 for a refill kernel, got {{n_steps!r}}")
-    n = params.shape[0]
-    n_groups = min(max(n // BLOCK, 1), n, get_num_threads())
-    run_blocks(grouped, n_groups, params, t0, dt, n_steps, n_transient, save_every, out,
-               status, saved{extra}, n_groups)
-
-
-@njit(nogil=True, **JIT)
-def grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra},
-            n_groups, g_first, g_stop):
+    return groups_head(spec.block, extra) + f'''\
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(parts["preamble"]), 1)}

@@ -24,6 +24,7 @@ from __future__ import annotations
 import re
 
 from .lanes import IDENTIFIER, allocate, indent, lane_loop, skip_unless
+from .refill import groups_head
 
 __all__ = ["system_refill_kernel"]
 
@@ -72,24 +73,7 @@ def system_refill_kernel(spec, parts, finish: str) -> str:
     observe_loop = lane_loop(NL.join(observe), {k: v for k, v in lane.items() if k != "ks"},
                              level=3, head=head)
     refill_loop = lane_loop(NL.join(refill), lane, level=4, head=skip_unless("finished"))
-    return f'''
-BLOCK = {spec.block}
-
-
-def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
-    """One group of lanes per thread, but no more groups than n // BLOCK (one group
-    when n < BLOCK), each group on a thread of its own (`sweep.kernels.threads`)."""
-    if n_steps < 1:  # every lane steps before its first stop test
-        raise ValueError(f"n_steps must be >= 1 for a refill kernel, got {{n_steps!r}}")
-    n = params.shape[0]
-    n_groups = min(max(n // BLOCK, 1), n, get_num_threads())
-    run_blocks(grouped, n_groups, params, t0, dt, n_steps, n_transient, save_every, out,
-               status, saved, n_groups)
-
-
-@njit(nogil=True, **JIT)
-def grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
-            n_groups, g_first, g_stop):
+    return groups_head(spec.block) + f'''\
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(parts.constants.values()), 1)}
