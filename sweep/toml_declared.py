@@ -54,7 +54,7 @@ __all__ = ["COORDINATE_KEYS", "PARAMETER_KEYS", "SYSTEM_KEYS", "declaration_from
 
 #: Keys of ``[system]`` for a declared system.
 SYSTEM_KEYS = ("kind", "name", "lagrangian", "potential", "coordinates", "parameters",
-               "damping")
+               "damping", "torque", "forcing", "drag")
 #: Keys of one ``[[system.coordinates]]`` table.
 COORDINATE_KEYS = ("name", "velocity", "units", "velocity_units", "angular", "long_name",
                    "force", "acceleration")
@@ -93,16 +93,13 @@ def declared_system(table: dict[str, Any]):
         symbol, a Lagrangian without a kinetic term in some velocity, a singular mass
         matrix, a value outside a parameter's bound.
     """
-    from .physics import Damping, DeclaredSystem
+    from .physics import DeclaredSystem
+    from .physics.coordinate_effects import acting_effects
+    from .toml_spec import _system_effects
 
     declaration, values = declaration_from_table(table)
-    effects = ()
-    if "damping" in table:
-        damping = table["damping"]
-        if not isinstance(damping, dict):
-            raise TypeError(f"damping must be a table [system.damping] with coefficient "
-                            f"= c (1/s), got {damping!r}")
-        effects = (Damping(**damping),)
+    kinds = {cls.declaration.name: cls for cls in acting_effects()}
+    effects = _system_effects({k: v for k, v in table.items() if k in kinds}, kinds)
     names = _names(declaration)
     try:
         return DeclaredSystem(declaration, effects=effects, **values)
@@ -213,9 +210,9 @@ def system_lines(system, value_text) -> list[str]:
         if p.long_name:
             entry["long_name"] = p.long_name
         out.append(f"{p.axis} = {value_text(entry)}")
-    if system.damping is not None:
-        out += ["", "[system.damping]", f"coefficient = {value_text(system.damping)}"]
-    return out
+    from .toml_spec import system_effects_lines
+
+    return out + system_effects_lines(system.effects, value_text)
 
 
 # ----------------------------------------------------------------------------- helpers

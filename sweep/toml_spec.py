@@ -390,6 +390,22 @@ def _system_effects(arguments: dict, effects: dict) -> tuple:
     return tuple(found)
 
 
+
+def system_effects_lines(effects: tuple, value_text) -> list[str]:
+    """The run file's ``[system.<effect>]`` tables of a system's ``effects`` (as
+    `_system_effects` reads them): one per effect with its fields (``on`` where given),
+    ``[[system.<effect>]]`` where an effect kind appears more than once; ``value_text``
+    writes a value in TOML."""
+    import dataclasses
+
+    kinds = [type(e).declaration.name for e in effects]
+    lines = []
+    for effect, name in zip(effects, kinds):
+        lines += ["", f"[[system.{name}]]" if kinds.count(name) > 1 else f"[system.{name}]"]
+        lines += [f"{f.name} = {value_text(getattr(effect, f.name))}"
+                  for f in dataclasses.fields(effect) if getattr(effect, f.name) is not None]
+    return lines
+
 def _grid(source: str, table: dict, names=None) -> Grid:
     """``[grid]`` -> Grid, axes in file order (``names``: the accepted axes, the single
     pendulum's by default)."""

@@ -157,6 +157,34 @@ def test_a_click_gives_every_coordinate_of_that_start_over_time():
     assert "sweep.DoublePendulum(" in traj.python and "[system]" in traj.toml
 
 
+
+def test_effects_on_one_coordinate_are_controls_and_change_the_map(tmp_path):
+    """A system's effects on one coordinate (``damping_theta1``, ``torque_theta2``) are
+    controls with their generalized force's units; a change recomputes the map of the
+    system with the new value (cell by cell sweep.run's), the other effects kept, and
+    the run file the page offers reproduces it."""
+    system = sweep.DoublePendulum(effects=(sweep.Damping(0.1, on="theta1"),
+                                           sweep.Torque(0.3, on="theta2")))
+    e = double(system)
+    controls = {c.name: c for c in e.parameter_controls()}
+    assert controls["damping_theta1"].label == "damping_theta1 [N m s]"
+    assert controls["torque_theta2"].label == "torque_theta2 [N m]"
+    assert controls["torque_theta2"].value == 0.3
+    e.update(quantity="var:theta1_final")
+    before = e.compute()
+    e.update(torque_theta2=2.0)
+    assert e.state.scene == sweep.DoublePendulum(effects=(
+        sweep.Damping(0.1, on="theta1"), sweep.Torque(2.0, on="theta2")))
+    after = e.compute()
+    assert not np.array_equal(after.values, before.values, equal_nan=True)
+    np.testing.assert_array_equal(after.values, plane(reference(e, observe=("final",))
+                                                      .theta1_final))
+    path = tmp_path / "map.toml"
+    path.write_text(e.toml_text())
+    assert load_run(path, {})[0] == e.state.scene
+    with pytest.raises(InvalidInput, match="finite"):
+        e.update(damping_theta1=float("nan"))
+
 def test_the_run_file_and_python_reproduce_the_map(tmp_path):
     e = double(sweep.DoublePendulum(mass1=2.0, effects=(sweep.Damping(0.1),)))
     e.zoom((0.0, 2.0), (-2.0, 0.0))

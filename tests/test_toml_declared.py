@@ -104,6 +104,30 @@ def test_the_run_file_system_follows_scipy_dop853():
         np.testing.assert_allclose(got, ref, rtol=0, atol=1e-7)
 
 
+
+def test_effects_on_its_coordinates_are_read_and_written_back():
+    """A declared system takes the effects on one coordinate as every system does
+    (``[system.<effect>]`` with ``on``; ``[[system.<effect>]]`` for several), and the
+    explorer's run file of it (`sweep.toml_spec.system_effects_lines`) reads back the
+    same system; a torque on the cart in N is the same system as in Python."""
+    from sweep.explore.systems import _system_toml, _toml_value
+    from sweep.toml_spec import system_effects_lines
+
+    spec = copy.deepcopy(spec_of_example())
+    spec["system"]["torque"] = {"value": 0.5, "on": "x"}
+    spec["system"]["damping"] = [{"coefficient": 0.2, "on": "x"},
+                                 {"coefficient": 0.05, "on": "theta"}]
+    system = parse_run(spec, "run.toml")[0]
+    assert sorted(map(repr, system.effects)) == sorted(map(repr, (
+        sweep.Damping(0.2, on="x"), sweep.Damping(0.05, on="theta"), sweep.Torque(0.5, on="x"))))
+    assert system.parameters()["torque_x"] == 0.5
+    lines = system_effects_lines(system.effects, _toml_value)
+    assert lines.count("[[system.damping]]") == 2 and "[system.torque]" in lines
+    text = "\n".join(_system_toml(system))
+    back = parse_run(tomllib.loads(text + "\n\n[grid]\ntheta_0 = [0.1]\n\n[run]\n"
+                                   "t_end = 1.0\ndt = 0.01\n"), "back.toml")[0]
+    assert back == system
+
 def spec_of_example() -> dict:
     with open(EXAMPLE, "rb") as handle:
         return tomllib.load(handle)

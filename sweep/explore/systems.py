@@ -163,11 +163,34 @@ def _replaced(system: System, changes: dict) -> System:
     return dataclasses.replace(system, **changes)
 
 
+def _effect_parameters(system: System) -> tuple:
+    """The parameters of the system's effects on one coordinate (``damping_theta1``,
+    ``torque_theta2``: `sweep.physics.coordinate_effects`), in the effects' order."""
+    from ..physics.coordinate_effects import parameters_on
+
+    coordinates = {c.name: c for c in system.declaration.coordinates}
+    return tuple(p for e in system.effects if e.coordinate is not None
+                 for p in parameters_on(type(e), coordinates[e.coordinate],
+                                        system.energy_units))
+
+
+def _with_effect_value(effects: tuple, axis: str, value: float) -> tuple:
+    """``effects`` with the value of the effect parameter named ``axis``
+    (``<field axis>_<coordinate>``) replaced (validated by the effect)."""
+    import dataclasses
+
+    from ..physics.coordinate_effects import split_axis
+
+    cls, p, coordinate = split_axis(axis)
+    return tuple(dataclasses.replace(e, **{p.field: value})
+                 if type(e) is cls and e.coordinate == coordinate else e for e in effects)
+
+
 def _system_python(system: System) -> list[str]:
     """Lines of Python that make ``system`` (as ``system``)."""
     arguments = ", ".join(f"{k}={v!r}" for k, v in _constructor(system).items())
     if system.effects:
-        arguments += f", effects=(sweep.Damping({system.damping!r}),)"
+        arguments += f", effects=({''.join(f'sweep.{e!r}, ' for e in system.effects)})"
     if isinstance(system, DeclaredSystem):
         return ["from sweep.physics import Coordinate, Parameter, SystemDeclaration",
                 *_declaration_python(system.declaration),
@@ -198,9 +221,9 @@ def _system_toml(system: System) -> list[str]:
         return system_lines(system, _toml_value)
     out = ["[system]", f"kind = {_toml_value(type(system).__name__)}"]
     out += [f"{k} = {_toml_value(v)}" for k, v in _constructor(system).items()]
-    if system.effects:
-        out += ["", "[system.damping]", f"coefficient = {_toml_value(system.damping)}"]
-    return out
+    from ..toml_spec import system_effects_lines
+
+    return out + system_effects_lines(system.effects, _toml_value)
 
 
 #: Pixels per axis of a system's maps by default: the double pendulum's flip map of
@@ -349,7 +372,8 @@ class SystemExplorer(Explorer):
         system, shown = self.state.scene, (self.state.view.x, self.state.view.y)
         values = system.parameters()
         out = []
-        for p in tuple(system.declaration.parameters) + (SYSTEM_DAMPING,):
+        for p in tuple(system.declaration.parameters) + (SYSTEM_DAMPING,) + \
+                _effect_parameters(system):
             bound = ""
             if p.minimum is not None:
                 bound = f" ({'>' if p.strict else '>='} {p.minimum:g})"
@@ -395,17 +419,23 @@ class SystemExplorer(Explorer):
 
         changes = {}
         names = [p.axis for p in system.declaration.parameters]
+        on_one = {p.axis for p in _effect_parameters(system)}
+        effects = tuple(system.effects)
         for name, value in values.items():
             if name == "damping":
                 # the mass-proportional damping; effects on one coordinate stay
-                changes["effects"] = tuple(e for e in system.effects
-                                           if e.coordinate is not None) + \
+                effects = tuple(e for e in effects if e.coordinate is not None) + \
                     ((Damping(value),) if value else ())
+                changes["effects"] = effects
+            elif name in on_one:
+                effects = _with_effect_value(effects, name, value)
+                changes["effects"] = effects
             elif name in names:
                 changes[name] = value
             else:
+                accepted = names + ["damping"] + sorted(on_one)
                 raise ValueError(f"{name}: not a parameter of {type(system).__name__}; "
-                                 f"accepted: {', '.join(names + ['damping'])}")
+                                 f"accepted: {', '.join(accepted)}")
         return _replaced(system, changes)
 
     # -- validation and updates ------------------------------------------------------
