@@ -13,7 +13,9 @@ spends shows too, and one line per test and generated kernel it uses (``"uses"``
 the memo of `sweep.kernels.cache` as well as from numba's disk cache), so that a kernel
 only one test needs can be found. Under pytest-xdist every worker writes
 ``compile.<worker>.jsonl``. ``python tests/compile_log.py compile*.jsonl`` sums them:
-per test file, per test, per spec, and the specs that several tests compiled.
+per test file, per test, per spec, the specs that several tests compiled, and the
+functions that more than one worker compiled (each loads from numba's disk cache what
+another has already written, so only near-simultaneous first uses compile twice).
 
 tests/conftest.py calls its hooks; they do nothing unless the variable is set.
 """
@@ -146,12 +148,24 @@ def test_cpu(item):
         recorder.handle.flush()
 
 
+def _compiled_by_several(rows):
+    """How many functions (a generated kernel's spec, or a function with its argument
+    types) more than one log file compiled, and the CPU seconds of all but each one's
+    cheapest process: what sharing the work between the processes cost in compiling."""
+    cpu = defaultdict(lambda: defaultdict(float))  # function -> log file -> CPU seconds
+    for r in rows:
+        cpu[(r["spec"], r["function"], r["args"])][r["log"]] += r.get("cpu", 0.0)
+    several = [sorted(by_log.values()) for by_log in cpu.values() if len(by_log) > 1]
+    return len(several), sum(sum(seconds[1:]) for seconds in several)
+
+
 def _summary(paths):
     rows, tests, uses = [], [], []
     for path in paths:
         with open(path) as handle:
             for line in handle:
                 row = json.loads(line)
+                row["log"] = path  # one file per process (pytest-xdist worker)
                 (tests if "test_cpu" in row else uses if "uses" in row else rows).append(row)
     if tests:
         test_cpu = defaultdict(float)
@@ -177,6 +191,10 @@ def _summary(paths):
     kernels = {r["spec"] for r in rows if r["spec"]}
     print(f"{len(rows)} compiles, {total:.0f} s ({cpu:.0f} s CPU); "
           f"{len(kernels)} generated kernels")
+    twice, extra = _compiled_by_several(rows)
+    print(f"{twice} compiled by more than one process (each worker compiles what numba's "
+          f"disk cache did not yet hold when it needed it): {extra:.1f} s CPU beyond "
+          f"each one's cheapest copy")
     print("\nper test file: compiles, seconds, CPU seconds")
     per_file = defaultdict(lambda: [0, 0.0, 0.0])
     for r in rows:

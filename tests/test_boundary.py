@@ -79,12 +79,14 @@ def test_bad_input_is_refused_before_anything_is_computed(kwargs, words):
 
 
 def test_the_command_prints_the_forced_wada_maps_numbers_and_writes_them(tmp_path):
-    """The conftest's Wada scene at 48 x 48 with a 21 x 21 pilot: the catalogue and so
-    the kernels of the ``wada_catalogue`` fixture. The map is fractal and Wada already
-    at this size (W3 = 0.996 after 6 steps, measured; the full-size map's 0.994 after 6,
-    docs/guide/map_accuracy.md)."""
+    """The conftest's Wada scene at 41 x 41 with a 21 x 21 pilot: 41 = 2 x 20 + 1 points
+    per axis, so the pilot's every other start is, to the bit, conftest's 21 x 21 pilot,
+    and the catalogue and the kernels are the ``wada_catalogue`` fixture's (at 48 x 48
+    the pilot thinned to other starts: another catalogue, a kernel of its own). The map
+    is fractal and Wada already at this size (W3 = 0.996 after 6 steps, measured; the
+    full-size map's 0.994 after 6, docs/guide/map_accuracy.md)."""
     output = tmp_path / "wada.json"
-    run_file = write(tmp_path, WADA_RUN_FILE.format(n=48, extra=""))
+    run_file = write(tmp_path, WADA_RUN_FILE.format(n=41, extra=""))
     code, out, err = call("boundary", run_file, "--pilot", 21, "--sampled", 300, "--wada", 6,
                           "-o", output)
     assert (code, err) == (0, ""), err

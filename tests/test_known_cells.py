@@ -223,21 +223,28 @@ def test_refine_with_known_cells_on_a_grid_of_omega0_first(wada_catalogue):
 # ---------------------------------------------------------------------- run files
 
 
-def test_a_run_file_stops_on_known_cells_and_labels_as_the_catalogue_route(tmp_path):
-    """``[run] known_cells = true`` with ``pilot = 21`` (the conftest catalogue's pilot,
-    so its kernels) on 96 x 96 starts: coarse maps of the grid first, then the map stops
-    on their settled cells; every start gets the label of the catalogue route (measured:
-    none differs; at 64 x 64, 32 of 4096 did, so the route refuses fewer than 96)."""
+def test_a_run_file_stops_on_known_cells_and_labels_as_the_catalogue_route(tmp_path,
+                                                                          wada_catalogue):
+    """``[run] known_cells = true`` with ``pilot = 21`` on 161 x 161 starts: coarse maps
+    of the grid first, then the map stops on their settled cells; every start gets the
+    label of the catalogue route (measured: none differs; at 64 x 64, 32 of 4096 did, so
+    the route refuses fewer than 96). 161 = 8 x 20 + 1 points per axis: the pilot's every
+    eighth start is, to the bit, conftest's 21 x 21 pilot (at 96 it thinned to other
+    starts, so another catalogue and two kernels of its own), so the catalogue and the
+    kernels are the ``wada_catalogue`` fixture's."""
     from test_cli import call, write
 
     paths = {}
     for name, extra in (("known", "pilot = 21\nknown_cells = true"), ("plain", "pilot = 21")):
         paths[name] = tmp_path / f"{name}.nc"
-        code, _out, err = call("run", write(tmp_path, WADA_RUN_FILE.format(extra=extra, n=96),
+        code, _out, err = call("run", write(tmp_path, WADA_RUN_FILE.format(extra=extra, n=161),
                                            f"{name}.toml"), "-o", paths[name],
                               "--no-progress")
         assert (code, err) == (0, ""), err
     known, plain = sweep.load(paths["known"]), sweep.load(paths["plain"])
+    for ds in (known, plain):  # the fixture's catalogue, so its kernels
+        np.testing.assert_array_equal(sweep.io.run_arguments(ds)["attractors"]["theta"],
+                                      wada_catalogue["theta"])
     assert known.attrs["cells_stopped_known"] > 0 and "stopped_known" not in plain
     np.testing.assert_array_equal(maps.basins(known).values, maps.basins(plain).values)
 
