@@ -107,6 +107,13 @@ class DoublePendulum(System):
         return "2.0 * min((m1 + m2) * grav * l1, m2 * grav * l2)"
 
     @property
+    def drive_frequency_parameter(self) -> Parameter | None:
+        """``pivot_frequency`` when the pivot is driven (``a cos(nu t)``), else None."""
+        if self.pivot_amplitude is None:
+            return None
+        return {p.axis: p for p in self.declaration.parameters}["pivot_frequency"]
+
+    @property
     def declaration(self) -> SystemDeclaration:
         """The double pendulum's declaration (`sweep.physics.systems.double_pendulum`),
         with the joint damping and the pivot drive if given."""

@@ -200,6 +200,13 @@ class System:
     flip_energy: str | None = None
 
     @property
+    def drive_frequency_parameter(self) -> Parameter | None:
+        """The parameter that is the angular frequency [rad/s] of the system's periodic
+        drive, or None without one: the ``strobe`` observable samples the state once per
+        its period ``2 pi / nu``. None here; a subclass with a drive says which."""
+        return None
+
+    @property
     def title(self) -> str:
         """What a dataset's title calls it (its class name)."""
         return type(self).__name__
