@@ -91,6 +91,46 @@ def test_a_damped_double_pendulum_without_drive_rests_in_one_basin():
         assert min(abs(value), 2 * np.pi - abs(value)) < 1e-5
 
 
+def test_coexisting_attractors_of_the_double_kapitza_pendulum_agree_with_dop853():
+    """The damped double pendulum on a pivot driven fast (a = 0.1 m, nu = 60 rad/s,
+    c = 0.5/s; the docs' example): three starts that sweep's basins send to three
+    different attractors -- the first arm upright, the second arm upright, and a
+    period-4 orbit -- are integrated by SciPy's DOP853 on Lagrange's equations written
+    out in tests/test_systems.py (rtol = atol = 1e-10) to the same 16 strobe times, and
+    `identify_attractors` puts each DOP853 sequence on the attractor of sweep's (the
+    period-4 one reached at another phase of its orbit: a cyclic shift). Identity
+    within basins' tol = 1e-3 rad and rad/s: after 984 periods (103 s) both have
+    converged to ~exp(-0.25 * 103) ~ 1e-11 of the orbit."""
+    from scipy.integrate import solve_ivp
+    from test_systems import _lagrange
+
+    period = 2 * np.pi / 60.0
+    system = sweep.DoublePendulum(pivot_amplitude=0.1, pivot_frequency=60.0,
+                                  effects=(sweep.Damping(0.5),))
+    starts = [(0.0, np.pi / 10), (1.4137166941154070, -np.pi / 4), (0.0, 3 * np.pi / 4)]
+    points = sweep.Points(theta1_0=[s[0] for s in starts], theta2_0=[s[1] for s in starts])
+    ds = sweep.run(system, points, t_end=1000 * period, dt=period / 40,
+                   t_transient=984 * period, observe=("strobe",), progress=False)
+    found = maps.basins(ds)
+    assert len(set(found.values.tolist())) == 3 and (found.values >= 0).all()
+    assert sorted(found.attrs["attractor_period"].tolist()) == [1, 1, 4]
+
+    def damped(t, y):  # mass-proportional damping: every acceleration gains - c omega_i
+        w1, w2, a1, a2 = _lagrange(t, y, a=0.1, nu=60.0)
+        return [w1, w2, a1 - 0.5 * y[2], a2 - 0.5 * y[3]]
+
+    times = (984 + np.arange(16)) * period
+    reference = np.stack([solve_ivp(damped, (0, times[-1]), [*s, 0.0, 0.0],
+                                    method="DOP853", rtol=1e-10, atol=1e-10,
+                                    t_eval=times).y for s in starts])
+    position, velocity, angular, *_ = maps.labels.system_strobe_table(ds)
+    labels, _ = maps.identify_attractors(np.concatenate([position, reference[:, :2]]),
+                                         np.concatenate([velocity, reference[:, 2:]]),
+                                         angular=angular)
+    np.testing.assert_array_equal(labels[3:], labels[:3])
+    assert len(set(labels.tolist())) == 3
+
+
 def test_identify_attractors_compares_angles_modulo_two_pi_and_other_coordinates_not():
     """Synthetic (n, 2, P) tables, an angle and a length: fixed points at angle 0 and
     2 pi (one attractor) and at length 0 and 2 pi (two), plus a period-2 orbit."""
