@@ -464,9 +464,11 @@ def run(
     scene : Scene or System
         The physics; only its effects are simulated. A system with several coordinates
         (`sweep.DoublePendulum`) runs its own kernel (`sweep.engine_systems`): fixed-step
-        explicit Runge-Kutta methods, observables ``final``, ``winding``, ``energy`` and
-        ``flip`` (`sweep.system_observables`), ``save_every``, ``stop_early`` at the
-        first flip, Dask; the other options are refused for it, before any compute.
+        explicit Runge-Kutta methods, observables ``final``, ``winding``, ``energy``,
+        ``flip``, ``lyapunov`` and, for a driven system, ``strobe`` (once per period of
+        its drive, `sweep.physics.System.drive_frequency_parameter`;
+        `sweep.system_observables`), ``save_every``, ``stop_early`` at the first flip,
+        Dask; the other options are refused for it, before any compute.
     grid : Grid
         Named axes; the run covers their Cartesian product.
     t_end : float
@@ -555,7 +557,8 @@ def run(
         ``chunk_size`` is the task size. Works with ``checkpoint``/``resume``.
     strobe_samples : int, default 16
         Stroboscopic samples the ``strobe`` observable keeps per trajectory (the last
-        ones, one per forcing period): 16 recognise periods up to 8; hundreds draw an
+        ones, one per forcing period, or per drive period for a system): 16 recognise
+        periods up to 8; hundreds draw an
         orbit diagram (`sweep.plot.orbit_diagram`). Between 2 and 4096; only with
         ``strobe`` observed. With ``stop_early`` a trajectory stops only once all N
         samples are taken and repeat with a period up to min(N // 2, 8), so a large N
