@@ -92,32 +92,33 @@ def periods(theta, omega, max_period, tol, angular=None):
 
 @njit(cache=True, parallel=True)
 def _periods(position, velocity, angular, max_period, tol):
-    """`periods` on (n, m, P) tables."""
+    """`periods` on (n, m, P) tables: for one angle (m = 1) the very loop of the
+    single pendulum's search, each coordinate's in turn for more."""
     n, m, samples = position.shape
     period = np.zeros(n, dtype=np.int64)
     turns = np.zeros((n, m), dtype=np.int64)
-    shifts = np.zeros((n, m))
     for i in prange(n):
         finite = True
-        for j in range(samples):
-            for c in range(m):
+        for c in range(m):
+            for j in range(samples):
                 if not (math.isfinite(position[i, c, j]) and math.isfinite(velocity[i, c, j])):
                     finite = False
+                    break
+            if not finite:
+                break
         if not finite:
             continue
         for p in range(1, max_period + 1):
             if samples < 2 * p:
                 break
-            for c in range(m):
-                shifts[i, c] = 0.0
-                if angular[c]:
-                    q = np.rint((position[i, c, samples - 1] - position[i, c, samples - 1 - p])
-                                / TWO_PI)
-                    shifts[i, c] = TWO_PI * q
             ok = True
-            for j in range(samples - p):
-                for c in range(m):
-                    if not (abs((position[i, c, j + p] - position[i, c, j]) - shifts[i, c]) < tol
+            for c in range(m):
+                shift = 0.0
+                if angular[c]:
+                    shift = TWO_PI * np.rint((position[i, c, samples - 1]
+                                              - position[i, c, samples - 1 - p]) / TWO_PI)
+                for j in range(samples - p):
+                    if not (abs((position[i, c, j + p] - position[i, c, j]) - shift) < tol
                             and abs(velocity[i, c, j + p] - velocity[i, c, j]) < tol):
                         ok = False
                         break
@@ -126,7 +127,10 @@ def _periods(position, velocity, angular, max_period, tol):
             if ok:
                 period[i] = p
                 for c in range(m):
-                    turns[i, c] = np.int64(np.rint(shifts[i, c] / TWO_PI))
+                    if angular[c]:
+                        turns[i, c] = np.int64(np.rint((position[i, c, samples - 1]
+                                                        - position[i, c, samples - 1 - p])
+                                                       / TWO_PI))
                 break
     return period, turns
 
