@@ -97,8 +97,8 @@ def _check_strobe(system: System, grid: ParameterRows, names, settings):
     drive = system.drive_frequency_parameter
     if drive is None:
         raise ValueError(f"observable 'strobe' samples once per drive period, and "
-                         f"{system!r} has no periodic drive; accepted: a driven system, "
-                         "e.g. sweep.DoublePendulum(..., pivot_amplitude=a, "
+                         f"this {system.title} has no periodic drive; accepted: a driven "
+                         "system, e.g. sweep.DoublePendulum(..., pivot_amplitude=a, "
                          "pivot_frequency=nu), or sweep.DeclaredSystem(..., "
                          "drive_frequency_axis=<its frequency parameter>)")
     frequencies = grid.axes.get(drive.axis, np.array([getattr(system, drive.axis)]))

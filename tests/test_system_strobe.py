@@ -5,6 +5,8 @@ the sampled steps, so the same bits) and SciPy's DOP853 on Lagrange's equations 
 out in tests/test_systems.py.
 """
 
+import pickle
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -95,6 +97,8 @@ def test_a_declared_system_samples_at_its_declared_drive():
                    progress=False)
     assert ds.attrs["strobe_frequency"] == "frequency"
     np.testing.assert_array_equal(ds["v2_strobe"].values[0], ds["v2"].values[0, -301::100])
+    again = pickle.loads(pickle.dumps(system))  # as a Dask worker gets it
+    assert again == system and again.drive_frequency_parameter.axis == "frequency"
 
 
 def _two_forced_pendula(Coordinate, Parameter, SystemDeclaration):
