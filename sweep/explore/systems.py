@@ -76,6 +76,8 @@ def system_quantities(system: System) -> dict[str, Quantity]:
     coordinates = system.declaration.coordinates
     out: dict[str, Quantity] = {}
     for observable in SYSTEM_OBSERVABLES.values():
+        if observable.sampled:  # a sequence per start (strobe), not one value to map
+            continue
         for name, units, _ in variables(observable.name, coordinates, system.energy_units):
             if units == "s":
                 out[f"log10:{name}"] = Quantity(
