@@ -157,8 +157,8 @@ def test_maps_not_yet_taking_a_systems_samples_say_so():
     system = sweep.DoublePendulum(pivot_amplitude=0.0, pivot_frequency=2 * np.pi)
     ds = sweep.run(system, sweep.Points(theta1_0=[0.1]), t_end=4.0, dt=0.01,
                    observe=("final", "strobe"), strobe_samples=2, progress=False)
-    with pytest.raises(ValueError, match="of a system's stroboscopic samples is not "
-                                         r"available yet; accepted: sweep\.maps\.basins"):
+    with pytest.raises(ValueError, match="not available for a system's stroboscopic "
+                                         r"samples yet; accepted: sweep\.maps\.basins"):
         maps.period(ds)
     undriven = sweep.run(sweep.DoublePendulum(), sweep.Points(theta1_0=[0.1]), t_end=4.0,
                          dt=0.01, observe=("final",), progress=False)

@@ -349,8 +349,8 @@ def strobe_axes(ds: xr.Dataset, what: str, along: str | None = None) -> list[str
         the axes).
     """
     if isinstance(ds, xr.Dataset) and "strobe_positions" in ds.attrs:
-        raise ValueError(f"{what} of a system's stroboscopic samples is not available yet; "
-                         "accepted: sweep.maps.basins, or a single pendulum's run")
+        raise ValueError(f"{what} is not available for a system's stroboscopic samples "
+                         "yet; accepted: sweep.maps.basins, or a single pendulum's run")
     if not isinstance(ds, xr.Dataset) or "strobe_theta" not in ds or "strobe_omega" not in ds:
         raise ValueError(f"{what} needs stroboscopic samples (strobe_theta and "
                          "strobe_omega); accepted: a dataset from sweep.run(..., "
