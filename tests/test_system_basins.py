@@ -114,6 +114,9 @@ def test_coexisting_attractors_of_the_double_kapitza_pendulum_agree_with_dop853(
     found = maps.basins(ds)
     assert len(set(found.values.tolist())) == 3 and (found.values >= 0).all()
     assert sorted(found.attrs["attractor_period"].tolist()) == [1, 1, 4]
+    # the period map reads the same samples: each start's attractor's period
+    np.testing.assert_array_equal(maps.period(ds).values,
+                                  found.attrs["attractor_period"][found.values])
 
     def damped(t, y):  # mass-proportional damping: every acceleration gains - c omega_i
         w1, w2, a1, a2 = _lagrange(t, y, a=0.1, nu=60.0)
@@ -159,7 +162,7 @@ def test_maps_not_yet_taking_a_systems_samples_say_so():
                    observe=("final", "strobe"), strobe_samples=2, progress=False)
     with pytest.raises(ValueError, match="not available for a system's stroboscopic "
                                          r"samples yet; accepted: sweep\.maps\.basins"):
-        maps.period(ds)
+        maps.attractor_catalogue(ds)
     undriven = sweep.run(sweep.DoublePendulum(), sweep.Points(theta1_0=[0.1]), t_end=4.0,
                          dt=0.01, observe=("final",), progress=False)
     with pytest.raises(ValueError, match="basins of a system need its stroboscopic "
