@@ -566,17 +566,24 @@ def amplitude(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
 
 
 # ------------------------------------------------------------------ forced attractors
-def _orbit(position_row, velocity_row, p, angular):
+def _orbit(position_row, velocity_row, p, angular=None):
     """The p orbit points of m coordinates (angles wrapped to [0, 2 pi)), then their
-    velocities: shape (p, 2 m), from rows of shape (m, P)."""
+    velocities: shape (p, 2 m), from rows of shape (m, P) (or of one angle: (P,), and
+    shape (p, 2)); ``angular`` (m,) bool, default all."""
+    position_row, velocity_row = np.atleast_2d(position_row), np.atleast_2d(velocity_row)
+    if angular is None:
+        angular = np.ones(position_row.shape[0], dtype=bool)
     position = position_row[:, -p:]
     position = np.where(angular[:, None], np.mod(position, 2 * np.pi), position)
     return np.concatenate([position, velocity_row[:, -p:]], axis=0).T
 
 
-def _same_orbit(a: np.ndarray, b: np.ndarray, tol: float, angular: np.ndarray) -> bool:
+def _same_orbit(a: np.ndarray, b: np.ndarray, tol: float,
+                angular: np.ndarray | None = None) -> bool:
     """True if orbits a and b (shape (p, 2 m), `_orbit`) coincide up to a cyclic shift,
-    the angles compared modulo 2 pi."""
+    the angles (``angular``, default all m coordinates) compared modulo 2 pi."""
+    if angular is None:
+        angular = np.ones(a.shape[1] // 2, dtype=bool)
     m = angular.size
     for shift in range(len(a)):
         rolled = np.roll(b, shift, axis=0)
