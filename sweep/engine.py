@@ -109,17 +109,42 @@ def _check_stroboscopic(names, scene: Scene, grid: Grid, settings) -> None:
                              "sweep.Forcing(amplitude, frequency, phase)")
         frequencies = grid.axes.get("forcing_frequency",
                                     np.array([scene.forcing.frequency]))
-        for frequency in np.unique(frequencies):
-            if frequency <= 0:
-                raise ValueError(f"observable {name!r} needs forcing_frequency > 0, got "
-                                 f"{float(frequency)!r}")
-            steps = 2 * np.pi / (frequency * settings.dt)
-            if abs(steps - round(steps)) > WHOLE_STEPS_RTOL * max(1.0, steps) * 1e3:
-                raise ValueError(
-                    f"observable {name!r}: the forcing period 2 pi / {float(frequency)!r} is "
-                    f"not a whole number of steps dt = {settings.dt!r} ({steps:.6g}); "
-                    f"accepted: dt = period / N, e.g. dt = "
-                    f"{float(2 * np.pi / (frequency * max(round(steps), 1)))!r}")
+        check_sampling_period(name, frequencies, settings.dt)
+
+
+def check_sampling_period(name: str, frequencies, dt: float, *,
+                          axis: str = "forcing_frequency", period: str = "forcing") -> None:
+    """Refuse a drive frequency at which an observable that samples once per period
+    could not: every value must be > 0 with a period ``2 pi / W`` that is a whole number
+    of steps ``dt`` (so every sample is at the same phase).
+
+    Parameters
+    ----------
+    name : str
+        The observable (``"strobe"``), for the message.
+    frequencies : array_like
+        The run's drive frequencies W [rad/s] (a grid axis' values, or the one value).
+    dt : float
+        The step [s].
+    axis, period : str
+        The frequency's axis name and what the period is called, for the message.
+
+    Raises
+    ------
+    ValueError
+        Naming the first bad frequency and what would be accepted.
+    """
+    for frequency in np.unique(frequencies):
+        if frequency <= 0:
+            raise ValueError(f"observable {name!r} needs {axis} > 0, got "
+                             f"{float(frequency)!r}")
+        steps = 2 * np.pi / (frequency * dt)
+        if abs(steps - round(steps)) > WHOLE_STEPS_RTOL * max(1.0, steps) * 1e3:
+            raise ValueError(
+                f"observable {name!r}: the {period} period 2 pi / {float(frequency)!r} is "
+                f"not a whole number of steps dt = {dt!r} ({steps:.6g}); "
+                f"accepted: dt = period / N, e.g. dt = "
+                f"{float(2 * np.pi / (frequency * max(round(steps), 1)))!r}")
 
 
 def _extremes(values: dict[str, np.ndarray]) -> list[dict[str, float]]:
@@ -439,9 +464,11 @@ def run(
     scene : Scene or System
         The physics; only its effects are simulated. A system with several coordinates
         (`sweep.DoublePendulum`) runs its own kernel (`sweep.engine_systems`): fixed-step
-        explicit Runge-Kutta methods, observables ``final``, ``winding``, ``energy`` and
-        ``flip`` (`sweep.system_observables`), ``save_every``, ``stop_early`` at the
-        first flip, Dask; the other options are refused for it, before any compute.
+        explicit Runge-Kutta methods, observables ``final``, ``winding``, ``energy``,
+        ``flip``, ``lyapunov`` and, for a driven system, ``strobe`` (once per period of
+        its drive, `sweep.physics.System.drive_frequency_parameter`;
+        `sweep.system_observables`), ``save_every``, ``stop_early`` at the first flip,
+        Dask; the other options are refused for it, before any compute.
     grid : Grid
         Named axes; the run covers their Cartesian product.
     t_end : float
@@ -530,7 +557,8 @@ def run(
         ``chunk_size`` is the task size. Works with ``checkpoint``/``resume``.
     strobe_samples : int, default 16
         Stroboscopic samples the ``strobe`` observable keeps per trajectory (the last
-        ones, one per forcing period): 16 recognise periods up to 8; hundreds draw an
+        ones, one per forcing period, or per drive period for a system): 16 recognise
+        periods up to 8; hundreds draw an
         orbit diagram (`sweep.plot.orbit_diagram`). Between 2 and 4096; only with
         ``strobe`` observed. With ``stop_early`` a trajectory stops only once all N
         samples are taken and repeat with a period up to min(N // 2, 8), so a large N

@@ -21,10 +21,11 @@ from .io import device_attributes, origin_attributes, run_attributes, status_var
 from .kernels import failure_summary, status_counts
 from .kernels.network import NETWORK_OBSERVABLES, NetworkSpec, network_outputs
 from .kernels.system import SystemSpec, n_outputs
+from .observables import STROBE_SAMPLES
 from .physics.network import NETWORK_PARAMETERS, SwingNetwork
 from .physics.system import System, system_parameters
 from .settings import CUDA_CHUNK, _block, _check_device, default_chunk_size, validate_settings
-from .system_observables import resolve_system_observe, variables
+from .system_observables import SYSTEM_OBSERVABLES, resolve_system_observe, variables
 
 __all__ = ["allocate_system", "prepare_system", "run_system", "system_dataset",
            "to_network_dataset", "to_system_dataset"]
@@ -88,6 +89,26 @@ def _prepare_network(network, grid, settings, observe, save_every, stop_early,
                        block=_block(grid.size, False), device=device)
 
 
+def _check_strobe(system: System, grid: ParameterRows, names, settings):
+    """With ``strobe`` observed: the system's drive-frequency parameter (it must have
+    one), every frequency on the grid > 0 with a period of whole steps; else None."""
+    from .engine import check_sampling_period
+
+    if "strobe" not in names:
+        return None
+    drive = system.drive_frequency_parameter
+    if drive is None:
+        raise ValueError(f"observable 'strobe' samples once per drive period, and "
+                         f"this {system.title} has no periodic drive; accepted: a driven "
+                         "system, e.g. sweep.DoublePendulum(..., pivot_amplitude=a, "
+                         "pivot_frequency=nu), or sweep.DeclaredSystem(..., "
+                         "drive_frequency_axis=<its frequency parameter>)")
+    frequencies = grid.axes.get(drive.axis, np.array([system.parameters()[drive.axis]]))
+    check_sampling_period("strobe", frequencies, settings.dt, axis=drive.axis,
+                          period="drive")
+    return drive
+
+
 def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
                    t_transient=0.0, observe=None, save_every=None,
                    method="rk4", chunk_size=None, stop_early=False, strobe_samples=None,
@@ -101,6 +122,7 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
         Naming the argument, its value and what is accepted.
     """
     from ._validate import check_flag, check_positive_int
+    from .engine import check_strobe_samples
 
     if not isinstance(grid, ParameterRows):
         raise TypeError(f"grid must be a sweep.Grid or sweep.Points, got {grid!r}")
@@ -138,10 +160,10 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
     if not names and save_every is None:
         raise ValueError("observe is empty and save_every is None -- nothing would be "
                          "computed; accepted: at least one of final, winding, energy, "
-                         "flip, or a save_every")
-    if strobe_samples is not None:
-        raise ValueError(f"strobe_samples={strobe_samples!r} is not available for a system "
-                         "yet; accepted: strobe_samples=None")
+                         "flip, lyapunov, strobe, or a save_every")
+    strobe_samples = STROBE_SAMPLES if strobe_samples is None else strobe_samples
+    check_strobe_samples(strobe_samples, names)
+    drive = _check_strobe(system, grid, names, settings)
     check_flag("check_stability", check_stability)
     if stop_early and (names != ("flip",) or save_every is not None):
         raise ValueError(
@@ -154,7 +176,9 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
                       damping=damping, save=save_every is not None, method=settings.method,
                       stop_early=bool(stop_early), block=_block(grid.size, bool(stop_early)),
                       flip_energy=system.flip_energy, device=device, dtype=dtype,
-                      refill=bool(stop_early) and _config.REFILL)
+                      refill=bool(stop_early) and _config.REFILL,
+                      strobe_samples=int(strobe_samples),
+                      strobe_frequency=None if drive is None else drive.symbol)
     if dtype != "float64":
         _check_single(system, spec)
     if "energy" in names and not spec.derived.energy_lines:
@@ -255,10 +279,18 @@ def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
     data_vars, col = {}, 0
     coordinates = spec.system.coordinates
     for name in spec.observe:
+        width = spec.strobe_samples if SYSTEM_OBSERVABLES[name].sampled else 1
         for variable, units, long_name in variables(name, coordinates, system.energy_units):
-            data_vars[variable] = xr.Variable(dims, grid.unflatten(out[:, col]),
-                                              {"units": units, "long_name": long_name})
-            col += 1
+            attrs = {"units": units, "long_name": long_name}
+            if width == 1:
+                data_vars[variable] = xr.Variable(dims, grid.unflatten(out[:, col]), attrs)
+            else:  # as the single pendulum's strobe_theta (sweep.io)
+                data_vars[variable] = xr.Variable(dims + ("strobe",),
+                                                  grid.unflatten(out[:, col:col + width]),
+                                                  attrs)
+                coords["strobe"] = xr.Variable("strobe", np.arange(1 - width, 1), {
+                    "units": "1", "long_name": "drive periods before the last sample"})
+            col += width
     data_vars["status"] = status_variable(grid, status)
     if saved is not None:
         coords["time"] = _time(settings, saved.shape[2])
@@ -276,6 +308,12 @@ def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
                  effects=_effects_attribute(system, spec))
     if spec.stop_early:
         attrs["stop_early"] = "at the first flip"
+    if "strobe" in spec.observe:  # what `sweep.maps.basins` reads of the samples
+        attrs.update(strobe_samples=spec.strobe_samples,
+                     strobe_frequency=system.drive_frequency_parameter.axis,
+                     strobe_positions=" ".join(c.name for c in coordinates),
+                     strobe_velocities=" ".join(c.velocity for c in coordinates),
+                     strobe_angular=" ".join(c.name for c in coordinates if c.angular))
     return xr.Dataset(data_vars, coords, attrs)
 
 

@@ -18,7 +18,13 @@ coordinate, units, meaning); `sweep.kernels.system` writes their kernel source a
   pendulum costs only the time each start takes to flip;
 - ``lyapunov``: ``lyapunov_max`` [1/s], the largest Lyapunov exponent over the steady
   window (Benettin's method on the integrator's step map, from the system's derived
-  Jacobian), as the single pendulum's.
+  Jacobian), as the single pendulum's;
+- ``strobe``: stroboscopic samples, as the single pendulum's ``strobe``: every
+  coordinate and velocity (``theta1_strobe``, ..., ``omega1_strobe``, ...; angles
+  unwrapped) at the last ``strobe_samples`` times ``t0 + n_transient dt + m 2 pi / nu``
+  (``nu`` the system's drive frequency, `sweep.physics.System.drive_frequency_parameter`),
+  oldest first, over a last dimension ``strobe``; NaN for samples the run did not reach.
+  They are the state at those steps exactly, the same bits as ``save_every`` saves.
 """
 
 from __future__ import annotations
@@ -42,11 +48,14 @@ class SystemObservable:
         coordinate, or one set for the system.
     stops : bool
         Whether ``stop_early`` may stop a trajectory on it (its answer is final).
+    sampled : bool
+        Each variable has ``strobe_samples`` columns (dimension ``strobe``), not one.
     """
 
     name: str
     per: str
     stops: bool = False
+    sampled: bool = False
 
 
 SYSTEM_OBSERVABLES = {o.name: o for o in (
@@ -55,6 +64,7 @@ SYSTEM_OBSERVABLES = {o.name: o for o in (
     SystemObservable("energy", "system"),
     SystemObservable("flip", "system", stops=True),
     SystemObservable("lyapunov", "system"),
+    SystemObservable("strobe", "coordinate", sampled=True),
 )}
 
 
@@ -84,7 +94,8 @@ def resolve_system_observe(observe) -> tuple[str, ...]:
 
 def variables(name: str, coordinates, energy_units: str) -> list[tuple[str, str, str]]:
     """``(variable, units, long_name)`` of observable ``name`` for these coordinates, in
-    the order of the kernel's output columns.
+    the order of the kernel's output columns (a ``sampled`` observable's variable has
+    ``strobe_samples`` columns each).
 
     Parameters
     ----------
@@ -117,4 +128,12 @@ def variables(name: str, coordinates, energy_units: str) -> list[tuple[str, str,
         return [("lyapunov_max", "s-1", "largest Lyapunov exponent over t >= t0 + t_transient "
                  "(finite-time, of the integrator's step map; one tangent vector from "
                  f"(1, ..., 1) / sqrt(2 m), renormalised every {LYAPUNOV_EVERY} steps)")]
+    if name == "strobe":
+        when = ("at the last strobe_samples drive periods (oldest first): stroboscopic "
+                "samples at t0 + n_transient dt + m 2 pi / nu, nu the drive's frequency")
+        return [(f"{c.name}_strobe", c.units, f"{c.long_name or c.name}"
+                 + (" (unwrapped)" if c.angular else "") + f" {when}")
+                for c in coordinates] + \
+            [(f"{c.velocity}_strobe", c.velocity_units, f"{c.velocity} {when}")
+             for c in coordinates]
     raise ValueError(f"unknown system observable {name!r}")

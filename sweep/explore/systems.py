@@ -85,7 +85,7 @@ def system_quantities(system: System) -> dict[str, Quantity]:
         meaningless.add("energy")  # accelerations without a potential: no energy
     out: dict[str, Quantity] = {}
     for observable in SYSTEM_OBSERVABLES.values():
-        if observable.name in meaningless:
+        if observable.name in meaningless or observable.sampled:  # strobe: a sequence
             continue
         for name, units, _ in variables(observable.name, coordinates, system.energy_units):
             if units == "s":

@@ -10,7 +10,9 @@ Kernel contract (as the single pendulum's fixed-step kernel, `sweep.kernels.sour
 params : float64[n, n_columns]        columns `SystemSpec.columns`: every coordinate's
                                       initial value, every initial velocity, the
                                       system's parameters, the effects' parameters
-out : float64[n, n_outputs(spec)]     observables (`sweep.system_observables`), in order
+out : float64[n, n_outputs(spec)]     observables (`sweep.system_observables`), in order;
+                                      ``strobe``: each state variable's strobe_samples
+                                      columns (oldest first), written during the run
 status : int8[n]                      `sweep.kernels.Status` per trajectory
 saved : float64[n, 2 m, n_saved]      the m coordinates, then the m velocities, at steps
                                       0, k, 2k, ... (``spec.save``)
@@ -26,9 +28,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .. import methods as _methods
-from ..observables import LYAPUNOV_EVERY
+from ..observables import LYAPUNOV_EVERY, STROBE_SAMPLES
 from ..physics.system import DerivedSystem, SystemDeclaration, system_columns
-from ..system_observables import variables
+from ..system_observables import SYSTEM_OBSERVABLES, variables
 from .lanes import IDENTIFIER, allocate, blocks_head, indent, lane_loop, scalar_lanes
 from .rewrite import Rewritten, rewrite
 from .spec import Status, check_block
@@ -78,6 +80,11 @@ class SystemSpec:
         With ``stop_early`` on the CPU in blocks of more than one lane: a lane whose
         trajectory has stopped takes the next one (`sweep.kernels.system_refill`),
         bit-identical to ``refill=False``; ignored otherwise.
+    strobe_samples : int
+        With ``strobe``: the samples kept per state variable (the last ones).
+    strobe_frequency : str, optional
+        With ``strobe``: the kernel symbol of the drive's angular frequency ``nu``
+        [rad/s] (a parameter's); one sample every ``round(2 pi / (nu dt))`` steps.
     """
 
     system: SystemDeclaration
@@ -92,10 +99,18 @@ class SystemSpec:
     dtype: str = "float64"
     flip_energy: str | None = None
     refill: bool = False
+    strobe_samples: int = STROBE_SAMPLES
+    strobe_frequency: str | None = None
 
     def __post_init__(self) -> None:
         if self.device == "cuda":  # one thread per trajectory: no lanes
             object.__setattr__(self, "block", 1)
+        if "strobe" not in self.observe:  # they change nothing then: one kernel either way
+            object.__setattr__(self, "strobe_samples", STROBE_SAMPLES)
+            object.__setattr__(self, "strobe_frequency", None)
+        elif self.strobe_frequency is None:
+            raise ValueError("observable 'strobe' samples once per drive period; the kernel "
+                             "spec needs strobe_frequency (the drive frequency's symbol)")
         object.__setattr__(self, "block", check_block(self.block))
         if not self.stop_early:  # it changes nothing then: one kernel either way
             object.__setattr__(self, "flip_energy", None)
@@ -113,12 +128,17 @@ class SystemSpec:
                 f"{tuple(c.name for c in self.system.coordinates)!r}, damping={self.damping!r}, "
                 f"observe={self.observe!r}, save={self.save!r}, method={self.method!r}, "
                 f"stop_early={self.stop_early!r}, block={self.block!r}"
-                + (", refill=True" if self.refill else ""))
+                + (", refill=True" if self.refill else "")
+                + (f", strobe_samples={self.strobe_samples!r}, strobe_frequency="
+                   f"{self.strobe_frequency!r}" if "strobe" in self.observe else ""))
 
 
 def n_outputs(spec: SystemSpec) -> int:
-    """Width of ``out``: every variable of every observed observable."""
-    return sum(len(variables(name, spec.system.coordinates, "")) for name in spec.observe)
+    """Width of ``out``: every variable of every observed observable (``strobe``:
+    ``strobe_samples`` columns each)."""
+    return sum(len(variables(name, spec.system.coordinates, ""))
+               * (spec.strobe_samples if SYSTEM_OBSERVABLES[name].sampled else 1)
+               for name in spec.observe)
 
 
 def _tableau(spec: SystemSpec):
@@ -364,6 +384,8 @@ class _Parts:
     physics: str            # the physics functions' source (`_physics`)
     hoisted: list[str]      # after the loads: the parameters' part, into hoisted_values
     n_hoisted: int          # rows of hoisted_values (0: none)
+    strobe_first: list[str]  # with strobe, for a real trajectory: its columns NaN, sample 0
+    strobe_sample: list[str]  # with strobe, after each step: the sample of state k_state
 
 
 def _parts(spec: SystemSpec) -> _Parts:
@@ -421,8 +443,48 @@ def _parts(spec: SystemSpec) -> _Parts:
     stores = [x for x in state] + (["flip_t"] if flip else []) + \
         ([f"ly_{x}" for x in state] if "lyapunov" in spec.observe else []) + \
         (["done"] + [f"stop_{x}" for x in state] if spec.stop_early else [])
+    strobe_first, strobe_sample = [], []
+    if "strobe" in spec.observe:
+        first += _strobe_counters(spec)
+        lane.update({"sb_S": "int64", "sb_next": "int64", "sb_col": "int64"})
+        strobe_first, strobe_sample = _strobe_lines(spec, state)
     return _Parts(state, symbols, lane, constants, first, body, stopped, renormalise, stores,
-                  physics, hoisted, len(fast.names))
+                  physics, hoisted, len(fast.names), strobe_first, strobe_sample)
+
+
+def _strobe_counters(spec: SystemSpec) -> list[str]:
+    """Per trajectory, before the first step: ``sb_S`` steps per drive period, the step
+    ``sb_next`` of the next sample to keep and its column ``sb_col``. The samples are the
+    states ``max(n_transient, 0) + m sb_S`` (m = 0, 1, ...) up to ``n_steps``, as the
+    single pendulum's ``strobe``; only the last ``strobe_samples`` are kept, so the first
+    kept one goes to column ``strobe_samples - (samples in the run)`` when that is >= 0
+    (the columns before it stay NaN), and the earlier ones are skipped."""
+    n = spec.strobe_samples
+    return [f"sb_S = round(TWO_PI / ({spec.strobe_frequency} * dt))",
+            "sb_next = max(n_transient, 0)",
+            f"sb_col = {n} - ((n_steps - sb_next) // sb_S + 1)",
+            "if sb_col < 0:",
+            "    sb_next += -sb_col * sb_S",
+            "    sb_col = 0"]
+
+
+def _strobe_lines(spec: SystemSpec, state: list[str]) -> tuple[list[str], list[str]]:
+    """``strobe``'s per-trajectory lines (trajectory ``i``, its row of ``out``): its
+    columns set to NaN and the initial state's sample where it is one; and after each
+    step, the sample of state ``k_state`` when it is due (each state variable into its
+    ``strobe_samples`` columns, oldest first)."""
+    n = spec.strobe_samples
+    start = 0
+    for name in spec.observe:
+        if name == "strobe":
+            break
+        start += len(variables(name, spec.system.coordinates, ""))
+    writes = [f"out[i, {start + k * n} + sb_col] = {x}" for k, x in enumerate(state)]
+    take = writes + ["sb_next += sb_S", "sb_col += 1"]
+    first = [f"for sb_q in range({start}, {start + len(state) * n}):",
+             "    out[i, sb_q] = math.nan",
+             "if sb_next == 0:"] + [indent(line, 1) for line in take]
+    return first, ["if sb_next == k_state:"] + [indent(line, 1) for line in take]
 
 
 _RENORMALISE_HEAD = (f"if k_state % {LYAPUNOV_EVERY} == 0 or k_state == n_transient or "
@@ -447,6 +509,8 @@ def system_kernel(spec: SystemSpec) -> str:
     if spec.save:
         first += ["if base + j < n:"] + [f"    saved[base + j, {k}, 0] = {x}"
                                          for k, x in enumerate(state)]
+    if parts.strobe_first:
+        first += ["if base + j < n:"] + [indent(line, 1) for line in parts.strobe_first]
     body = list(parts.body)
     head = ""
     if spec.stop_early:
@@ -466,6 +530,11 @@ def system_kernel(spec: SystemSpec) -> str:
                 + NL.join(f"        saved[base + j, {k}, k_save] = lane_{x}[j]"
                           for k, x in enumerate(state)))
     stop = "if n_done == BLOCK:\n    break" if spec.stop_early else ""
+    strobe = ""
+    if parts.strobe_sample:  # the block's earliest due sample first: most steps take none
+        strobe = ("if k_state >= sb_due:\n    sb_due = n_steps + 1\n" + lane_loop(
+            NL.join(["i = base + j"] + parts.strobe_sample
+                    + ["sb_due = min(sb_due, sb_next)"]), lane, level=1, count="n_real"))
     finish = lane_loop(_finish(spec, state, symbols), lane, level=2, stores=[],
                        count="n_real")
     kernel = blocks_head(spec.block) + f'''\
@@ -477,6 +546,7 @@ def system_kernel(spec: SystemSpec) -> str:
         n_real = min(BLOCK, n - base)
 {indent(NL.join(allocate(lane) + invariant), 2)}
         n_done = 0
+{indent("sb_due = 0" if strobe else "", 2)}
 {init_loop}
         for step in range(n_steps):
 {step_loop}
@@ -484,6 +554,7 @@ def system_kernel(spec: SystemSpec) -> str:
 {indent(renormalise, 3)}
 {indent(stop, 3)}
 {indent(save, 3)}
+{indent(strobe, 3)}
 {finish}
 '''
     return (scalar_lanes(kernel, lane) if spec.block == 1 else kernel), parts.physics
@@ -503,6 +574,7 @@ def system_cuda_kernel(spec: SystemSpec) -> tuple[str, str]:
         loop += ["if flip_t < math.inf:"] + [indent(line, 1) for line in parts.stopped] + \
             ["    break"]
     loop.append("k_state = step + 1")
+    loop += parts.strobe_sample
     if parts.renormalise:
         loop += [_RENORMALISE_HEAD, indent(parts.renormalise, 1)]
     save_first = []
@@ -515,8 +587,9 @@ def system_cuda_kernel(spec: SystemSpec) -> tuple[str, str]:
                     "n_done = 0"] + list(parts.constants.values()) + loads
                    + ([f"{_INVARIANT} = cuda.local.array(({parts.n_hoisted}, 1), np.float64)",
                        "j = 0"] if parts.n_hoisted else []) + parts.hoisted + parts.first
-                   + save_first + ["for step in range(n_steps):", indent(NL.join(loop), 1),
-                                   _finish(spec, state, symbols, index="")])
+                   + save_first + parts.strobe_first
+                   + ["for step in range(n_steps):", indent(NL.join(loop), 1),
+                      _finish(spec, state, symbols, index="")])
     physics = parts.physics.replace(_INLINE, "@njit(**JIT)")
     return cuda_module(body), device_functions(physics, spec.dtype)
 

@@ -221,13 +221,17 @@ def basins(ds: xr.Dataset, *, rest_position: bool = False, max_period: int = 8,
     rest position, so every captured start gets the same label).
 
     For forced scenes (a run observing ``strobe``) the attractors are the periodic
-    orbits found in the stroboscopic samples by `identify_attractors`.
+    orbits found in the stroboscopic samples by `identify_attractors`; so for a driven
+    system of several coordinates (`sweep.DoublePendulum` with a pivot drive, a
+    `sweep.DeclaredSystem` with a ``drive_frequency_axis``), from the samples of every
+    coordinate and velocity (``theta1_strobe``, ...), its angles compared modulo 2 pi
+    each.
 
     Parameters
     ----------
     ds : xarray.Dataset
-        An unforced run observing ``final`` and ``energy``, or a forced run observing
-        ``strobe``.
+        An unforced run observing ``final`` and ``energy``, or a forced run (of the
+        pendulum or of a system) observing ``strobe``.
     rest_position : bool, default False
         Unforced scenes: identify wells modulo 2 pi.
     max_period, tol
@@ -241,10 +245,20 @@ def basins(ds: xr.Dataset, *, rest_position: bool = False, max_period: int = 8,
         not converged, or failed). Attributes list each attractor by label:
         ``attractor_theta`` [rad] (and, forced, ``attractor_omega`` [rad/s],
         ``attractor_period`` [forcing periods], ``attractor_turns_per_period``,
-        ``attractor_size`` [trajectories]).
+        ``attractor_size`` [trajectories]). A system's: ``attractor_<coordinate>``
+        and ``attractor_<velocity>`` for each (``attractor_theta1``, ...,
+        ``attractor_omega2``; angles in [0, 2 pi)), ``attractor_turns_per_period_<angle>``
+        for each angle, ``attractor_period``, ``attractor_size``.
     """
     max_period = check_max_period(max_period)  # checked whichever path is taken below
     tol = check_tolerance(tol)
+    if "strobe_positions" in ds.attrs:
+        return _system_basins(ds, max_period=max_period, tol=tol)
+    if "system_name" in ds.attrs:
+        raise ValueError("basins of a system need its stroboscopic samples; accepted: a "
+                         "dataset from sweep.run(driven_system, ..., observe=(..., "
+                         "'strobe')), e.g. sweep.DoublePendulum(..., pivot_amplitude=a, "
+                         "pivot_frequency=nu)")
     if "strobe_theta" in ds:
         return _forced_basins(ds, max_period=max_period, tol=tol)
     if "forcing" in str(ds.attrs.get("effects", "")).split():
@@ -268,6 +282,54 @@ def basins(ds: xr.Dataset, *, rest_position: bool = False, max_period: int = 8,
     return out
 
 
+def system_strobe_table(ds: xr.Dataset):
+    """A system run's stroboscopic samples as two (n, m, P) tables (rows in the order
+    of the grid dims), the angular flags of its m coordinates, the grid dims, and the
+    names of the coordinates and of the velocities.
+
+    Raises
+    ------
+    ValueError
+        If a sample variable the attributes name is missing.
+    """
+    positions = str(ds.attrs["strobe_positions"]).split()
+    velocities = str(ds.attrs["strobe_velocities"]).split()
+    angles = set(str(ds.attrs.get("strobe_angular", "")).split())
+    _require(ds, tuple(f"{name}_strobe" for name in positions + velocities), "strobe",
+             "basins")
+    dims = tuple(d for d in ds[f"{positions[0]}_strobe"].dims if d != "strobe")
+    samples = ds.sizes["strobe"]
+    tables = [np.stack([ds[f"{name}_strobe"].transpose(*dims, "strobe").values
+                        .reshape(-1, samples) for name in names], axis=1)
+              for names in (positions, velocities)]
+    angular = np.array([name in angles for name in positions])
+    return tables[0], tables[1], angular, dims, positions, velocities
+
+
+def _system_basins(ds: xr.Dataset, *, max_period: int, tol: float) -> xr.DataArray:
+    """`basins` of a driven system's run (`system_strobe_table`)."""
+    position, velocity, angular, dims, positions, velocities = system_strobe_table(ds)
+    labels, catalogue = identify_attractors(position, velocity, max_period=max_period,
+                                            tol=tol, angular=angular)
+    shape = tuple(ds.sizes[d] for d in dims)
+    out = xr.DataArray(labels.reshape(shape), coords=map_coords(ds, dims), dims=dims,
+                       name="basins")
+    attrs = {"long_name": "basin of attraction (attractor label)"}
+    for k, name in enumerate(positions):
+        attrs[f"attractor_{name}"] = catalogue["theta"][:, k]
+    for k, name in enumerate(velocities):
+        attrs[f"attractor_{name}"] = catalogue["omega"][:, k]
+    attrs["attractor_period"] = catalogue["period"]
+    for k, name in enumerate(positions):
+        if angular[k]:
+            attrs[f"attractor_turns_per_period_{name}"] = catalogue["turns_per_period"][:, k]
+    attrs.update(attractor_size=catalogue["size"],
+                 attractor_kind="periodic orbit (stroboscopic point, angles modulo 2 pi)",
+                 unresolved=UNRESOLVED)
+    out.attrs = attrs
+    return out
+
+
 def strobe_axes(ds: xr.Dataset, what: str, along: str | None = None) -> list[str]:
     """The grid axes of a dataset with stroboscopic samples, in order; with ``along``,
     check that it is one of them.
@@ -286,6 +348,9 @@ def strobe_axes(ds: xr.Dataset, what: str, along: str | None = None) -> list[str
         for an ``along`` that is not a grid axis (saying what it is instead, and listing
         the axes).
     """
+    if isinstance(ds, xr.Dataset) and "strobe_positions" in ds.attrs:
+        raise ValueError(f"{what} is not available for a system's stroboscopic samples "
+                         "yet; accepted: sweep.maps.basins, or a single pendulum's run")
     if not isinstance(ds, xr.Dataset) or "strobe_theta" not in ds or "strobe_omega" not in ds:
         raise ValueError(f"{what} needs stroboscopic samples (strobe_theta and "
                          "strobe_omega); accepted: a dataset from sweep.run(..., "
@@ -501,18 +566,32 @@ def amplitude(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
 
 
 # ------------------------------------------------------------------ forced attractors
-def _orbit(theta_row, omega_row, p):
-    """The p orbit points (angle wrapped to [0, 2 pi), velocity), shape (p, 2)."""
-    return np.stack([np.mod(theta_row[-p:], 2 * np.pi), omega_row[-p:]], axis=1)
+def _orbit(position_row, velocity_row, p, angular=None):
+    """The p orbit points of m coordinates (angles wrapped to [0, 2 pi)), then their
+    velocities: shape (p, 2 m), from rows of shape (m, P) (or of one angle: (P,), and
+    shape (p, 2)); ``angular`` (m,) bool, default all."""
+    position_row, velocity_row = np.atleast_2d(position_row), np.atleast_2d(velocity_row)
+    if angular is None:
+        angular = np.ones(position_row.shape[0], dtype=bool)
+    position = position_row[:, -p:]
+    position = np.where(angular[:, None], np.mod(position, 2 * np.pi), position)
+    return np.concatenate([position, velocity_row[:, -p:]], axis=0).T
 
 
-def _same_orbit(a: np.ndarray, b: np.ndarray, tol: float) -> bool:
-    """True if orbits a and b (shape (p, 2)) coincide up to a cyclic shift."""
+def _same_orbit(a: np.ndarray, b: np.ndarray, tol: float,
+                angular: np.ndarray | None = None) -> bool:
+    """True if orbits a and b (shape (p, 2 m), `_orbit`) coincide up to a cyclic shift,
+    the angles (``angular``, default all m coordinates) compared modulo 2 pi."""
+    if angular is None:
+        angular = np.ones(a.shape[1] // 2, dtype=bool)
+    m = angular.size
     for shift in range(len(a)):
         rolled = np.roll(b, shift, axis=0)
-        d_theta = np.abs(a[:, 0] - rolled[:, 0])
-        d_theta = np.minimum(d_theta, 2 * np.pi - d_theta)
-        if (d_theta < tol).all() and (np.abs(a[:, 1] - rolled[:, 1]) < tol).all():
+        difference = np.abs(a - rolled)
+        difference[:, :m] = np.where(angular, np.minimum(difference[:, :m],
+                                                         2 * np.pi - difference[:, :m]),
+                                     difference[:, :m])
+        if (difference < tol).all():
             return True
     return False
 
@@ -533,20 +612,27 @@ def _check_weights(weights, n: int) -> np.ndarray:
 
 
 def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int = 8,
-                        tol: float = 1e-3, weights: np.ndarray | None = None):
+                        tol: float = 1e-3, weights: np.ndarray | None = None,
+                        angular=None):
     """Group trajectories by the periodic attractor their stroboscopic samples sit on.
 
     Parameters
     ----------
-    theta, omega : ndarray, shape (n, P)
-        Last P stroboscopic samples per trajectory, oldest first.
+    theta, omega : ndarray, shape (n, P) or (n, m, P)
+        Last P stroboscopic samples per trajectory, oldest first: of one angle and its
+        velocity (the single pendulum), or of m coordinates and their velocities (a
+        system: `sweep.maps.basins` reads them from ``theta1_strobe``, ...).
     max_period : int, default 8
         Longest period (in forcing periods) that is looked for; >= 1.
     tol : float, default 1e-3
-        Repetition and identity tolerance, in rad and rad/s; > 0.
+        Repetition and identity tolerance, in rad and rad/s (the coordinates' units);
+        > 0.
     weights : ndarray of int, shape (n,), optional
         How many trajectories each row stands for (default one each), whole numbers
         >= 1: basin sizes, and the order of the labels, count them so.
+    angular : array_like of bool, shape (m,), optional
+        With (n, m, P) tables: which coordinates are angles, compared modulo 2 pi and
+        allowed whole turns per period (default: all).
 
     Returns
     -------
@@ -557,53 +643,53 @@ def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int
         ``theta`` [rad, in [0, 2 pi)] and ``omega`` [rad/s]: one point of each
         attractor; ``period`` (forcing periods); ``turns_per_period`` (mean net turns
         per forcing period; 0 for librations); ``size`` (trajectories in its basin).
+        With (n, m, P) tables ``theta``, ``omega`` and ``turns_per_period`` have a
+        column per coordinate (angles wrapped to [0, 2 pi), others as they are).
 
     Notes
     -----
     Orbits are first bucketed by (period, turns, quantised orbit point of least
-    wrapped angle), then buckets whose orbits coincide up to a cyclic shift within
-    ``tol`` are merged, so quantisation edges do not split an attractor.
+    wrapped angle -- of the first coordinate), then buckets whose orbits coincide up
+    to a cyclic shift within ``tol`` are merged, so quantisation edges do not split an
+    attractor.
 
     Raises
     ------
     ValueError
-        For ``theta`` and ``omega`` of different shapes, or ``max_period``, ``tol`` or
-        ``weights`` out of range.
+        For ``theta`` and ``omega`` of different shapes, or ``max_period``, ``tol``,
+        ``weights`` or ``angular`` out of range.
     """
     max_period = check_max_period(max_period)
     tol = check_tolerance(tol)
-    theta = np.ascontiguousarray(theta, dtype=np.float64)
-    omega = np.ascontiguousarray(omega, dtype=np.float64)
-    if theta.ndim != 2 or theta.shape != omega.shape:
-        raise ValueError(f"theta and omega must be 2-D arrays of the same shape (n, P), "
-                         f"got {theta.shape} and {omega.shape}")
+    theta, omega, angular, one = _strobe.as_coordinates(theta, omega, angular)
     if weights is not None:
         weights = _check_weights(weights, theta.shape[0])
-    period, turns = _strobe.periods(theta, omega, max_period, tol)
-    n = theta.shape[0]
+    period, turns = _strobe.periods(theta, omega, max_period, tol, angular)
+    n, m = theta.shape[:2]
     labels = np.full(n, UNRESOLVED, dtype=np.int32)
     resolved = np.flatnonzero(period > 0)
     if resolved.size == 0:
-        empty = np.zeros(0)
-        return labels, {"theta": empty, "omega": empty, "period": empty.astype(int),
-                        "turns_per_period": empty, "size": empty.astype(int)}
+        empty = np.zeros(0 if one else (0, m))
+        return labels, {"theta": empty, "omega": empty, "period": np.zeros(0, dtype=int),
+                        "turns_per_period": empty, "size": np.zeros(0, dtype=int)}
     bucket_of, buckets, first = _strobe.bucket_keys(theta, omega, period, turns, resolved,
-                                                    10 * tol)
+                                                    10 * tol, angular)
     # buckets in lexicographic order of their keys (the merge below and the order of
     # equal-sized basins depend on it)
     order = np.lexsort(buckets.T[::-1])
     rank = np.empty_like(order)
     rank[order] = np.arange(order.size)
     buckets, first, bucket_of = buckets[order], first[order], rank[bucket_of]
-    # merge buckets holding the same orbit (few buckets: quadratic is fine)
+    # merge buckets holding the same orbit (few buckets: quadratic is fine); the same
+    # period and turns (key columns 0 to m)
     parent = np.arange(len(buckets))
-    orbits = [_orbit(theta[r], omega[r], int(buckets[b, 0])) for b, r in enumerate(first)]
+    orbits = [_orbit(theta[r], omega[r], int(buckets[b, 0]), angular)
+              for b, r in enumerate(first)]
     for a in range(len(buckets)):
         for b in range(a):
-            if parent[b] != b or buckets[a, 0] != buckets[b, 0] \
-                    or buckets[a, 1] != buckets[b, 1]:
+            if parent[b] != b or (buckets[a, :m + 1] != buckets[b, :m + 1]).any():
                 continue
-            if _same_orbit(orbits[a], orbits[b], 10 * tol):
+            if _same_orbit(orbits[a], orbits[b], 10 * tol, angular):
                 parent[a] = b
                 break
     attractor_of_bucket = parent[bucket_of]
@@ -616,12 +702,17 @@ def identify_attractors(theta: np.ndarray, omega: np.ndarray, *, max_period: int
     rank = np.empty_like(order)
     rank[order] = np.arange(order.size)
     labels[resolved] = rank[inverse.ravel()]
-    reps = [first[r] for r in roots[order]]
+    reps = np.array([first[r] for r in roots[order]])
+    last = theta[reps, :, -1]
+    turns = turns.reshape(n, m)
     catalogue = {
-        "theta": np.array([np.mod(theta[r, -1], 2 * np.pi) for r in reps]),
-        "omega": np.array([omega[r, -1] for r in reps]),
-        "period": np.array([period[r] for r in reps]),
-        "turns_per_period": np.array([turns[r] / period[r] for r in reps]),
+        "theta": np.where(angular, np.mod(last, 2 * np.pi), last),
+        "omega": omega[reps, :, -1],
+        "period": period[reps],
+        "turns_per_period": turns[reps] / period[reps, None],
         "size": sizes[order],
     }
+    if one:
+        for key in ("theta", "omega", "turns_per_period"):
+            catalogue[key] = catalogue[key][:, 0]
     return labels, catalogue

@@ -8,7 +8,7 @@ import xarray as xr
 
 from .._validate import check_count
 from . import _strobe
-from .labels import check_tolerance, map_coords, strobe_axes, strobe_table
+from .labels import check_tolerance, map_coords, strobe_axes, strobe_table, system_strobe_table
 
 __all__ = ["NO_PERIOD", "period"]
 
@@ -28,7 +28,8 @@ def period(ds: xr.Dataset, *, max_period: int | None = None, tol: float = 1e-3
     Parameters
     ----------
     ds : xarray.Dataset
-        A run observing ``strobe`` (forced scene), over any grid.
+        A run observing ``strobe`` (forced scene, or a driven system: then every
+        coordinate and velocity repeats, each angle up to whole turns), over any grid.
     max_period : int, optional
         Longest period looked for; at most half the stroboscopic samples (the
         default: ``strobe_samples // 2``, 8 with the default 16 samples).
@@ -50,8 +51,10 @@ def period(ds: xr.Dataset, *, max_period: int | None = None, tol: float = 1e-3
         Without stroboscopic samples, or for ``max_period``/``tol`` out of range.
     """
     tol = check_tolerance(tol)
-    strobe_axes(ds, "stroboscopic analysis")  # before reading the number of samples
-    samples = ds["strobe_theta"].sizes["strobe"]
+    system = isinstance(ds, xr.Dataset) and "strobe_positions" in ds.attrs
+    if not system:
+        strobe_axes(ds, "stroboscopic analysis")  # before reading the number of samples
+    samples = ds.sizes["strobe"]
     largest = samples // 2
     if max_period is None:
         max_period = largest
@@ -59,8 +62,12 @@ def period(ds: xr.Dataset, *, max_period: int | None = None, tol: float = 1e-3
                              accepted=f"an int from 1 to {largest} (half the {samples} "
                                       "stroboscopic samples; more samples: sweep.run(..., "
                                       "strobe_samples=N))")
-    theta, omega, dims = strobe_table(ds)
-    found, _ = _strobe.periods(theta, omega, max_period, tol)
+    if system:  # every coordinate's samples, each angle up to whole turns
+        theta, omega, angular, dims, *_ = system_strobe_table(ds)
+    else:
+        theta, omega, dims = strobe_table(ds)
+        angular = None
+    found, _ = _strobe.periods(theta, omega, max_period, tol, angular)
     found = np.where(found > 0, found, NO_PERIOD).astype(np.int32)
     if "attractor" in ds.data_vars and "attractors_period" in ds.attrs:
         # a trajectory stopped on a catalogued attractor kept too few samples to show

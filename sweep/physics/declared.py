@@ -44,6 +44,11 @@ class DeclaredSystem(System):
         ``on="<coordinate>"``, `sweep.Damping`, `sweep.Torque`, `sweep.Forcing` and
         `sweep.QuadraticDrag` are a
         generalized force on that coordinate (`sweep.physics.coordinate_effects`).
+    drive_frequency_axis : str, optional
+        The axis name of the parameter that is the angular frequency ``nu`` [rad/s] of a
+        periodic drive the dynamics contain (a term in ``t`` of period ``2 pi / nu``):
+        the ``strobe`` observable then samples the state once per that period. None
+        (default): no periodic drive declared, and ``strobe`` is refused.
     **values : float
         A value for each of the declaration's parameters, by its axis name, in the
         parameter's units; a parameter left out takes its ``default`` (an error if it
@@ -83,7 +88,8 @@ class DeclaredSystem(System):
     >>> system = sweep.DeclaredSystem(cart, stiffness=5.0)       # doctest: +SKIP
     """
 
-    def __init__(self, declaration: SystemDeclaration, effects=(), **values) -> None:
+    def __init__(self, declaration: SystemDeclaration, effects=(), *,
+                 drive_frequency_axis: str | None = None, **values) -> None:
         if not isinstance(declaration, SystemDeclaration):
             raise TypeError(f"DeclaredSystem takes a sweep.physics.SystemDeclaration, got "
                             f"{type(declaration).__name__}")
@@ -108,6 +114,11 @@ class DeclaredSystem(System):
                                  f"{p.axis!r} has no default and was not given; accepted: "
                                  f"{p.accepted()}")
             object.__setattr__(self, p.axis, value)
+        if drive_frequency_axis is not None and drive_frequency_axis not in axes:
+            raise ValueError(f"DeclaredSystem {declaration.name!r}: drive_frequency_axis = "
+                             f"{drive_frequency_axis!r} names no parameter; accepted: None "
+                             f"or one of {', '.join(map(repr, axes)) or 'none'}")
+        object.__setattr__(self, "_drive", drive_frequency_axis)
         object.__setattr__(self, "effects", effects)
         self._check_parameters()
         _DECLARED[declaration.name] = declaration
@@ -120,22 +131,32 @@ class DeclaredSystem(System):
 
     def __eq__(self, other) -> bool:
         return (type(other) is DeclaredSystem and other._declaration == self._declaration
-                and other._values() == self._values() and other.effects == self.effects)
+                and other._values() == self._values() and other.effects == self.effects
+                and other._drive == self._drive)
 
     def __hash__(self) -> int:
-        return hash((self._declaration, self._values(), self.effects))
+        return hash((self._declaration, self._values(), self.effects, self._drive))
 
     def __repr__(self) -> str:
         values = ", ".join(f"{p.axis}={getattr(self, p.axis)!r}"
                            for p in self._declaration.parameters)
         effects = f", effects={self.effects!r}" if self.effects else ""
+        drive = f", drive_frequency_axis={self._drive!r}" if self._drive else ""
         return (f"DeclaredSystem({self._declaration.name!r}"
-                f"{', ' + values if values else ''}{effects})")
+                f"{', ' + values if values else ''}{effects}{drive})")
 
     def __reduce__(self):  # pickling (Dask): the declaration, the values, the effects
         return (_rebuild, (self._declaration, self.effects,
                            {p.axis: getattr(self, p.axis)
-                            for p in self._declaration.parameters}))
+                            for p in self._declaration.parameters}, self._drive))
+
+    @property
+    def drive_frequency_parameter(self) -> Parameter | None:
+        """The parameter named by ``drive_frequency_axis``, else the frequency of a
+        forcing on one coordinate (`System.drive_frequency_parameter`), or None."""
+        if self._drive is None:
+            return super().drive_frequency_parameter
+        return {p.axis: p for p in self._declaration.parameters}.get(self._drive)
 
     @property
     def declaration(self) -> SystemDeclaration:
@@ -167,6 +188,8 @@ class DeclaredSystem(System):
         spec = super().to_dict()
         spec["declaration"] = json.loads(json.dumps(dataclasses.asdict(self._declaration),
                                                     default=_plain))
+        if self._drive is not None:
+            spec["drive_frequency_axis"] = self._drive
         return spec
 
 
@@ -177,5 +200,5 @@ def _plain(value):
     return str(value)
 
 
-def _rebuild(declaration, effects, values) -> DeclaredSystem:
-    return DeclaredSystem(declaration, effects=effects, **values)
+def _rebuild(declaration, effects, values, drive=None) -> DeclaredSystem:
+    return DeclaredSystem(declaration, effects=effects, drive_frequency_axis=drive, **values)

@@ -115,6 +115,14 @@ class DoublePendulum(System):
         return "2.0 * min((m1 + m2) * grav * l1, m2 * grav * l2)"
 
     @property
+    def drive_frequency_parameter(self) -> Parameter | None:
+        """``pivot_frequency`` when the pivot is driven (``a cos(nu t)``), else the
+        frequency of a forcing on one coordinate (`System.drive_frequency_parameter`)."""
+        if self.pivot_amplitude is None:
+            return super().drive_frequency_parameter
+        return {p.axis: p for p in self.declaration.parameters}["pivot_frequency"]
+
+    @property
     def declaration(self) -> SystemDeclaration:
         """The double pendulum's declaration (`sweep.physics.systems.double_pendulum`),
         with the joint damping and the pivot drive if given."""

@@ -208,6 +208,23 @@ class System:
     flip_energy: str | None = None
 
     @property
+    def drive_frequency_parameter(self) -> Parameter | None:
+        """The parameter that is the angular frequency [rad/s] of the system's periodic
+        drive, or None without one: the ``strobe`` observable samples the state once per
+        its period ``2 pi / nu``. Here: the frequency of a `sweep.Forcing` on one
+        coordinate (``forcing_frequency_<coordinate>``) when it is the only one; a
+        subclass with a drive of its own (the double pendulum's pivot) says which."""
+        from .coordinate_effects import parameters_on
+
+        forcings = [e for e in self.effects if e.coordinate is not None
+                    and type(e).declaration.name == "forcing"]
+        if len(forcings) != 1:
+            return None
+        coordinate = {c.name: c for c in self.declaration.coordinates}[forcings[0].coordinate]
+        found = parameters_on(type(forcings[0]), coordinate, self.energy_units)
+        return next(p for p in found if p.axis.startswith("forcing_frequency_"))
+
+    @property
     def title(self) -> str:
         """What a dataset's title calls it (its class name)."""
         return type(self).__name__
