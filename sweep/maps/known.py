@@ -4,9 +4,10 @@ attractors' own cells (`seed_attractors`), and the coarse maps of the whole wind
 `sweep.maps.refine` runs first (`background`).
 
 What may stop a trajectory was decided by measurement (docs/guide/refine.md): a cell
-whose label is shared by its 8 neighbours (`KNOWN_RADIUS`), and the 3 x 3 cells around
-each point of a catalogued attractor's orbit (`SEED_RADIUS`); a trajectory stops after
-`sweep.observables.KNOWN_HITS` periods running in such cells of one label.
+whose label is shared by its 8 neighbours (`KNOWN_RADIUS`), and the cell of each point
+of a catalogued attractor's orbit (`SEED_RADIUS`); a trajectory stops after
+`sweep.observables.KNOWN_HITS` periods running in such cells of one label, fewer where
+the known cells around the last one share its label (`sweep._known.hits_needed`).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import numpy as np
 import xarray as xr
 
 from .. import engine
+from .._known import agreeing
 from ..grid import Grid
 
 __all__ = ["BACKGROUND_FACTORS", "KNOWN_MIN_POINTS", "KNOWN_RADIUS", "SEED_RADIUS",
@@ -54,18 +56,7 @@ def settled(labels: np.ndarray, radius: int = KNOWN_RADIUS) -> np.ndarray:
     radius : int
         >= 0.
     """
-    labels = np.asarray(labels)
-    out = np.where(labels >= 0, labels, -1).astype(np.int32)
-    n0, n1 = labels.shape
-    for dr in range(-radius, radius + 1):
-        for dc in range(-radius, radius + 1):
-            if dr == 0 and dc == 0:
-                continue
-            shifted = np.full(labels.shape, -2, dtype=labels.dtype)
-            shifted[max(-dr, 0):n0 - max(dr, 0), max(-dc, 0):n1 - max(dc, 0)] = \
-                labels[max(dr, 0):n0 - max(-dr, 0), max(dc, 0):n1 - max(-dc, 0)]
-            out[shifted != labels] = -1
-    return out
+    return agreeing(labels, radius)
 
 
 def _cell(theta: np.ndarray, omega: np.ndarray, t: float, w: float) -> tuple[int, int]:
