@@ -93,6 +93,12 @@ class Observable:
         stops when every other observed observable is settled *or* any alternative
         one is (``attractor``: a match with a known attractor answers the question
         the ``strobe`` test answers more slowly).
+    phase : str
+        The state variable that ``update`` keeps as the steps since the steady
+        window's start modulo the forcing period's steps, if ``update`` does nothing
+        else while it is not 0 (and ``settled`` changes only where it is 0): a kernel
+        may then run ``update`` and ``settled`` only at those stroboscopic steps,
+        setting it to 0 first (`sweep.kernels.refill` with known cells).
     """
 
     name: str
@@ -114,6 +120,7 @@ class Observable:
     renormalise_every: int = 0
     finite: str = ""
     alternative: bool = False
+    phase: str = ""
 
     def n_samples(self, spec=None) -> int:
         """Columns per variable for a kernel spec (its ``sample_option`` field), or
@@ -349,6 +356,7 @@ OBSERVABLES: dict[str, Observable] = {
             requires_forcing=True,
             state=(("acc_sb_S", "int64"), ("acc_sb_k", "int64"), ("acc_sb_m", "int64"),
                    ("acc_sb_new", "bool_")),
+            phase="acc_sb_k",
         ),
         Observable(
             name="attractor",
@@ -396,6 +404,7 @@ OBSERVABLES: dict[str, Observable] = {
             alternative=True,
             state=(("acc_at_S", "int64"), ("acc_at_k", "int64"), ("acc_at_j", "int64"),
                    ("acc_at_n", "int64")),
+            phase="acc_at_k",
         ),
         Observable(
             name="capture",

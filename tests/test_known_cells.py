@@ -46,6 +46,23 @@ def test_a_map_that_knows_nothing_changes_no_bit(wada_catalogue):
         np.testing.assert_array_equal(plain[name].values, nothing[name].values)
 
 
+@pytest.mark.parametrize("transient, end", [(0.0, 40.5), (3.37, 41.9), (20.0, 40.0)])
+def test_a_map_that_knows_nothing_changes_no_bit_whatever_the_transient(
+        wada_catalogue, transient, end):
+    """With known cells the refill kernel runs the strobe and attractor observables
+    only at the steady window's stroboscopic steps (`Observable.phase`): their samples,
+    matches and stops are still the plain run's, with no transient, one of no whole
+    number of periods, and a run that ends between two stroboscopic steps."""
+    period = 2 * np.pi
+    run = dict(WADA_PILOT, t_transient=transient * period, t_end=end * period)
+    plain = sweep.run(WADA_SCENE, GRID, attractors=wada_catalogue, **run)
+    nothing = sweep.run(WADA_SCENE, GRID, attractors=wada_catalogue, **run,
+                        known_cells=_known(np.full((SIZE, SIZE), -1)))
+    assert np.isfinite(plain["strobe_theta"].values).all(axis=-1).any()  # rings filled
+    for name in ("strobe_theta", "strobe_omega", "attractor", "status"):
+        np.testing.assert_array_equal(plain[name].values, nothing[name].values)
+
+
 def test_a_map_of_one_label_stops_every_trajectory_with_it(wada_catalogue):
     """Every cell known as attractor 1: each trajectory's first KNOWN_HITS
     stroboscopic points are hits (the angle wrapped onto the map's rows), so it stops
