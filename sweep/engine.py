@@ -569,8 +569,10 @@ def run(
         unknown, e.g. labels known from a coarser map. A trajectory whose stroboscopic
         points (times ``t0 + m 2 pi / W``, m >= 1, from the start on, whatever
         ``t_transient``) fall in cells of one label `sweep.observables.KNOWN_HITS`
-        periods running (the angle taken modulo 2 pi onto the map's rows; a point
-        beyond the map is no hit) stops there and is labelled with it (``attractor``).
+        periods running, fewer where the last cell's label reaches its neighbours in
+        the map (`sweep.observables.KNOWN_HITS_BY_DEPTH`; the angle taken modulo 2 pi
+        onto the map's rows; a point beyond the map is no hit), stops there and is
+        labelled with it (``attractor``).
         The map is read, never written, during the run, so the result does not depend
         on threads, blocks, chunks or Dask. The dataset gains ``stopped_known`` (1
         where a trajectory stopped on known cells) and the attribute

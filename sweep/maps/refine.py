@@ -317,15 +317,15 @@ def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
     known_cells : bool, default False
         Forced `basins` over theta0 x omega0 (evenly spaced) with ``stop_early`` and a
         catalogue: a trajectory stops once its stroboscopic points fall in known cells
-        of one attractor `sweep.observables.KNOWN_HITS` periods running
-        (`sweep.run`'s ``known_cells``). Known are, frozen while a level runs: the
-        settled cells (`sweep.maps.known.settled`: 8 neighbours of one label) of
-        coarse maps of the whole window run first (`sweep.maps.known.background`) and
-        of the cells earlier levels decided, and the cells of the catalogued
-        attractors. The labels then do not depend on threads, blocks, chunks or Dask;
-        they may differ from the full run's near fractal boundaries (measured in the
-        refine guide: on the 1200 x 1200 Wada map, 631 of 1.44 M differ, refine's own
-        filled islands, as without known cells).
+        of one attractor `sweep.observables.KNOWN_HITS` periods running, fewer deep
+        inside a region of one label (`sweep.run`'s ``known_cells``). Known are,
+        frozen while a level runs: the settled cells (`sweep.maps.known.settled`: 8
+        neighbours of one label) of coarse maps of the whole window run first
+        (`sweep.maps.known.background`) and of the cells earlier levels decided, and
+        the cells of the catalogued attractors. The labels then do not depend on
+        threads, blocks, chunks or Dask; they may differ from the full run's near
+        fractal boundaries (measured in the refine guide: on the 1200 x 1200 Wada map,
+        696 of 1.44 M differ, refine's own filled islands, as without known cells).
     **run_kwargs
         `sweep.run` arguments (``t_end``, ``dt``, ``observe``, ``stop_early``,
         ``attractors``, ``device``, ...), the same for every level; ``progress``
