@@ -58,6 +58,19 @@ def _sine_table(spec: KernelSpec, drives, shared: list[str]) -> tuple[str, list[
     return table, lines
 
 
+#: A known-cells kernel whose observables act at stroboscopic steps only (`_sampled`):
+#: each lane's step advanced and the live lanes due at this step (a known-cells test, a
+#: stroboscopic step of the steady window, the last step) counted, in a loop LLVM
+#: vectorises; the lane loop of the observables runs only when one is due.
+_DUE = """n_due = 0
+for j in range(BLOCK):
+    ks = lane_ks[j] + 1
+    lane_ks[j] = ks
+    n_due += lane_live[j] & ((ks == lane_acc_kn_next[j]) | (ks == lane_acc_ob_next[j])
+                             | (ks >= n_steps))
+if n_due > 0:"""
+
+
 def _sampled(spec: KernelSpec) -> bool:
     """Whether the kernel runs the observables' update and stop test only at the
     steady window's stroboscopic steps (``acc_ob_next``): with known cells, when every
@@ -144,8 +157,8 @@ finished = False"""
     # the known-cells stop runs from the first step on, the observables after the
     # transient
     head = "    ks = lane_ks[j] + 1\n    lane_ks[j] = ks\n"
-    if _sampled(spec):
-        head += "    if not lane_live[j]:\n        continue\n" + \
+    if _sampled(spec):  # the steps advanced, and lanes due counted, a vector at a time
+        head = "    ks = lane_ks[j]\n    if not lane_live[j]:\n        continue\n" + \
             known_head("ks", "ks != lane_acc_ob_next[j] and ks < n_steps")
     elif spec.known_cells:
         head += "    if not lane_live[j]:\n        continue\n" + \
@@ -154,6 +167,8 @@ finished = False"""
         head += "    if not lane_live[j] or (ks < n_transient and ks < n_steps):\n" \
                 "        continue\n"
     observe_loop = lane_loop(observe, counted, level=3, head=head)
+    if _sampled(spec):
+        observe_loop = indent(_DUE, 3) + NL + indent(observe_loop, 1)
     refill_loop = lane_loop(refill, lane, level=4,
                             head=skip_unless("finished"))
     extra = KNOWN_ARGUMENTS if spec.known_cells else ""
