@@ -19,7 +19,7 @@ import sweep
 from sweep import _config, maps
 from sweep._known import hits_needed, known_arguments
 from sweep.kernels import KernelSpec, source
-from sweep.maps.known import settled
+from sweep.maps.known import background, background_factors, settled
 from sweep.observables import KNOWN_HITS, KNOWN_HITS_BY_DEPTH
 
 #: A small Wada map (the issue's scene, c = 0.2, A = 1.66, W = 1): its boundaries are
@@ -112,6 +112,16 @@ def test_one_hit_deep_inside_stops_a_trajectory(wada_catalogue):
                    known_cells=_known(np.ones((SIZE, SIZE))))
     assert ds.attrs["cells_stopped_known"] > SIZE * SIZE // 2
     assert (ds["attractor"].values[ds["stopped_known"].values == 1] == 1).all()
+
+
+def test_a_map_of_400_points_per_axis_runs_no_half_resolution_background(wada_catalogue):
+    """HALF_BELOW: the 1/2 map costs more than it saves from 400 points per axis on
+    (measured); below, and when either axis is shorter, it runs."""
+    assert background_factors(400, 1200) == (8, 4)
+    assert background_factors(399, 1200) == background_factors(48, 48) == (8, 4, 2)
+    axes = [np.linspace(-np.pi, np.pi, 400), np.linspace(-4, 4, 400)]
+    _, cells = background(WADA_SCENE, *axes, wada_catalogue, **WADA_PILOT)
+    assert cells == 50 * 50 + 100 * 100  # the 1/8 and 1/4 maps only
 
 
 def test_settled_cells_are_those_whose_neighbours_agree():
