@@ -124,10 +124,11 @@ def background_factors(n0: int, n1: int) -> tuple[int, ...]:
 
 
 def background(scene, theta: np.ndarray, omega: np.ndarray, catalogue: dict,
+               factors: tuple[int, ...] | None = None,
                **run_kwargs) -> tuple[xr.DataArray | None, int]:
-    """The known cells of the window ``theta`` x ``omega`` from coarse maps of it
-    (`background_factors`), each run with the known cells of the one before (settled
-    cells and seeds).
+    """The known cells of the window ``theta`` x ``omega`` from coarse maps of it at
+    1 / ``factors`` of its resolution (default: `background_factors`), each run with
+    the known cells of the one before (settled cells and seeds).
 
     Returns
     -------
@@ -138,7 +139,9 @@ def background(scene, theta: np.ndarray, omega: np.ndarray, catalogue: dict,
         Trajectories the backgrounds ran.
     """
     known, cells = None, 0
-    for factor in background_factors(theta.size, omega.size):
+    if factors is None:
+        factors = background_factors(theta.size, omega.size)
+    for factor in factors:
         size = [(axis.size - 1) // factor + 1 for axis in (theta, omega)]
         if min(size) < _SMALLEST:
             continue
