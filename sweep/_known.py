@@ -1,13 +1,17 @@
 """The map of known cells of `sweep.run(..., known_cells=...)`: its checks, before any
 compute, and the two kernel arguments it becomes (`sweep.kernels.KernelSpec.known_cells`,
-`sweep.kernels.snippets.known_source`)."""
+`sweep.kernels.snippets.known_source`): each known cell with the hits it needs, fewer
+deep inside a region of one label (`hits_needed`)."""
 
 from __future__ import annotations
 
 import numpy as np
 import xarray as xr
 
-__all__ = ["KNOWN_DIMS", "check_known_cells", "known_arguments", "no_known_arguments"]
+from .observables import KNOWN_HITS_BY_DEPTH
+
+__all__ = ["KNOWN_DIMS", "agreeing", "check_known_cells", "hits_needed", "known_arguments",
+           "no_known_arguments"]
 
 #: The known map's dimensions, in the kernel's order (rows, columns).
 KNOWN_DIMS = ("theta0", "omega0")
@@ -90,16 +94,56 @@ def check_known_cells(known_cells, *, attractors: int, stop_early, method,
                         coords={name: known[name].values for name in KNOWN_DIMS})
 
 
+def agreeing(labels: np.ndarray, radius: int) -> np.ndarray:
+    """The labels (>= 0) of the cells whose neighbours within ``radius`` rows and
+    columns all hold the same label; -1 elsewhere (cells within ``radius`` of the map's
+    edge too).
+
+    Parameters
+    ----------
+    labels : ndarray, shape (n0, n1), int
+        Attractor indices, negative where unknown.
+    radius : int
+        >= 0.
+    """
+    labels = np.asarray(labels)
+    out = np.where(labels >= 0, labels, -1).astype(np.int32)
+    n0, n1 = labels.shape
+    for dr in range(-radius, radius + 1):
+        for dc in range(-radius, radius + 1):
+            if dr == 0 and dc == 0:
+                continue
+            shifted = np.full(labels.shape, -2, dtype=labels.dtype)
+            shifted[max(-dr, 0):n0 - max(dr, 0), max(-dc, 0):n1 - max(dc, 0)] = \
+                labels[max(dr, 0):n0 - max(-dr, 0), max(dc, 0):n1 - max(-dc, 0)]
+            out[shifted != labels] = -1
+    return out
+
+
+def hits_needed(labels: np.ndarray) -> np.ndarray:
+    """Per cell of a map of known labels (-1 unknown), the stroboscopic hits running
+    that stop a trajectory there: ``KNOWN_HITS_BY_DEPTH[r]`` where every cell within
+    ``r`` rows and columns holds the cell's label (r = 0: the cell alone; the last entry
+    for every larger r); 0 where unknown."""
+    labels = np.asarray(labels)
+    need = np.where(labels >= 0, KNOWN_HITS_BY_DEPTH[0], 0)
+    for radius, hits in enumerate(KNOWN_HITS_BY_DEPTH[1:], start=1):
+        need = np.where(agreeing(labels, radius) >= 0, hits, need)
+    return need
+
+
 def known_arguments(known: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
     """The kernel's ``known`` and ``known_axes`` of a checked map (`check_known_cells`):
-    the labels, and ``[theta of row 0, rows per rad, omega of column 0, columns per
-    rad/s, rows per 2 pi]``."""
+    per cell ``4 * label + hits`` (`hits_needed`; -1 where unknown), and ``[theta of
+    row 0, rows per rad, omega of column 0, columns per rad/s, rows per 2 pi]``."""
     known = known.transpose(*KNOWN_DIMS)
     theta0, d_theta = _axis("theta0", known["theta0"].values)
     omega0, d_omega = _axis("omega0", known["omega0"].values)
     axes = np.array([theta0, 1.0 / d_theta, omega0, 1.0 / d_omega,
                      2.0 * np.pi / abs(d_theta)], dtype=np.float64)
-    return np.ascontiguousarray(known.values, dtype=np.int32), axes
+    labels = np.asarray(known.values, dtype=np.int32)
+    codes = np.where(labels >= 0, 4 * labels + hits_needed(labels), -1)
+    return np.ascontiguousarray(codes, dtype=np.int32), axes
 
 
 def no_known_arguments() -> tuple[np.ndarray, np.ndarray]:

@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["WHOLE_STEPS_RTOL", "transient_steps", "whole_steps"]
+import numpy as np
+
+__all__ = ["WHOLE_STEPS_RTOL", "check_sampling_period", "transient_steps", "whole_steps"]
 
 # A time span must be a whole number of steps to within this relative slack:
 # (t_end - t0) / dt is computed in floating point, so 300 / 0.01 = 30000.000000000004.
@@ -30,3 +32,38 @@ def transient_steps(t_transient: float, dt: float) -> int:
     """First step index n whose time ``t0 + n dt`` is >= ``t0 + t_transient`` (a
     transient meant to end on a step counts as ending there, despite rounding)."""
     return math.ceil(t_transient / dt - WHOLE_STEPS_RTOL * max(1.0, t_transient / dt))
+
+
+def check_sampling_period(name: str, frequencies, dt: float, *,
+                          axis: str = "forcing_frequency", period: str = "forcing") -> None:
+    """Refuse a drive frequency at which an observable that samples once per period
+    could not: every value must be > 0 with a period ``2 pi / W`` that is a whole number
+    of steps ``dt`` (so every sample is at the same phase).
+
+    Parameters
+    ----------
+    name : str
+        The observable (``"strobe"``), for the message.
+    frequencies : array_like
+        The run's drive frequencies W [rad/s] (a grid axis' values, or the one value).
+    dt : float
+        The step [s].
+    axis, period : str
+        The frequency's axis name and what the period is called, for the message.
+
+    Raises
+    ------
+    ValueError
+        Naming the first bad frequency and what would be accepted.
+    """
+    for frequency in np.unique(frequencies):
+        if frequency <= 0:
+            raise ValueError(f"observable {name!r} needs {axis} > 0, got "
+                             f"{float(frequency)!r}")
+        steps = 2 * np.pi / (frequency * dt)
+        if abs(steps - round(steps)) > WHOLE_STEPS_RTOL * max(1.0, steps) * 1e3:
+            raise ValueError(
+                f"observable {name!r}: the {period} period 2 pi / {float(frequency)!r} is "
+                f"not a whole number of steps dt = {dt!r} ({steps:.6g}); "
+                f"accepted: dt = period / N, e.g. dt = "
+                f"{float(2 * np.pi / (frequency * max(round(steps), 1)))!r}")

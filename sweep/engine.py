@@ -17,7 +17,7 @@ from . import _config, io
 from . import methods as _methods
 from . import stability as _stability
 from ._known import check_known_cells, known_arguments, no_known_arguments
-from ._timesteps import WHOLE_STEPS_RTOL
+from ._timesteps import check_sampling_period
 from ._validate import check_flag, check_positive_int
 from ._version import __version__
 from .execution import RunContext, execute
@@ -38,7 +38,7 @@ from .kernels import (
     status_counts,
 )
 from .methods import METHODS
-from .observables import DEFAULT_OBSERVE, OBSERVABLES, STROBE_SAMPLES, STROBE_SAMPLES_RANGE, resolve
+from .observables import DEFAULT_OBSERVE, OBSERVABLES, STROBE_SAMPLES, resolve
 from .physics import EFFECTS, Scene
 from .physics.system import System
 from .settings import (  # re-exported: sweep.engine.RunSettings, validate_settings, ...
@@ -49,6 +49,7 @@ from .settings import (  # re-exported: sweep.engine.RunSettings, validate_setti
     RunSettings,
     _block,
     _check_device,
+    check_strobe_samples,
     default_chunk_size,
     validate_method,  # noqa: F401
     validate_settings,
@@ -110,41 +111,6 @@ def _check_stroboscopic(names, scene: Scene, grid: Grid, settings) -> None:
         frequencies = grid.axes.get("forcing_frequency",
                                     np.array([scene.forcing.frequency]))
         check_sampling_period(name, frequencies, settings.dt)
-
-
-def check_sampling_period(name: str, frequencies, dt: float, *,
-                          axis: str = "forcing_frequency", period: str = "forcing") -> None:
-    """Refuse a drive frequency at which an observable that samples once per period
-    could not: every value must be > 0 with a period ``2 pi / W`` that is a whole number
-    of steps ``dt`` (so every sample is at the same phase).
-
-    Parameters
-    ----------
-    name : str
-        The observable (``"strobe"``), for the message.
-    frequencies : array_like
-        The run's drive frequencies W [rad/s] (a grid axis' values, or the one value).
-    dt : float
-        The step [s].
-    axis, period : str
-        The frequency's axis name and what the period is called, for the message.
-
-    Raises
-    ------
-    ValueError
-        Naming the first bad frequency and what would be accepted.
-    """
-    for frequency in np.unique(frequencies):
-        if frequency <= 0:
-            raise ValueError(f"observable {name!r} needs {axis} > 0, got "
-                             f"{float(frequency)!r}")
-        steps = 2 * np.pi / (frequency * dt)
-        if abs(steps - round(steps)) > WHOLE_STEPS_RTOL * max(1.0, steps) * 1e3:
-            raise ValueError(
-                f"observable {name!r}: the {period} period 2 pi / {float(frequency)!r} is "
-                f"not a whole number of steps dt = {dt!r} ({steps:.6g}); "
-                f"accepted: dt = period / N, e.g. dt = "
-                f"{float(2 * np.pi / (frequency * max(round(steps), 1)))!r}")
 
 
 def _extremes(values: dict[str, np.ndarray]) -> list[dict[str, float]]:
@@ -220,37 +186,6 @@ def _check_stable_step(scene: Scene, grid: Grid, settings, effects) -> None:
     drives = [_drive_axes(effect)[0] for effect in effects if effect.drive is not None]
     _stability.check_drive(settings.integrator, settings.dt,
                            [(axis, float(np.max(np.abs(values[axis])))) for axis in drives])
-
-
-def check_strobe_samples(strobe_samples, names) -> None:
-    """Refuse a number of stroboscopic samples out of range, or one given without the
-    ``strobe`` observable (it would change nothing).
-
-    Parameters
-    ----------
-    strobe_samples : int
-        Samples the ``strobe`` observable keeps (`STROBE_SAMPLES_RANGE`).
-    names : tuple of str
-        The observed observables (`sweep.observables.resolve`).
-
-    Raises
-    ------
-    TypeError
-        If ``strobe_samples`` is not an int (a bool is not).
-    ValueError
-        If it is out of range, or differs from the default without ``strobe``.
-    """
-    low, high = STROBE_SAMPLES_RANGE
-    accepted = f"an int from {low} to {high} (samples, one per forcing period)"
-    if isinstance(strobe_samples, (bool, np.bool_)) or not isinstance(
-            strobe_samples, (int, np.integer)):
-        raise TypeError(f"strobe_samples must be {accepted}, got {strobe_samples!r}")
-    if not low <= strobe_samples <= high:
-        raise ValueError(f"strobe_samples must be {accepted}, got {strobe_samples!r}")
-    if strobe_samples != STROBE_SAMPLES and "strobe" not in names:
-        raise ValueError(f"strobe_samples = {strobe_samples!r} is read only by the 'strobe' "
-                         "observable, which this run does not observe; accepted: "
-                         "observe=(..., 'strobe'), or no strobe_samples")
 
 
 def _drive_axes(effect) -> tuple[str, str]:
@@ -597,8 +532,10 @@ def run(
         unknown, e.g. labels known from a coarser map. A trajectory whose stroboscopic
         points (times ``t0 + m 2 pi / W``, m >= 1, from the start on, whatever
         ``t_transient``) fall in cells of one label `sweep.observables.KNOWN_HITS`
-        periods running (the angle taken modulo 2 pi onto the map's rows; a point
-        beyond the map is no hit) stops there and is labelled with it (``attractor``).
+        periods running, fewer where the last cell's label reaches its neighbours in
+        the map (`sweep.observables.KNOWN_HITS_BY_DEPTH`; the angle taken modulo 2 pi
+        onto the map's rows; a point beyond the map is no hit), stops there and is
+        labelled with it (``attractor``).
         The map is read, never written, during the run, so the result does not depend
         on threads, blocks, chunks or Dask. The dataset gains ``stopped_known`` (1
         where a trajectory stopped on known cells) and the attribute

@@ -92,7 +92,7 @@ def _prepare_network(network, grid, settings, observe, save_every, stop_early,
 def _check_strobe(system: System, grid: ParameterRows, names, settings):
     """With ``strobe`` observed: the system's drive-frequency parameter (it must have
     one), every frequency on the grid > 0 with a period of whole steps; else None."""
-    from .engine import check_sampling_period
+    from ._timesteps import check_sampling_period
 
     if "strobe" not in names:
         return None
@@ -122,7 +122,7 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
         Naming the argument, its value and what is accepted.
     """
     from ._validate import check_flag, check_positive_int
-    from .engine import check_strobe_samples
+    from .settings import check_strobe_samples
 
     if not isinstance(grid, ParameterRows):
         raise TypeError(f"grid must be a sweep.Grid or sweep.Points, got {grid!r}")

@@ -93,6 +93,12 @@ class Observable:
         stops when every other observed observable is settled *or* any alternative
         one is (``attractor``: a match with a known attractor answers the question
         the ``strobe`` test answers more slowly).
+    phase : str
+        The state variable that ``update`` keeps as the steps since the steady
+        window's start modulo the forcing period's steps, if ``update`` does nothing
+        else while it is not 0 (and ``settled`` changes only where it is 0): a kernel
+        may then run ``update`` and ``settled`` only at those stroboscopic steps,
+        setting it to 0 first (`sweep.kernels.refill` with known cells).
     """
 
     name: str
@@ -114,6 +120,7 @@ class Observable:
     renormalise_every: int = 0
     finite: str = ""
     alternative: bool = False
+    phase: str = ""
 
     def n_samples(self, spec=None) -> int:
         """Columns per variable for a kernel spec (its ``sample_option`` field), or
@@ -178,6 +185,15 @@ ATTRACTOR_MATCHES = 3
 #: `sweep.maps.refine(..., known_cells=True)`; the kernels' `KernelSpec.known_cells`).
 #: Measured on the 1200^2 Wada map and the Baker-Gollub map (docs/guide/refine.md).
 KNOWN_HITS = 3
+
+#: Hits running that stop a trajectory in a known cell by how far its label reaches:
+#: entry r where every cell within r rows and columns of the map of known cells holds
+#: its label (r = 0: the cell alone, `KNOWN_HITS`; the last entry for any larger r;
+#: `sweep._known.hits_needed`). Each entry is at most 3 (the kernel keeps it in two
+#: bits). Measured on the 1200^2 Wada map (docs/guide/refine.md): with (3, 2, 1) no start
+#: is labelled differently from the full run, and the map's trajectories run 16 % fewer
+#: periods than with 3 hits everywhere.
+KNOWN_HITS_BY_DEPTH = (KNOWN_HITS, 2, 1)
 
 #: Steps between renormalisations of the ``lyapunov`` observable's tangent vectors. A
 #: stable RK4 step (|z| <= 2.83) grows a tangent vector by at most ~14 (the stability
@@ -340,6 +356,7 @@ OBSERVABLES: dict[str, Observable] = {
             requires_forcing=True,
             state=(("acc_sb_S", "int64"), ("acc_sb_k", "int64"), ("acc_sb_m", "int64"),
                    ("acc_sb_new", "bool_")),
+            phase="acc_sb_k",
         ),
         Observable(
             name="attractor",
@@ -387,6 +404,7 @@ OBSERVABLES: dict[str, Observable] = {
             alternative=True,
             state=(("acc_at_S", "int64"), ("acc_at_k", "int64"), ("acc_at_j", "int64"),
                    ("acc_at_n", "int64")),
+            phase="acc_at_k",
         ),
         Observable(
             name="capture",

@@ -15,9 +15,11 @@ from ._timesteps import transient_steps, whole_steps
 from ._validate import check_real
 from .kernels.spec import check_device
 from .methods import METHODS
+from .observables import STROBE_SAMPLES, STROBE_SAMPLES_RANGE
 
 __all__ = ["CUDA_CHUNK", "DEFAULT_ATOL", "DEFAULT_RTOL", "MIN_RTOL", "RunSettings",
-           "default_chunk_size", "validate_method", "validate_settings"]
+           "check_strobe_samples", "default_chunk_size", "validate_method",
+           "validate_settings"]
 
 #: Default tolerances of the adaptive methods (per step, RMS norm over theta, omega):
 #: about 1e-6 global error on a few periods of the pendulum.
@@ -180,3 +182,34 @@ def _check_device(device, integrator) -> None:
     if reason is not None:
         raise ValueError(f"device='cuda' cannot run here: {reason}; accepted: "
                          "device='cpu'")
+
+
+def check_strobe_samples(strobe_samples, names) -> None:
+    """Refuse a number of stroboscopic samples out of range, or one given without the
+    ``strobe`` observable (it would change nothing).
+
+    Parameters
+    ----------
+    strobe_samples : int
+        Samples the ``strobe`` observable keeps (`STROBE_SAMPLES_RANGE`).
+    names : tuple of str
+        The observed observables (`sweep.observables.resolve`).
+
+    Raises
+    ------
+    TypeError
+        If ``strobe_samples`` is not an int (a bool is not).
+    ValueError
+        If it is out of range, or differs from the default without ``strobe``.
+    """
+    low, high = STROBE_SAMPLES_RANGE
+    accepted = f"an int from {low} to {high} (samples, one per forcing period)"
+    if isinstance(strobe_samples, (bool, np.bool_)) or not isinstance(
+            strobe_samples, (int, np.integer)):
+        raise TypeError(f"strobe_samples must be {accepted}, got {strobe_samples!r}")
+    if not low <= strobe_samples <= high:
+        raise ValueError(f"strobe_samples must be {accepted}, got {strobe_samples!r}")
+    if strobe_samples != STROBE_SAMPLES and "strobe" not in names:
+        raise ValueError(f"strobe_samples = {strobe_samples!r} is read only by the 'strobe' "
+                         "observable, which this run does not observe; accepted: "
+                         "observe=(..., 'strobe'), or no strobe_samples")

@@ -95,11 +95,11 @@ def declared_system(table: dict[str, Any]):
     """
     from .physics import DeclaredSystem
     from .physics.coordinate_effects import acting_effects
-    from .toml_spec import _system_effects
+    from .toml_effects import system_effects
 
     declaration, values = declaration_from_table(table)
     kinds = {cls.declaration.name: cls for cls in acting_effects()}
-    effects = _system_effects({k: v for k, v in table.items() if k in kinds}, kinds)
+    effects = system_effects({k: v for k, v in table.items() if k in kinds}, kinds)
     names = _names(declaration)
     try:
         return DeclaredSystem(declaration, effects=effects, **values)
@@ -210,7 +210,7 @@ def system_lines(system, value_text) -> list[str]:
         if p.long_name:
             entry["long_name"] = p.long_name
         out.append(f"{p.axis} = {value_text(entry)}")
-    from .toml_spec import system_effects_lines
+    from .toml_effects import system_effects_lines
 
     return out + system_effects_lines(system.effects, value_text)
 

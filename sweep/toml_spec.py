@@ -103,6 +103,7 @@ from .grid import Grid, Points, from_degrees
 from .kernels.spec import check_device, check_dtype
 from .observables import DEFAULT_OBSERVE, resolve
 from .physics import Scene, parameter_names, parameters
+from .toml_effects import system_effects
 
 __all__ = ["OPTION_KEYS", "REFINE_MAPS", "RUN_KEYS", "SYSTEM_KINDS", "TABLES", "angle_axes",
            "check_scheduler",
@@ -329,7 +330,7 @@ def _system(source: str, table: dict):
     """``[system]`` -> a `sweep.physics.System`: ``kind`` names its class, the other keys
     are its constructor's arguments, ``[system.damping]`` a `sweep.Damping` (without
     ``on``: mass-proportional), and ``[system.<effect>]`` with ``on = "<coordinate>"``
-    an effect on one coordinate (`_system_effects`)."""
+    an effect on one coordinate (`sweep.toml_effects.system_effects`)."""
     import dataclasses
 
     from . import physics
@@ -361,50 +362,9 @@ def _system(source: str, table: dict):
                                  "= [[...], ...]; accepted: one of them")
             arguments["adjacency"] = arguments.pop("edges", arguments.get("adjacency"))
         else:
-            arguments["effects"] = _system_effects(arguments, effects)
+            arguments["effects"] = system_effects(arguments, effects)
         return cls(**arguments)
 
-
-def _system_effects(arguments: dict, effects: dict) -> tuple:
-    """The effects of ``[system]`` (popped from ``arguments``): each ``[system.<name>]``
-    a table of the effect's arguments (``on`` among them), or ``[[system.<name>]]`` an
-    array of such tables (one per coordinate)."""
-    found = []
-    for name, cls in effects.items():
-        if name not in arguments:
-            continue
-        value = arguments.pop(name)
-        keys = [p.field for p in cls.declaration.parameters] + ["on"]
-        accepted = (f"a table [system.{name}] with {', '.join(keys)} (on: a coordinate's "
-                    f"name" + (", or none for the mass-proportional damping with "
-                               "coefficient = c in 1/s" if name == "damping" else "")
-                    + f"), or an array of them [[system.{name}]]")
-        for entry in value if isinstance(value, list) else [value]:
-            if not isinstance(entry, dict):
-                raise TypeError(f"{name} must be {accepted}, got {entry!r}")
-            unknown = [key for key in entry if key not in keys]
-            if unknown:
-                raise ValueError(f"unknown key {unknown[0]!r} in [system.{name}]; accepted: "
-                                 f"{', '.join(keys)}")
-            found.append(cls(**entry))
-    return tuple(found)
-
-
-
-def system_effects_lines(effects: tuple, value_text) -> list[str]:
-    """The run file's ``[system.<effect>]`` tables of a system's ``effects`` (as
-    `_system_effects` reads them): one per effect with its fields (``on`` where given),
-    ``[[system.<effect>]]`` where an effect kind appears more than once; ``value_text``
-    writes a value in TOML."""
-    import dataclasses
-
-    kinds = [type(e).declaration.name for e in effects]
-    lines = []
-    for effect, name in zip(effects, kinds):
-        lines += ["", f"[[system.{name}]]" if kinds.count(name) > 1 else f"[system.{name}]"]
-        lines += [f"{f.name} = {value_text(getattr(effect, f.name))}"
-                  for f in dataclasses.fields(effect) if getattr(effect, f.name) is not None]
-    return lines
 
 def _grid(source: str, table: dict, names=None) -> Grid:
     """``[grid]`` -> Grid, axes in file order (``names``: the accepted axes, the single

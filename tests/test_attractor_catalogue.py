@@ -284,7 +284,7 @@ def test_equal_basins_keep_the_full_runs_order():
              "attractors_omega": rings["omega"].ravel(),
              "attractors_period": rings["period"], "attractors_samples": samples}
     labels, found = sweep.maps.labels._identify_with_catalogue(
-        stopped, omega, index, attrs, max_period=8, tol=1e-3)
+        stopped[index < 0], omega[index < 0], index, attrs, max_period=8, tol=1e-3)
     np.testing.assert_array_equal(labels, full)
     np.testing.assert_array_equal(found["size"], [10, 10])
 
@@ -328,3 +328,15 @@ def test_weights_count_as_repeated_rows():
                                         weights=np.array([5, 1, 1, 1]))
     assert weighted[0].tolist() == [0, 1, 1, 1] and repeated[0][0] == 0
     np.testing.assert_array_equal(weighted[1]["size"], repeated[1]["size"])  # [5, 3]
+
+
+def test_the_strobe_table_of_some_rows_is_those_rows_of_the_whole_table():
+    """`maps.basins` of a run with a catalogue copies the samples of its unmatched
+    trajectories only (`strobe_table(ds, rows)`); they are the whole table's rows."""
+    ds = sweep.run(SCENE, _grid(7), **EARLY)
+    theta, omega, dims = sweep.maps.labels.strobe_table(ds)
+    rows = np.array([0, 5, 48])
+    some_theta, some_omega, some_dims = sweep.maps.labels.strobe_table(ds, rows)
+    assert some_dims == dims and some_theta.flags.c_contiguous
+    np.testing.assert_array_equal(some_theta, theta[rows])
+    np.testing.assert_array_equal(some_omega, omega[rows])

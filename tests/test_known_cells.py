@@ -17,8 +17,10 @@ from shared_kernels import WADA_PILOT, WADA_RUN_FILE, WADA_SCENE
 
 import sweep
 from sweep import _config, maps
+from sweep._known import hits_needed, known_arguments
 from sweep.kernels import KernelSpec, source
-from sweep.maps.known import settled
+from sweep.maps.known import background, background_factors, settled
+from sweep.observables import KNOWN_HITS, KNOWN_HITS_BY_DEPTH
 
 #: A small Wada map (the issue's scene, c = 0.2, A = 1.66, W = 1): its boundaries are
 #: fractal, so a map of known cells there is tested where it is hardest.
@@ -44,6 +46,23 @@ def test_a_map_that_knows_nothing_changes_no_bit(wada_catalogue):
         np.testing.assert_array_equal(plain[name].values, nothing[name].values)
 
 
+@pytest.mark.parametrize("transient, end", [(0.0, 40.5), (3.37, 41.9), (20.0, 40.0)])
+def test_a_map_that_knows_nothing_changes_no_bit_whatever_the_transient(
+        wada_catalogue, transient, end):
+    """With known cells the refill kernel runs the strobe and attractor observables
+    only at the steady window's stroboscopic steps (`Observable.phase`): their samples,
+    matches and stops are still the plain run's, with no transient, one of no whole
+    number of periods, and a run that ends between two stroboscopic steps."""
+    period = 2 * np.pi
+    run = dict(WADA_PILOT, t_transient=transient * period, t_end=end * period)
+    plain = sweep.run(WADA_SCENE, GRID, attractors=wada_catalogue, **run)
+    nothing = sweep.run(WADA_SCENE, GRID, attractors=wada_catalogue, **run,
+                        known_cells=_known(np.full((SIZE, SIZE), -1)))
+    assert np.isfinite(plain["strobe_theta"].values).all(axis=-1).any()  # rings filled
+    for name in ("strobe_theta", "strobe_omega", "attractor", "status"):
+        np.testing.assert_array_equal(plain[name].values, nothing[name].values)
+
+
 def test_a_map_of_one_label_stops_every_trajectory_with_it(wada_catalogue):
     """Every cell known as attractor 1: each trajectory's first KNOWN_HITS
     stroboscopic points are hits (the angle wrapped onto the map's rows), so it stops
@@ -59,6 +78,61 @@ def test_a_map_of_one_label_stops_every_trajectory_with_it(wada_catalogue):
     far = sweep.Grid(theta0=GRID.axes["theta0"], omega0=GRID.axes["omega0"] + 100.0)
     none = _run(wada_catalogue, known_cells=_known(np.ones((SIZE, SIZE)), far))
     assert none.attrs["cells_stopped_known"] == 0
+
+
+def test_a_cell_deep_inside_one_label_stops_a_trajectory_on_fewer_hits():
+    """KNOWN_HITS_BY_DEPTH: a cell whose label reaches 2 rows and columns around it
+    needs 1 hit, 1 row and column 2 hits, the cell alone 3 (the map's edge counts as
+    disagreeing)."""
+    labels = np.zeros((7, 8), dtype=np.int64)
+    labels[6, 7] = 1
+    labels[0, 0] = -1
+    want = np.array([[0, 3, 3, 3, 3, 3, 3, 3],   # the edge: 3; unknown: 0 (no hit)
+                     [3, 3, 2, 2, 2, 2, 2, 3],   # (1, 1) touches the unknown corner
+                     [3, 2, 2, 1, 1, 1, 2, 3],   # (2, 2) reaches it within 2
+                     [3, 2, 1, 1, 1, 1, 2, 3],
+                     [3, 2, 1, 1, 1, 2, 2, 3],   # (4, 5) reaches label 1 within 2
+                     [3, 2, 2, 2, 2, 2, 3, 3],   # (5, 6) touches it
+                     [3, 3, 3, 3, 3, 3, 3, 3]])
+    np.testing.assert_array_equal(hits_needed(labels), want)
+    assert KNOWN_HITS_BY_DEPTH[0] == KNOWN_HITS
+    codes, _ = known_arguments(_known(labels, sweep.Grid(theta0=np.arange(7.0),
+                                                         omega0=np.arange(8.0))))
+    np.testing.assert_array_equal(codes, np.where(labels >= 0, 4 * labels + want, -1))
+
+
+def test_one_hit_deep_inside_stops_a_trajectory(wada_catalogue):
+    """A map of one label, run for 2.5 forcing periods (2 stroboscopic times): 3 hits
+    running could never be reached, but away from the map's edges 1 hit is enough (the
+    trajectories whose first point falls on the edge rows or columns, or beyond the
+    map, run on)."""
+    period = 2 * np.pi
+    short = dict(WADA_PILOT, t_end=2.5 * period, t_transient=2 * period)
+    ds = sweep.run(WADA_SCENE, GRID, attractors=wada_catalogue, **short,
+                   known_cells=_known(np.ones((SIZE, SIZE))))
+    assert ds.attrs["cells_stopped_known"] > SIZE * SIZE // 2
+    assert (ds["attractor"].values[ds["stopped_known"].values == 1] == 1).all()
+
+
+def test_a_map_of_400_points_per_axis_runs_no_half_resolution_background(wada_catalogue):
+    """HALF_BELOW: the 1/2 map costs more than it saves from 400 points per axis on
+    (measured); below, and when either axis is shorter, it runs."""
+    assert background_factors(400, 1200) == (8, 4)
+    assert background_factors(399, 1200) == background_factors(48, 48) == (8, 4, 2)
+    axes = [np.linspace(-np.pi, np.pi, 400), np.linspace(-4, 4, 400)]
+    _, cells = background(WADA_SCENE, *axes, wada_catalogue, **WADA_PILOT)
+    assert cells == 50 * 50 + 100 * 100  # the 1/8 and 1/4 maps only
+
+
+def test_refine_runs_the_half_resolution_background_whatever_the_size(wada_catalogue,
+                                                                       monkeypatch):
+    """refine fills blocks from its own levels, so it keeps the 1/2 map (measured: 1228
+    starts of the 1200 x 1200 map differ from the full run without it, 696 with it):
+    with HALF_BELOW lowered to this map's 48 points, its 24 x 24 background still
+    runs (the 1/8 and 1/4 maps are below 16 points per axis, so skipped)."""
+    monkeypatch.setattr(sweep.maps.known, "HALF_BELOW", SIZE)
+    assert background_factors(SIZE, SIZE) == (8, 4)
+    assert _refined(wada_catalogue).attrs["background_cells"] == 24 * 24
 
 
 def test_settled_cells_are_those_whose_neighbours_agree():

@@ -20,14 +20,15 @@ ROOT = Path(sweep.__file__).parent
 #: Layer of each module (by name prefix, longest match wins); higher imports lower.
 LAYERS = {
     "sweep._config": 0, "sweep._validate": 0, "sweep._version": 0, "sweep._timesteps": 0,
-    "sweep._moved": 0, "sweep._known": 0,
+    "sweep._moved": 0,
+    "sweep._known": 1,  # the known-cells rule reads the hits of sweep.observables
     "sweep.physics": 1, "sweep.methods": 1, "sweep.observables": 1,
     "sweep.system_observables": 1,
     "sweep.kernels": 2, "sweep.grid": 2, "sweep.stability": 2,
     "sweep.execution": 3, "sweep.io": 3, "sweep.settings": 3,
     "sweep.engine": 4, "sweep.engine_systems": 4,
     "sweep.maps": 5, "sweep.accuracy": 5, "sweep.map_precision": 5, "sweep.plot": 5,
-    "sweep.toml_spec": 5,
+    "sweep.toml_spec": 5, "sweep.toml_declared": 5, "sweep.toml_effects": 5,
     "sweep.distributed": 5, "sweep.diskspace": 5,
     "sweep.cli": 6, "sweep.__main__": 7,
     "sweep.explore": 6,  # the browser explorer, beside cli: the public API and maps

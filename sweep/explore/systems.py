@@ -221,7 +221,7 @@ def _system_toml(system: System) -> list[str]:
         return system_lines(system, _toml_value)
     out = ["[system]", f"kind = {_toml_value(type(system).__name__)}"]
     out += [f"{k} = {_toml_value(v)}" for k, v in _constructor(system).items()]
-    from ..toml_spec import system_effects_lines
+    from ..toml_effects import system_effects_lines
 
     return out + system_effects_lines(system.effects, _toml_value)
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import re
 
+from ..observables import OBSERVABLES
 from .fixed import NL, _drives, _finish, _first_lines, _lane_dtypes, _load, _parameters
 from .lanes import (
     IDENTIFIER,
@@ -84,6 +85,29 @@ def grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved
 '''
 
 
+#: A known-cells kernel whose observables act at stroboscopic steps only (`_sampled`):
+#: each lane's step advanced and the live lanes due at this step (a known-cells test, a
+#: stroboscopic step of the steady window, the last step) counted, in a loop LLVM
+#: vectorises; the lane loop of the observables runs only when one is due.
+_DUE = """n_due = 0
+for j in range(BLOCK):
+    ks = lane_ks[j] + 1
+    lane_ks[j] = ks
+    n_due += lane_live[j] & ((ks == lane_acc_kn_next[j]) | (ks == lane_acc_ob_next[j])
+                             | (ks >= n_steps))
+if n_due > 0:"""
+
+
+def _sampled(spec: KernelSpec) -> bool:
+    """Whether the kernel runs the observables' update and stop test only at the
+    steady window's stroboscopic steps (``acc_ob_next``): with known cells, when every
+    observed observable declares its `sweep.observables.Observable.phase` (it acts
+    only there). A lane then skips the other steps of its steady window as it skips
+    its transient's (the known-cells kernel visits it at its stroboscopic steps
+    anyway); the results are the same bits."""
+    return spec.known_cells and all(OBSERVABLES[name].phase for name in spec.observe)
+
+
 def refill_kernel(spec: KernelSpec, method) -> str:
     """Kernel body of a fixed-step method with early stop and lane refill (see the
     module docstring); same contract as `sweep.kernels.fixed`.
@@ -101,6 +125,8 @@ def refill_kernel(spec: KernelSpec, method) -> str:
     # loading trajectory i into lane j: parameters, state, observables, first sines
     load = ["k_state = 0"] + _first_lines(spec, parts, per_lane, drives.init, update,
                                           index="") + ["ks = 0"]
+    if _sampled(spec):  # the first stroboscopic step after the start's own update
+        load += ["acc_ob_next = n_transient if n_transient > 0 else acc_kn_S"]
     # the drives' sines at this lane's own step: the same expressions as the fixed
     # kernel's at its block step (so the same bits), per lane, or read from a table
     # over the steps when every trajectory has the same drive frequency and phase
@@ -109,8 +135,15 @@ def refill_kernel(spec: KernelSpec, method) -> str:
     settle = lane_snippet(stop_source(spec, action="done = True"))
     # the lane's step count was advanced in the loop's head
     known = lane_snippet(known_source("done = True")) if spec.known_cells else ""
+    if _sampled(spec):  # the observables only at the steady window's stroboscopic steps
+        phases = NL.join(f"{OBSERVABLES[name].phase} = 0" for name in spec.observe)
+        steady = f"""if k_state == lane_acc_ob_next[j]:
+    lane_acc_ob_next[j] += lane_acc_kn_S[j]
+{indent(phases, 1)}"""
+    else:
+        steady = "if k_state >= n_transient:"
     observe = f"""k_state = ks
-if k_state >= n_transient:
+{steady}
 {indent(update, 1)}
 {indent(settle, 1)}
 {known}
@@ -132,6 +165,8 @@ finished = False"""
     lane.update({"i": "int64", "ks": "int64", "live": "bool_", "finished": "bool_"})
     if spec.known_cells:
         lane.update(KNOWN_STATE)
+    if _sampled(spec):
+        lane["acc_ob_next"] = "int64"
     later = set(IDENTIFIER.findall(NL.join(step_body + sines + drives.carry +
                                            [observe, refill])))
     lane = {name: dtype for name, dtype in lane.items() if name in later or name == "live"}
@@ -149,13 +184,18 @@ finished = False"""
     # the known-cells stop runs from the first step on, the observables after the
     # transient
     head = "    ks = lane_ks[j] + 1\n    lane_ks[j] = ks\n"
-    if spec.known_cells:
+    if _sampled(spec):  # the steps advanced, and lanes due counted, a vector at a time
+        head = "    ks = lane_ks[j]\n    if not lane_live[j]:\n        continue\n" + \
+            known_head("ks", "ks != lane_acc_ob_next[j] and ks < n_steps")
+    elif spec.known_cells:
         head += "    if not lane_live[j]:\n        continue\n" + \
             known_head("ks", "ks < n_transient and ks < n_steps")
     else:
         head += "    if not lane_live[j] or (ks < n_transient and ks < n_steps):\n" \
                 "        continue\n"
     observe_loop = lane_loop(observe, counted, level=3, head=head)
+    if _sampled(spec):
+        observe_loop = indent(_DUE, 3) + NL + indent(observe_loop, 1)
     refill_loop = lane_loop(refill, lane, level=4,
                             head=skip_unless("finished"))
     extra = KNOWN_ARGUMENTS if spec.known_cells else ""

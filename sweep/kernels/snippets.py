@@ -7,7 +7,6 @@ import re
 from ..observables import (
     ATTRACTOR_MATCHES,
     ATTRACTOR_TOL,
-    KNOWN_HITS,
     OBSERVABLES,
     STROBE_TOL,
     STROBE_TOL_FLOAT32,
@@ -16,9 +15,13 @@ from .lanes import indent
 from .spec import KernelSpec, Status
 from .terms import tension_terms
 
-__all__ = ["KNOWN_STATE", "failed_samples", "failed_status", "finite_test", "known_final",
-           "known_head", "known_init", "known_source", "ok_test", "renormalisations", "snippets",
-           "stop_source"]
+__all__ = ["KNOWN_STATE", "KNOWN_STOPPED", "failed_samples", "failed_status", "finite_test",
+           "known_final", "known_head", "known_init", "known_source", "ok_test",
+           "renormalisations", "snippets", "stop_source"]
+
+#: The known-cells stop's count of hits once the trajectory stopped on known cells
+#: (`known_source`; read by `known_final`): no count of hits reaches it.
+KNOWN_STOPPED = 1 << 30
 
 #: Per-trajectory state of the known-cells stop (`known_source`), name -> dtype.
 KNOWN_STATE = {"acc_kn_S": "int64", "acc_kn_next": "int64", "acc_kn_n": "int64",
@@ -183,9 +186,10 @@ def known_source(action: str) -> str:
     step (state ``th, om`` at step ``k_state``) whatever the transient (`known_head`):
     at each stroboscopic time ``t0 + m 2 pi / W`` (m >= 1; step ``acc_kn_next``)
     the point is snapped to the nearest cell of the map ``known`` (its angle first
-    wrapped by whole turns into the map's rows); a cell of label ``L >= 0`` is a hit,
-    and ``KNOWN_HITS`` hits of one label running run ``action`` (once: only while the
-    trajectory is not ``done``).
+    wrapped by whole turns into the map's rows); a cell holding ``4 L + h`` (label
+    ``L >= 0``, hits ``h`` in 1..3: `sweep._known.known_arguments`) is a hit, and a
+    run of hits of one label as long as the current cell's ``h`` runs ``action`` (once:
+    only while the trajectory is not ``done``) and sets the count to `KNOWN_STOPPED`.
 
     ``known_axes`` holds, in cell units: ``[theta of row 0, rows per rad, omega of
     column 0, columns per rad/s, rows per 2 pi turn (> 0)]``. A point beyond the map
@@ -199,20 +203,22 @@ if k_state == lane_acc_kn_next[j]:
         acc_kn_x = (th - known_axes[0]) * known_axes[1]
         acc_kn_x -= known_axes[4] * math.floor((acc_kn_x + 0.5) / known_axes[4])
         acc_kn_y = (om - known_axes[2]) * known_axes[3]
-        acc_kn_l = -1
+        acc_kn_c = -1
         if acc_kn_x >= -0.5 and acc_kn_x < known.shape[0] - 0.5 and acc_kn_y >= -0.5 \\
                 and acc_kn_y < known.shape[1] - 0.5:
-            acc_kn_l = known[int(math.floor(acc_kn_x + 0.5)),
+            acc_kn_c = known[int(math.floor(acc_kn_x + 0.5)),
                              int(math.floor(acc_kn_y + 0.5))]
-        if acc_kn_l < 0:
+        if acc_kn_c < 0:
             lane_acc_kn_n[j] = 0
-        elif lane_acc_kn_n[j] > 0 and acc_kn_l == lane_acc_kn_L[j]:
-            lane_acc_kn_n[j] += 1
         else:
-            lane_acc_kn_n[j] = 1
-            lane_acc_kn_L[j] = acc_kn_l
-        if lane_acc_kn_n[j] >= {KNOWN_HITS}:
-{indent(action, 3)}"""
+            if lane_acc_kn_n[j] > 0 and (acc_kn_c >> 2) == lane_acc_kn_L[j]:
+                lane_acc_kn_n[j] += 1
+            else:
+                lane_acc_kn_n[j] = 1
+                lane_acc_kn_L[j] = acc_kn_c >> 2
+            if lane_acc_kn_n[j] >= (acc_kn_c & 3):
+                lane_acc_kn_n[j] = {KNOWN_STOPPED}
+{indent(action, 4)}"""
 
 
 def known_final(spec: KernelSpec) -> str:
@@ -223,6 +229,6 @@ def known_final(spec: KernelSpec) -> str:
         if name == "attractor":
             attractor = col
         col += OBSERVABLES[name].n_columns(spec)
-    return (f"out[i, {col}] = 1.0 if acc_kn_n >= {KNOWN_HITS} else 0.0\n"
-            f"if acc_kn_n >= {KNOWN_HITS}:\n"
+    return (f"out[i, {col}] = 1.0 if acc_kn_n == {KNOWN_STOPPED} else 0.0\n"
+            f"if acc_kn_n == {KNOWN_STOPPED}:\n"
             f"    out[i, {attractor}] = acc_kn_L")

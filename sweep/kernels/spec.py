@@ -168,11 +168,13 @@ class KernelSpec:
         depend on it (a test checks it); `_config.BLOCK` by default.
     known_cells : bool
         With ``stop_early`` and an attractor catalogue: the kernel takes two more
-        arguments, ``known`` (int32[n0, n1], per cell of a map over theta0 x omega0 the
-        index of the catalogued attractor its start settles on, -1 unknown) and
-        ``known_axes`` (float64[5], `sweep.kernels.snippets.known_source`), and stops a
-        trajectory whose stroboscopic points (times ``t0 + m 2 pi / W``, m >= 1) fall
-        in known cells of one label ``KNOWN_HITS`` periods running, writing that label
+        arguments, ``known`` (int32[n0, n1], per cell of a map over theta0 x omega0
+        ``4 L + h``: the index ``L`` of the catalogued attractor its start settles on
+        and the hits ``h`` (1..3) that stop a trajectory there, -1 unknown;
+        `sweep._known.known_arguments`) and ``known_axes`` (float64[5],
+        `sweep.kernels.snippets.known_source`), and stops a trajectory whose
+        stroboscopic points (times ``t0 + m 2 pi / W``, m >= 1) fall in known cells of
+        one label as many periods running as the last cell's ``h``, writing that label
         as its ``attractor`` (fixed-step float64 CPU kernels only).
     """
 

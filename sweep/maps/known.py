@@ -4,9 +4,10 @@ attractors' own cells (`seed_attractors`), and the coarse maps of the whole wind
 `sweep.maps.refine` runs first (`background`).
 
 What may stop a trajectory was decided by measurement (docs/guide/refine.md): a cell
-whose label is shared by its 8 neighbours (`KNOWN_RADIUS`), and the 3 x 3 cells around
-each point of a catalogued attractor's orbit (`SEED_RADIUS`); a trajectory stops after
-`sweep.observables.KNOWN_HITS` periods running in such cells of one label.
+whose label is shared by its 8 neighbours (`KNOWN_RADIUS`), and the cell of each point
+of a catalogued attractor's orbit (`SEED_RADIUS`); a trajectory stops after
+`sweep.observables.KNOWN_HITS` periods running in such cells of one label, fewer where
+the known cells around the last one share its label (`sweep._known.hits_needed`).
 """
 
 from __future__ import annotations
@@ -15,10 +16,12 @@ import numpy as np
 import xarray as xr
 
 from .. import engine
+from .._known import agreeing
 from ..grid import Grid
 
-__all__ = ["BACKGROUND_FACTORS", "KNOWN_MIN_POINTS", "KNOWN_RADIUS", "SEED_RADIUS",
-           "background", "known_map", "seed_attractors", "settled", "upsample"]
+__all__ = ["BACKGROUND_FACTORS", "HALF_BELOW", "KNOWN_MIN_POINTS", "KNOWN_RADIUS",
+           "SEED_RADIUS", "background", "background_factors", "known_map", "seed_attractors",
+           "settled", "upsample"]
 
 #: A cell is settled when every cell within this many rows and columns (its 8
 #: neighbours for 1) is known with its label.
@@ -29,8 +32,17 @@ KNOWN_RADIUS = 1
 SEED_RADIUS = 0
 
 #: The background maps `background` runs before the map: the window at 1/8, 1/4 and
-#: 1/2 of the map's resolution, each stopping on the settled cells of the one before.
+#: 1/2 of the map's resolution, each stopping on the settled cells of the one before
+#: (the 1/2 map only below `HALF_BELOW` points per axis: `background_factors`).
 BACKGROUND_FACTORS = (8, 4, 2)
+
+#: Maps with at least this many points on each axis run no background at 1/2 of their
+#: resolution (its 1/4 map has 100 points per axis or more). Measured on the Wada map
+#: (2026-11-28, AMD EPYC Zen 5, CPU times of backgrounds, map and labels): at 1200 x
+#: 1200, 6.1 s against 6.9-7.4 s with the 1/2 map, at 400 x 400 0.83 s against
+#: 0.88-0.93 s, no start labelled differently from the full run either way; at 200 x
+#: 200 without it 4 starts of 40,000 differ (none with it).
+HALF_BELOW = 400
 
 #: Fewest points per axis of a map that stops on the known cells of its own coarse maps
 #: (`background`: its finest then has 48 or more). Measured on the Wada map (c = 0.2,
@@ -54,18 +66,7 @@ def settled(labels: np.ndarray, radius: int = KNOWN_RADIUS) -> np.ndarray:
     radius : int
         >= 0.
     """
-    labels = np.asarray(labels)
-    out = np.where(labels >= 0, labels, -1).astype(np.int32)
-    n0, n1 = labels.shape
-    for dr in range(-radius, radius + 1):
-        for dc in range(-radius, radius + 1):
-            if dr == 0 and dc == 0:
-                continue
-            shifted = np.full(labels.shape, -2, dtype=labels.dtype)
-            shifted[max(-dr, 0):n0 - max(dr, 0), max(-dc, 0):n1 - max(dc, 0)] = \
-                labels[max(dr, 0):n0 - max(-dr, 0), max(dc, 0):n1 - max(-dc, 0)]
-            out[shifted != labels] = -1
-    return out
+    return agreeing(labels, radius)
 
 
 def _cell(theta: np.ndarray, omega: np.ndarray, t: float, w: float) -> tuple[int, int]:
@@ -114,11 +115,20 @@ def upsample(known: xr.DataArray, theta: np.ndarray, omega: np.ndarray) -> np.nd
     return np.asarray(known.values)[np.ix_(rows, cols)]
 
 
+def background_factors(n0: int, n1: int) -> tuple[int, ...]:
+    """The factors of `BACKGROUND_FACTORS` a map of ``n0`` x ``n1`` points runs its
+    background maps at (`HALF_BELOW`)."""
+    if min(n0, n1) >= HALF_BELOW:
+        return tuple(f for f in BACKGROUND_FACTORS if f != 2)
+    return BACKGROUND_FACTORS
+
+
 def background(scene, theta: np.ndarray, omega: np.ndarray, catalogue: dict,
+               factors: tuple[int, ...] | None = None,
                **run_kwargs) -> tuple[xr.DataArray | None, int]:
-    """The known cells of the window ``theta`` x ``omega`` from coarse maps of it
-    (`BACKGROUND_FACTORS`), each run with the known cells of the one before (settled
-    cells and seeds).
+    """The known cells of the window ``theta`` x ``omega`` from coarse maps of it at
+    1 / ``factors`` of its resolution (default: `background_factors`), each run with
+    the known cells of the one before (settled cells and seeds).
 
     Returns
     -------
@@ -129,7 +139,9 @@ def background(scene, theta: np.ndarray, omega: np.ndarray, catalogue: dict,
         Trajectories the backgrounds ran.
     """
     known, cells = None, 0
-    for factor in BACKGROUND_FACTORS:
+    if factors is None:
+        factors = background_factors(theta.size, omega.size)
+    for factor in factors:
         size = [(axis.size - 1) // factor + 1 for axis in (theta, omega)]
         if min(size) < _SMALLEST:
             continue

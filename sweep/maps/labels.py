@@ -379,9 +379,11 @@ def check_tolerance(tol) -> float:
                           accepted="a finite number > 0 (rad and rad/s)")
 
 
-def strobe_table(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+def strobe_table(ds: xr.Dataset, rows=None) -> tuple[np.ndarray, np.ndarray,
+                                                     tuple[str, ...]]:
     """The stroboscopic samples of every trajectory as two (n, P) tables, rows in the
-    order of the grid dims (returned third).
+    order of the grid dims (returned third); with ``rows`` (indices into that order),
+    of those trajectories only (nothing else is copied).
 
     Raises
     ------
@@ -393,6 +395,8 @@ def strobe_table(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray, tuple[str, ...
     samples = theta.sizes["strobe"]
     table = [ds[name].transpose(*dims, "strobe").values.reshape(-1, samples)
              for name in ("strobe_theta", "strobe_omega")]
+    if rows is not None:
+        table = [t[rows] for t in table]
     return (np.ascontiguousarray(table[0], dtype=np.float64),
             np.ascontiguousarray(table[1], dtype=np.float64), dims)
 
@@ -440,16 +444,17 @@ def _identify_with_catalogue(theta, omega, index, attrs, *, max_period: int, tol
     """`identify_attractors` for a run with an attractor catalogue. A trajectory the
     kernel matched to catalogued attractor ``a`` (``index >= 0``) stopped before its
     own samples could show a period; it stands for that attractor's ring (extended to
-    the map's width, `_catalogue_rings`). The unmatched trajectories and one row per
-    matched attractor, weighted by its matches, are identified together: the labels,
-    sizes and order (ties included) are those of identifying every row, at the cost of
-    the unmatched rows only."""
+    the map's width, `_catalogue_rings`). The unmatched trajectories (``theta`` and
+    ``omega``: their samples only, in order) and one row per matched attractor,
+    weighted by its matches, are identified together: the labels, sizes and order (ties
+    included) are those of identifying every row, at the cost of the unmatched rows
+    only."""
     matched = index >= 0
     counts = np.bincount(index[matched], minlength=0)
     used = np.flatnonzero(counts)  # catalogued attractors this run matched
     rings = _catalogue_rings(attrs, theta.shape[1])
     unmatched = np.flatnonzero(~matched)
-    table = [np.concatenate([t[unmatched], r[used]]) for t, r in zip((theta, omega), rings)]
+    table = [np.concatenate([t, r[used]]) for t, r in zip((theta, omega), rings)]
     weights = np.concatenate([np.ones(unmatched.size, dtype=np.int64), counts[used]])
     part, catalogue = identify_attractors(*table, max_period=max_period, tol=tol,
                                           weights=weights)
@@ -462,12 +467,14 @@ def _identify_with_catalogue(theta, omega, index, attrs, *, max_period: int, tol
 
 
 def _forced_basins(ds: xr.Dataset, *, max_period: int, tol: float) -> xr.DataArray:
-    flat_theta, flat_omega, dims = strobe_table(ds)
+    dims = tuple(strobe_axes(ds, "stroboscopic analysis"))
     index = _catalogued(ds, dims)
     if index is None or not (index >= 0).any():
+        flat_theta, flat_omega, _ = strobe_table(ds)
         labels, catalogue = identify_attractors(flat_theta, flat_omega,
                                                 max_period=max_period, tol=tol)
-    else:
+    else:  # the samples of the unmatched trajectories only
+        flat_theta, flat_omega, _ = strobe_table(ds, np.flatnonzero(index < 0))
         labels, catalogue = _identify_with_catalogue(flat_theta, flat_omega, index,
                                                      ds.attrs, max_period=max_period,
                                                      tol=tol)

@@ -26,7 +26,7 @@ from ..grid import Grid, Points
 from ..observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
 from ..physics import Scene
 from ._quadtree import check_step, refine_field
-from .known import background, seed_attractors, settled, upsample
+from .known import BACKGROUND_FACTORS, background, seed_attractors, settled, upsample
 from .known import known_map as _known_map
 from .labels import (
     UNRESOLVED,
@@ -317,15 +317,15 @@ def refine(scene: Scene, grid: Grid, label=basins, *, step: int = 16,
     known_cells : bool, default False
         Forced `basins` over theta0 x omega0 (evenly spaced) with ``stop_early`` and a
         catalogue: a trajectory stops once its stroboscopic points fall in known cells
-        of one attractor `sweep.observables.KNOWN_HITS` periods running
-        (`sweep.run`'s ``known_cells``). Known are, frozen while a level runs: the
-        settled cells (`sweep.maps.known.settled`: 8 neighbours of one label) of
-        coarse maps of the whole window run first (`sweep.maps.known.background`) and
-        of the cells earlier levels decided, and the cells of the catalogued
-        attractors. The labels then do not depend on threads, blocks, chunks or Dask;
-        they may differ from the full run's near fractal boundaries (measured in the
-        refine guide: on the 1200 x 1200 Wada map, 631 of 1.44 M differ, refine's own
-        filled islands, as without known cells).
+        of one attractor `sweep.observables.KNOWN_HITS` periods running, fewer deep
+        inside a region of one label (`sweep.run`'s ``known_cells``). Known are,
+        frozen while a level runs: the settled cells (`sweep.maps.known.settled`: 8
+        neighbours of one label) of coarse maps of the whole window run first
+        (`sweep.maps.known.background`) and of the cells earlier levels decided, and
+        the cells of the catalogued attractors. The labels then do not depend on
+        threads, blocks, chunks or Dask; they may differ from the full run's near
+        fractal boundaries (measured in the refine guide: on the 1200 x 1200 Wada map,
+        696 of 1.44 M differ, refine's own filled islands, as without known cells).
     **run_kwargs
         `sweep.run` arguments (``t_end``, ``dt``, ``observe``, ``stop_early``,
         ``attractors``, ``device``, ...), the same for every level; ``progress``
@@ -461,7 +461,11 @@ def _refine_known(scene, grid: Grid, run, keys, step: int, kwargs: dict, *, flip
     catalogue = kwargs["attractors"]  # flip: the field's rows are omega0, the map's theta0
     theta, omega = (np.asarray(grid.axes[name], dtype=np.float64) for name in INITIAL_AXES)
     others = {k: v for k, v in kwargs.items() if k != "attractors"}
-    back, back_cells = background(scene, theta, omega, catalogue, **others)
+    # every background level, the 1/2 map too (`HALF_BELOW` is measured for the
+    # map without refine's filled blocks: at 1200 x 1200 refine then labels 1228
+    # starts differently from the full run, against 696 with it)
+    back, back_cells = background(scene, theta, omega, catalogue,
+                                  factors=BACKGROUND_FACTORS, **others)
     base = upsample(back, theta, omega) if back is not None else \
         np.full((theta.size, omega.size), -1, dtype=np.int32)
     lookup = {}  # the field's key -> catalogue index, from the cells run so far

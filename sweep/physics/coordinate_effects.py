@@ -33,7 +33,9 @@ import functools
 import re
 
 from .effect import EFFECTS, Effect, Parameter
-from .system import Coordinate, SystemDeclaration
+
+# Coordinates and declarations are sweep.physics.system's (`Coordinate`,
+# `SystemDeclaration`), named in the docstrings only: system imports this module.
 
 __all__ = ["acting_effects", "coordinate_axis", "force_source", "parameters_on",
            "split_axis", "with_effects"]
@@ -59,7 +61,7 @@ def acting_effects() -> tuple[type[Effect], ...]:
     return tuple(cls for cls in EFFECTS.values() if cls.declaration.generalized_force)
 
 
-def _units(p: Parameter, effect: str, coordinate: Coordinate,
+def _units(p: Parameter, effect: str, coordinate,
            energy_units: str) -> tuple[str, str]:
     k = _FORCE_POWER.get((effect, p.field))
     if k is None:
@@ -74,7 +76,7 @@ def _units(p: Parameter, effect: str, coordinate: Coordinate,
             f"{energy_units}{seconds.replace('s2', 's^2')}/{unit}^{k + 1}")
 
 
-def parameters_on(effect_type: type[Effect], coordinate: Coordinate,
+def parameters_on(effect_type: type[Effect], coordinate,
                   energy_units: str = "J") -> tuple[Parameter, ...]:
     """The parameters of ``effect_type`` acting on ``coordinate``.
 
@@ -106,7 +108,7 @@ def parameters_on(effect_type: type[Effect], coordinate: Coordinate,
     return tuple(found)
 
 
-def force_source(effect_type: type[Effect], coordinate: Coordinate) -> str:
+def force_source(effect_type: type[Effect], coordinate) -> str:
     """The generalized force of ``effect_type`` on ``coordinate`` as a declaration
     expression: its ``generalized_force`` with ``q``, ``v`` and its symbols renamed
     (``"-c*v"`` on theta1 -> ``"-c_th1*om1"``)."""
@@ -117,8 +119,8 @@ def force_source(effect_type: type[Effect], coordinate: Coordinate) -> str:
                            declaration.generalized_force)
 
 
-def with_effects(declaration: SystemDeclaration, effects: tuple,
-                 energy_units: str = "J") -> SystemDeclaration:
+def with_effects(declaration, effects: tuple,
+                 energy_units: str = "J"):
     """``declaration`` with the generalized forces of the ``effects`` that name a
     coordinate (``on``) added; ``declaration`` itself when none does.
 
@@ -142,8 +144,8 @@ def with_effects(declaration: SystemDeclaration, effects: tuple,
 
 
 @functools.lru_cache(maxsize=256)
-def _with_effects(declaration: SystemDeclaration, effects: tuple,
-                  energy_units: str) -> SystemDeclaration:
+def _with_effects(declaration, effects: tuple,
+                  energy_units: str):
     if not effects:
         return declaration
     by_name = {c.name: c for c in declaration.coordinates}

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 from .effect import Parameter
 from .system import (
+    DerivedSystem,
     System,
     SystemDeclaration,
     initial_parameters,
@@ -78,6 +79,13 @@ class CoupledPendula(System):
     def __post_init__(self) -> None:
         _declaration(self.n, self.kind, self.topology)  # checks n, kind and topology
         self._check_parameters()
+
+    def derived(self, jacobian: bool = False) -> DerivedSystem:
+        """Its equations as kernel source, its effects on coordinates included
+        (`sweep.physics.derive.derive_system`)."""
+        from .derive import derive_system
+
+        return derive_system(self, jacobian)
 
     @property
     def declaration(self) -> SystemDeclaration:

@@ -16,6 +16,7 @@ import math
 
 from .effect import Parameter
 from .system import (
+    DerivedSystem,
     System,
     SystemDeclaration,
     register_system,
@@ -157,6 +158,13 @@ class DeclaredSystem(System):
         if self._drive is None:
             return super().drive_frequency_parameter
         return {p.axis: p for p in self._declaration.parameters}.get(self._drive)
+
+    def derived(self, jacobian: bool = False) -> DerivedSystem:
+        """Its equations as kernel source, its effects on coordinates included
+        (`sweep.physics.derive.derive_system`)."""
+        from .derive import derive_system
+
+        return derive_system(self, jacobian)
 
     @property
     def declaration(self) -> SystemDeclaration:

@@ -56,7 +56,7 @@ from .. import _config
 from .effect import RESERVED_SYMBOLS, Parameter
 from .system import Coordinate, DerivedSystem, SystemDeclaration
 
-__all__ = ["DERIVE_VERSION", "FUNCTIONS", "derive"]
+__all__ = ["DERIVE_VERSION", "FUNCTIONS", "derive", "derive_system"]
 
 #: Version of the derivation and of the source it writes: part of the disk cache's key,
 #: so a change here (a different printer, another simplification) misses old entries.
@@ -138,6 +138,32 @@ def derive(declaration: SystemDeclaration, *, jacobian: bool = False) -> Derived
 
 
 @functools.cache
+def derive_system(system, jacobian: bool = False) -> DerivedSystem:
+    """A system's equations of motion and energy (with ``jacobian``: and the Jacobian of
+    the accelerations) as kernel source, its effects on coordinates included: `derive`
+    of ``system.declaration_with_effects`` (SymPy only on the first derivation on a
+    machine, then read from the cache; the built-in systems' common declarations are
+    shipped derived). `sweep.physics.System.derived` of every system.
+
+    Raises
+    ------
+    ImportError
+        Where the equations must be derived and SymPy is not installed (naming the
+        effects on coordinates that made a derivation necessary).
+    """
+    declaration = system.declaration_with_effects
+    try:
+        return derive(declaration, jacobian=jacobian)
+    except ImportError as error:
+        if declaration is system.declaration:
+            raise
+        acting = ", ".join(repr(e) for e in system.effects if e.coordinate is not None)
+        raise ImportError(
+            f"{type(system).__name__} with {acting}: an effect on one coordinate changes "
+            "the equations of motion, which sweep derives again with SymPy (once per "
+            "machine and combination, then cached); " + str(error)) from error
+
+
 def _derive(declaration: SystemDeclaration, jacobian: bool) -> DerivedSystem:
     """`derive` after the structure checks: shipped with sweep (`sweep.physics.shipped`),
     from the disk cache, or derived and stored."""

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 from .effect import Parameter
 from .system import (
+    DerivedSystem,
     System,
     SystemDeclaration,
     register_system,
@@ -121,6 +122,13 @@ class DoublePendulum(System):
         if self.pivot_amplitude is None:
             return super().drive_frequency_parameter
         return {p.axis: p for p in self.declaration.parameters}["pivot_frequency"]
+
+    def derived(self, jacobian: bool = False) -> DerivedSystem:
+        """Its equations as kernel source, its effects on coordinates included
+        (`sweep.physics.derive.derive_system`)."""
+        from .derive import derive_system
+
+        return derive_system(self, jacobian)
 
     @property
     def declaration(self) -> SystemDeclaration:

@@ -394,31 +394,18 @@ class System:
                                     for p in cls.declaration.parameters}, on=on))
         return self._with_effects(self.effects + tuple(added)) if added else self
 
-    def derived(self, jacobian: bool = False):
+    def derived(self, jacobian: bool = False):  # pragma: no cover - abstract
         """Its equations of motion and energy (with ``jacobian``: and the Jacobian of
-        the accelerations) as kernel source, its effects on coordinates included
-        (`sweep.physics.derive.derive` of `declaration_with_effects`: SymPy only on the
-        first derivation on a machine, then read from the cache; the built-in systems'
-        common declarations are shipped derived).
+        the accelerations) as kernel source, its effects on coordinates included:
+        `sweep.physics.derive.derive_system` (each system's class calls it; derive
+        imports this module, so this one does not import derive).
 
         Raises
         ------
         ImportError
             Where the equations must be derived and SymPy is not installed.
         """
-        from .derive import derive
-
-        declaration = self.declaration_with_effects
-        try:
-            return derive(declaration, jacobian=jacobian)
-        except ImportError as error:
-            if declaration is self.declaration:
-                raise
-            acting = ", ".join(repr(e) for e in self.effects if e.coordinate is not None)
-            raise ImportError(
-                f"{type(self).__name__} with {acting}: an effect on one coordinate changes "
-                "the equations of motion, which sweep derives again with SymPy (once per "
-                "machine and combination, then cached); " + str(error)) from error
+        raise NotImplementedError
 
     def to_dict(self) -> dict:
         """A JSON-able description (dataset attribute ``system``)."""
