@@ -137,7 +137,6 @@ def derive(declaration: SystemDeclaration, *, jacobian: bool = False) -> Derived
     return _derive(declaration, bool(jacobian))
 
 
-@functools.cache
 def derive_system(system, jacobian: bool = False) -> DerivedSystem:
     """A system's equations of motion and energy (with ``jacobian``: and the Jacobian of
     the accelerations) as kernel source, its effects on coordinates included: `derive`
@@ -164,6 +163,7 @@ def derive_system(system, jacobian: bool = False) -> DerivedSystem:
             "machine and combination, then cached); " + str(error)) from error
 
 
+@functools.cache
 def _derive(declaration: SystemDeclaration, jacobian: bool) -> DerivedSystem:
     """`derive` after the structure checks: shipped with sweep (`sweep.physics.shipped`),
     from the disk cache, or derived and stored."""
