@@ -225,7 +225,8 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         check_positive_int("estimate_error", estimate_error,
                            "None or an int >= 1 (trajectories)")
     if chunk_size is None:  # a GPU needs ~10^5-10^6 threads in flight to be busy
-        chunk_size = default_chunk_size(settings) if device != "cuda" else CUDA_CHUNK
+        chunk_size = default_chunk_size(settings, bool(stop_early)) \
+            if device != "cuda" else CUDA_CHUNK
     check_positive_int("chunk_size", chunk_size)
 
     integrator = settings.integrator

@@ -145,7 +145,8 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
 
     check_dtype(dtype, integrator)
     if chunk_size is None:
-        chunk_size = default_chunk_size(settings) if device != "cuda" else CUDA_CHUNK
+        chunk_size = default_chunk_size(settings, bool(stop_early)) \
+            if device != "cuda" else CUDA_CHUNK
     check_positive_int("chunk_size", chunk_size)
     if isinstance(system, SwingNetwork):
         if dtype != "float64":

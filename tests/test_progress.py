@@ -59,6 +59,10 @@ def test_default_chunks_hold_about_a_second_of_work():
     assert (long + _config.CHUNK_MIN) * 30_000 > _config.CHUNK_WORK
     # 10^7 steps: never fewer than CHUNK_MIN trajectories
     assert default_chunk_size(_settings(1e5, 0.01)) == _config.CHUNK_MIN
+    # early stop: the cap whatever t_end (most trajectories end long before it, and a
+    # chunk's slowest trajectory keeps the other threads waiting at its end)
+    assert default_chunk_size(_settings(300.0, 0.01), stop_early=True) == _config.CHUNK_SIZE
+    assert default_chunk_size(_settings(1e5, 0.01), stop_early=True) == _config.CHUNK_SIZE
 
 
 def test_the_default_chunks_give_the_same_result_as_one_chunk(monkeypatch):
