@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import threading
 import time
 from pathlib import Path
 
@@ -302,3 +303,39 @@ def test_websocket_origins_are_limited_to_the_served_address(app):
     port = app.url.rstrip("/").rsplit(":", 1)[1]
     own = IOLoop().run_sync(lambda: status(f"http://127.0.0.1:{port}"))
     assert own != 403  # let past the origin check (the session token is checked next)
+
+
+def test_a_page_opened_during_the_warm_up_shows_the_map_once_it_ends(driver):
+    """A page that connects while the server warms up says so, and draws the home map
+    as soon as the warm-up ends: it waits on its own event loop (`_Session._poll_warm`),
+    not for a callback from the warm-up thread into a document the server may still be
+    attaching (which was lost now and then: "starting" forever)."""
+    from sweep.cli import demo_inputs
+    from sweep.explore import app as explore_app
+
+    scene, grid, kwargs = demo_inputs(64)
+    app = explore_app.ExplorerApp(scene, grid, resolution=64, **kwargs)
+    entered, release = threading.Event(), threading.Event()
+    compute = app.template.compute
+
+    def held(*args, **kw):
+        entered.set()
+        assert release.wait(60)
+        return compute(*args, **kw)
+
+    app.template.compute = held
+    app.serve(port=0)
+    try:
+        assert entered.wait(30) and app.warming
+        driver.get(app.url)
+        loaded = "if (!window.Bokeh || !Bokeh.documents.length) return null;\n" + _TEXTS
+        status = _wait(driver, loaded, lambda texts: len(texts) == 1, 30, "starting")[0]
+        assert "compiling the kernels" in status
+        assert driver.execute_script(_MAP) is None  # nothing computed yet
+        release.set()
+        shown = _wait(driver, _MAP, lambda s: s["n"] == 64 * 64 and s["stage"] == "final",
+                      60)
+        assert "well" in shown["title"] and not app.warming
+    finally:
+        release.set()
+        app.stop()

@@ -80,6 +80,9 @@ _NAN_COLOUR = "#404040"
 #: immediate; this bounds a server that neither listens nor fails).
 LISTEN_TIMEOUT = 60.0
 
+#: How often a page opened during the warm-up asks whether it ended [ms].
+WARM_POLL_MS = 50
+
 #: What the page says while the app warms up (`ExplorerApp.warm_up`).
 WARMING_TEXT = ("**starting**: compiling the kernels and computing the first view "
                 "(once per server; seconds)…")
@@ -204,10 +207,31 @@ class _Session:
         app._sessions.append(weakref.ref(self))
         if self.doc is not None and hasattr(self.doc, "on_session_destroyed"):
             self.doc.on_session_destroyed(lambda context: self.requests.close())
-        if app.call_when_warm(self._from_worker(self._first_submit)):
+        self._warm_poll = None
+        if app.warming and self._served():
+            # a served page waits for the warm-up on its own event loop: a callback from
+            # the warm-up thread, scheduled while the server was still attaching this
+            # new document to its session, was lost now and then (the page said
+            # "starting" forever; seen in about 1 of 10 fresh starts under load)
             self.status.object = WARMING_TEXT  # the first map follows from the cache
+            self._warm_poll = self.doc.add_periodic_callback(self._poll_warm, WARM_POLL_MS)
+        elif app.call_when_warm(self._from_worker(self._first_submit)):
+            self.status.object = WARMING_TEXT  # a notebook: no event loop of its own
         else:
             self._submit()
+
+    def _served(self) -> bool:
+        """Whether this page is a served Bokeh document (with an event loop)."""
+        return self.doc is not None and getattr(self.doc, "session_context", None) is not None
+
+    def _poll_warm(self) -> None:
+        """On the page's event loop, every `WARM_POLL_MS`: once the app's warm-up has
+        ended, stop polling and make the first request."""
+        if self.app.warming or self._warm_poll is None:
+            return
+        self.doc.remove_periodic_callback(self._warm_poll)
+        self._warm_poll = None
+        self._first_submit()
 
     def _first_submit(self) -> None:
         """The first request, once the app's warm-up ended (unless a control was changed
