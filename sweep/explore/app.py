@@ -208,13 +208,16 @@ class _Session:
         if self.doc is not None and hasattr(self.doc, "on_session_destroyed"):
             self.doc.on_session_destroyed(lambda context: self.requests.close())
         self._warm_poll = None
-        if app.warming and self._served():
-            # a served page waits for the warm-up on its own event loop: a callback from
-            # the warm-up thread, scheduled while the server was still attaching this
-            # new document to its session, was lost now and then (the page said
-            # "starting" forever; seen in about 1 of 10 fresh starts under load)
-            self.status.object = WARMING_TEXT  # the first map follows from the cache
-            self._warm_poll = self.doc.add_periodic_callback(self._poll_warm, WARM_POLL_MS)
+        if self._served():
+            # a served page asks for its first map once the browser is connected
+            # (`pn.state.onload`): a map that came back before (the home view from the
+            # cache, in 0.1 s) changed a document the browser had not pulled yet and
+            # never reached it (the page showed the status but no picture), and a
+            # callback from the warm-up thread scheduled while the server was still
+            # attaching the document was lost now and then ("starting" forever)
+            if app.warming:
+                self.status.object = WARMING_TEXT  # the first map follows from the cache
+            pn.state.onload(self._loaded)
         elif app.call_when_warm(self._from_worker(self._first_submit)):
             self.status.object = WARMING_TEXT  # a notebook: no event loop of its own
         else:
@@ -223,6 +226,15 @@ class _Session:
     def _served(self) -> bool:
         """Whether this page is a served Bokeh document (with an event loop)."""
         return self.doc is not None and getattr(self.doc, "session_context", None) is not None
+
+    def _loaded(self) -> None:
+        """The browser is connected: the first request now, or, while the app warms up,
+        a check on this page's event loop every `WARM_POLL_MS` until it has."""
+        if self.app.warming:
+            self.status.object = WARMING_TEXT
+            self._warm_poll = self.doc.add_periodic_callback(self._poll_warm, WARM_POLL_MS)
+        else:
+            self._first_submit()
 
     def _poll_warm(self) -> None:
         """On the page's event loop, every `WARM_POLL_MS`: once the app's warm-up has
