@@ -310,11 +310,9 @@ def test_websocket_origins_are_limited_to_the_served_address(app):
     assert own != 403  # let past the origin check (the session token is checked next)
 
 
-def test_a_page_opened_during_the_warm_up_shows_the_map_once_it_ends(driver):
-    """A page that connects while the server warms up says so, and draws the home map
-    as soon as the warm-up ends: it waits on its own event loop (`_Session._poll_warm`),
-    not for a callback from the warm-up thread into a document the server may still be
-    attaching (which was lost now and then: "starting" forever)."""
+def _held_warm_up_app():
+    """A 64 x 64 demo app whose warm-up waits in its first computation for ``release``
+    (``entered`` set once it waits there)."""
     from sweep.cli import demo_inputs
     from sweep.explore import app as explore_app
 
@@ -329,6 +327,16 @@ def test_a_page_opened_during_the_warm_up_shows_the_map_once_it_ends(driver):
         return compute(*args, **kw)
 
     app.template.compute = held
+    return app, entered, release
+
+
+def test_a_page_opened_during_the_warm_up_shows_the_map_once_it_ends(driver):
+    """A page that connects while the server warms up says so, and draws the home map
+    as soon as the warm-up ends: once connected it waits on its own event loop
+    (`_Session._loaded`, `_poll_warm`),
+    not for a callback from the warm-up thread into a document the server may still be
+    attaching (which was lost now and then: "starting" forever)."""
+    app, entered, release = _held_warm_up_app()
     app.serve(port=0)
     try:
         assert entered.wait(30) and app.warming
@@ -354,19 +362,7 @@ def test_a_map_ready_before_the_browser_connects_still_reaches_the_page():
     picture it guards against (status and numbers shown, no image) was reproduced only
     by ``benchmarks/explore.py``'s forced scene in a fresh browser (3 of 3 runs before
     the change, 0 of 3 after), not by this smaller case."""
-    from sweep.cli import demo_inputs
-    from sweep.explore import app as explore_app
-
-    scene, grid, kwargs = demo_inputs(64)
-    app = explore_app.ExplorerApp(scene, grid, resolution=64, **kwargs)
-    entered, release = threading.Event(), threading.Event()
-    compute = app.template.compute
-
-    def held(*args, **kw):
-        entered.set()
-        assert release.wait(60)
-        return compute(*args, **kw)
-
+    app, entered, release = _held_warm_up_app()
     class ReleasedOnCreation(app.session_class):
         def __init__(self, owner):
             super().__init__(owner)  # on the server, during the page's HTTP request
@@ -375,7 +371,6 @@ def test_a_map_ready_before_the_browser_connects_still_reaches_the_page():
             while owner.warming and time.monotonic() < end:
                 time.sleep(0.01)
 
-    app.template.compute = held
     app.session_class = ReleasedOnCreation
     app.serve(port=0)
     fresh = _fresh_driver()

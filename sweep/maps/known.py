@@ -56,16 +56,8 @@ _SMALLEST = 16
 
 
 def settled(labels: np.ndarray, radius: int = KNOWN_RADIUS) -> np.ndarray:
-    """The labels (>= 0) of the cells whose neighbours within ``radius`` rows and
-    columns all hold the same label; -1 elsewhere (cells at the map's edge too).
-
-    Parameters
-    ----------
-    labels : ndarray, shape (n0, n1), int
-        Attractor indices, negative where unknown.
-    radius : int
-        >= 0.
-    """
+    """The settled cells of ``labels``: `sweep._known.agreeing` at the known-cells
+    radius (`KNOWN_RADIUS` rows and columns by default); -1 elsewhere."""
     return agreeing(labels, radius)
 
 
