@@ -28,6 +28,7 @@ SCRIPT = textwrap.dedent("""
     import json, os, sys, time
     import sweep
     from sweep import kernels
+    open(sys.argv[2], "w").close()  # imported: ready to start
     while not os.path.exists(sys.argv[1]):
         time.sleep(0.005)
     ds = sweep.run(sweep.Scene(model="linear"), sweep.Grid(theta0=[0.1]), t_end=1.0,
@@ -45,13 +46,17 @@ def test_two_processes_compiling_one_kernel_at_once_share_the_cache(tmp_path):
     env.pop("NUMBA_CACHE_DIR", None)  # numba's files beside the modules, in tmp_path
     start = tmp_path / "start"
 
-    def launch():
-        return subprocess.Popen([sys.executable, "-c", SCRIPT, str(start)], env=env,
+    def launch(k):
+        return subprocess.Popen([sys.executable, "-c", SCRIPT, str(start),
+                                 str(tmp_path / f"ready{k}")], env=env,
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
-    both = [launch(), launch()]
-    time.sleep(0.5)  # both importing sweep; then they compile together
-    start.touch()
+    both = [launch(0), launch(1)]
+    end = time.monotonic() + 120  # both have imported sweep (a fixed sleep was too short
+    while not all((tmp_path / f"ready{k}").exists() for k in (0, 1)):  # on a busy CI)
+        assert time.monotonic() < end and all(p.poll() is None for p in both)
+        time.sleep(0.01)
+    start.touch()  # then they compile together
     reports = []
     for process in both:
         out, err = process.communicate(timeout=300)
@@ -60,7 +65,7 @@ def test_two_processes_compiling_one_kernel_at_once_share_the_cache(tmp_path):
     assert reports[0]["theta"] == reports[1]["theta"]
     assert all(r["misses"] == 1 and r["hits"] == 0 for r in reports)  # both compiled
 
-    later = launch()
+    later = launch(2)
     out, err = later.communicate(timeout=300)  # start exists: runs at once
     assert later.returncode == 0, err
     report = json.loads(out.splitlines()[-1])
