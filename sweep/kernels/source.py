@@ -214,15 +214,22 @@ _HOISTED = re.compile(r"(hoisted_values = np\.empty\(\(\d+, BLOCK\))\)")
 _FLIP_TIME = re.compile(r"^(\s*at_\w+ = t0 \+ \(.*\)) \* dt$", re.MULTILINE)
 
 
+def _single_module(text: str, vecmath_import: str, keep) -> str:
+    """A generated CPU module's first float32 steps (`sweep.kernels.precision`): the
+    float32 sine imported in place of ``vecmath_import``, ``F = np.float32``, every
+    float literal and every parameter load but those of ``keep`` as float32."""
+    text = text.replace(vecmath_import, HEADER, 1).replace(
+        "import numpy as np\n", "import numpy as np\nF = np.float32\n", 1)
+    return single_loads(single(text), keep)
+
+
 def _system_single(spec: SystemSpec, text: str) -> str:
     """A system's CPU module in float32 (`sweep.kernels.precision`, as the single
     pendulum's): float literals and parameter loads as float32, the float32 sine, the
     step in float32 on a float64 clock; the angles, ``2 pi``, the flip's thresholds
     and times, and the observables' accumulators stay float64."""
     angles = {c.symbol for c in spec.system.coordinates if c.angular}
-    text = text.replace(_SYSTEM_VECMATH_IMPORT, HEADER, 1).replace(
-        "import numpy as np\n", "import numpy as np\nF = np.float32\n", 1)
-    text = clock(single_loads(single(text), angles))
+    text = clock(_single_module(text, _SYSTEM_VECMATH_IMPORT, angles))
     text = text.replace("F(math.pi)", "math.pi").replace("TWO_PI = F(2.0) * math.pi",
                                                          "TWO_PI = 2.0 * math.pi")
     text = _HOISTED.sub(r"\1, dtype=np.float32)", text)
@@ -234,10 +241,8 @@ def _precision(spec: KernelSpec, text: str) -> str:
     its literals and sine in float32 (`sweep.kernels.precision`)."""
     if spec.dtype == "float64":
         return _tidy(text)
-    text = text.replace(_VECMATH_IMPORT, HEADER, 1).replace(
-        "import numpy as np\n", "import numpy as np\nF = np.float32\n", 1)
-    text = clock(single_drive_values(single_loads(single(text), float64_symbols(
-        spec.model, spec.effects))))
+    text = clock(single_drive_values(_single_module(
+        text, _VECMATH_IMPORT, float64_symbols(spec.model, spec.effects))))
     # 2 pi for the observables (turns of the float64 angle): kept float64
     text = text.replace("TWO_PI = F(2.0) * F(math.pi)", "TWO_PI = 2.0 * math.pi")
     return _tidy(text)
