@@ -190,7 +190,8 @@ def _system_python(system: System) -> list[str]:
     """Lines of Python that make ``system`` (as ``system``)."""
     arguments = ", ".join(f"{k}={v!r}" for k, v in _constructor(system).items())
     if system.effects:
-        arguments += f", effects=({''.join(f'sweep.{e!r}, ' for e in system.effects)})"
+        effects = ", ".join(f"sweep.{e!r}" for e in system.effects)
+        arguments += f", effects=({effects}{',' if len(system.effects) == 1 else ''})"
     if isinstance(system, DeclaredSystem):
         return ["from sweep.physics import Coordinate, Parameter, SystemDeclaration",
                 *_declaration_python(system.declaration),
