@@ -24,10 +24,31 @@ cache._serialise_numba_index()  # as build() does (conftest.py has too)
 
 #: One process: wait for the start file, run the linear model's one-trajectory kernel,
 #: report the result and whether the kernel was compiled or loaded from the disk cache.
+#: With a barrier (``argv[3:5]``: this process's file and the other's), a generated
+#: kernel's first look into numba's cache waits, once it missed, until the other process
+#: missed too: both then compile at once whatever the load (on a busy CI one process
+#: could otherwise start so late that it found the other's kernel on disk).
 SCRIPT = textwrap.dedent("""
     import json, os, sys, time
+    from numba.core import caching
     import sweep
     from sweep import kernels
+
+    if len(sys.argv) > 3:
+        mine, other = sys.argv[3:5]
+        load = caching.Cache.load_overload
+
+        def load_overload(self, sig, target_context):
+            data = load(self, sig, target_context)
+            generated = "BLOCK" in getattr(self._py_func, "__globals__", {})
+            if data is None and generated and not os.path.exists(mine):
+                open(mine, "w").close()
+                end = time.monotonic() + 120
+                while not os.path.exists(other) and time.monotonic() < end:
+                    time.sleep(0.005)
+            return data
+
+        caching.Cache.load_overload = load_overload
     open(sys.argv[2], "w").close()  # imported: ready to start
     while not os.path.exists(sys.argv[1]):
         time.sleep(0.005)
@@ -46,10 +67,12 @@ def test_two_processes_compiling_one_kernel_at_once_share_the_cache(tmp_path):
     env.pop("NUMBA_CACHE_DIR", None)  # numba's files beside the modules, in tmp_path
     start = tmp_path / "start"
 
-    def launch(k):
+    def launch(k, barrier=True):
+        missed = [str(tmp_path / f"missed{k}"), str(tmp_path / f"missed{1 - k}")]
         return subprocess.Popen([sys.executable, "-c", SCRIPT, str(start),
-                                 str(tmp_path / f"ready{k}")], env=env,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                 str(tmp_path / f"ready{k}")] + (missed if barrier else []),
+                                env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True)
 
     both = [launch(0), launch(1)]
     end = time.monotonic() + 120  # both have imported sweep (a fixed sleep was too short
@@ -64,8 +87,9 @@ def test_two_processes_compiling_one_kernel_at_once_share_the_cache(tmp_path):
         reports.append(json.loads(out.splitlines()[-1]))
     assert reports[0]["theta"] == reports[1]["theta"]
     assert all(r["misses"] == 1 and r["hits"] == 0 for r in reports)  # both compiled
+    assert all((tmp_path / f"missed{k}").exists() for k in (0, 1))  # the barrier held
 
-    later = launch(2)
+    later = launch(2, barrier=False)
     out, err = later.communicate(timeout=300)  # start exists: runs at once
     assert later.returncode == 0, err
     report = json.loads(out.splitlines()[-1])
