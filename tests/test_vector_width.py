@@ -212,6 +212,57 @@ def test_float32_kernels_fill_the_register_and_give_the_same_bits(monkeypatch, t
     assert _user_loop_registers() == before  # the option was reset
 
 
+
+def test_llvm_options_change_the_machine_code_inside_and_are_reset_after():
+    """`vectors._llvm_options` sets LLVM's option while its block runs (the machine
+    code of a function emitted then differs: no machine scheduler) and resets it after
+    (the same function's code is again what it was), so the user's code compiled
+    afterwards is untouched."""
+    from numba import njit
+
+    from sweep.kernels import vecmath
+
+    @njit
+    def chains(x, out):  # independent sines: a scheduler has work to reorder
+        for i in range(x.shape[0]):
+            a, b = vecmath.sin(x[i]), vecmath.sin(2.0 * x[i])
+            out[i] = a * b + vecmath.sin(a - b)
+
+    chains(np.linspace(0.0, 1.0, 64), np.empty(64))
+    signature = chains.signatures[0]
+    before = chains.inspect_asm(signature)  # emitted anew by each call
+    with vectors._llvm_options(("--enable-misched=false",)):
+        inside = chains.inspect_asm(signature)
+    assert inside != before
+    assert chains.inspect_asm(signature) == before
+
+
+def test_system_kernels_without_the_machine_scheduler_give_the_same_bits(monkeypatch):
+    """A system's kernels compile without LLVM's machine scheduler (faster:
+    `vectors._llvm_options`), but for the tangent dynamics; a scheduler only reorders
+    operations, so the double pendulum's chaotic trajectories (where one differing ulp
+    grows visibly over 5 s) are the same bits either way, in blocks of SIMD lanes."""
+    from sweep.engine_systems import prepare_system
+
+    source_module = sys.modules["sweep.kernels.source"]
+    system = sweep.DoublePendulum()
+    grid = sweep.Grid(theta1_0=np.linspace(-3.0, 3.0, 8), theta2_0=np.linspace(-2.5, 2.5, 8))
+    kw = dict(t_end=5.0, dt=0.005)
+
+    def module_text(**more):
+        spec = prepare_system(system, grid, **kw, **more)[1]
+        assert spec.block > 1  # lanes, not one trajectory alone
+        return sweep.kernels.source(spec)
+
+    assert module_text(observe=("final",)).rstrip().endswith(", scheduler=False)")
+    assert "scheduler" not in module_text(observe=("final", "lyapunov"))
+    runs = {}
+    for scheduler in (False, True):
+        monkeypatch.setattr(source_module, "SYSTEM_SCHEDULER", scheduler)
+        runs[scheduler] = sweep.run(system, grid, observe=("final",), progress=False, **kw)
+    for name, variable in runs[False].data_vars.items():
+        assert variable.values.tobytes() == runs[True][name].values.tobytes(), name
+
 #: The outputs' bits of every kind of kernel that reads `sweep.kernels.vecmath`, as a
 #: digest per workload: the sine itself (sin, cos, sincos, sincos_quadrant of
 #: arguments up to 1e4), the

@@ -83,6 +83,11 @@ _VECMATH_IMPORT = ("from sweep.kernels.vecmath import cos as vcos, fma as vfma, 
 #: read the same statements, so the pairing keeps them on one trajectory).
 _SYSTEM_VECMATH_IMPORT = _VECMATH_IMPORT.replace("sincos as vsincos",
                                                  "sincos_quadrant as vsincos")
+#: Whether a system's CPU kernels compile with LLVM's machine instruction scheduler
+#: (`sweep.kernels.vectors._llvm_options` says why not), but for those with the tangent
+#: dynamics (``lyapunov``), which keep it, as the single pendulum's kernels do. Set to
+#: True to compare: the results are the same bits either way.
+SYSTEM_SCHEDULER = False
 
 
 def source(spec: KernelSpec) -> str:
@@ -189,12 +194,14 @@ JIT = {jit}
 '''
 
 
-def _compile_with(single: bool) -> str:
+def _compile_with(single: bool, scheduler: bool = True) -> str:
     """The module's last line: every dispatcher above compiles with the configured SIMD
-    width and alignment (`sweep.kernels.vectors`)."""
+    width and alignment (`sweep.kernels.vectors`), and without LLVM's machine
+    instruction scheduler where ``scheduler`` is False (`SYSTEM_SCHEDULER`)."""
     width = vectors.resolved(_config.vector_width())
     return f"compile_with(globals(), {width}, {_config.LANE_ALIGNMENT}, " \
-        f"{single and _config.SINGLE_BY_NARROWEST})\n"
+        f"{single and _config.SINGLE_BY_NARROWEST}" \
+        + ("" if scheduler else ", scheduler=False") + ")\n"
 
 
 def system_module(spec: SystemSpec) -> str:
@@ -207,7 +214,10 @@ def system_module(spec: SystemSpec) -> str:
     text = system_source(spec, header)
     if spec.dtype == "float32":
         text = _system_single(spec, text)
-    return _tidy(text) + _compile_with(spec.dtype == "float32")
+    # the tangent dynamics' loop ran slower without the scheduler: 124 against 143 M
+    # trajectory-steps/s on the double pendulum (AMD EPYC Zen 5, 2 threads)
+    scheduler = SYSTEM_SCHEDULER or "lyapunov" in spec.observe
+    return _tidy(text) + _compile_with(spec.dtype == "float32", scheduler)
 
 
 _HOISTED = re.compile(r"(hoisted_values = np\.empty\(\(\d+, BLOCK\))\)")

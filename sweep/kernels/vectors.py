@@ -94,25 +94,29 @@ def describe(setting: str | int) -> str:
 
 
 def compile_with(namespace: dict, width: int | None, alignment: int = 32,
-                 by_narrowest: bool = False) -> None:
+                 by_narrowest: bool = False, scheduler: bool = True) -> None:
     """Make every numba dispatcher defined in a generated kernel module (``namespace``,
     its globals) compile with ``"prefer-vector-width"="<width>"`` on its functions
     (none for ``width=None``), its arrays (``np.empty`` in the kernel: the lanes)
-    aligned to ``alignment`` bytes (numba's default: 32), and, if ``by_narrowest``,
-    with LLVM's loop vectoriser counting lanes by the loop's narrowest type.
+    aligned to ``alignment`` bytes (numba's default: 32), if ``by_narrowest``, with
+    LLVM's loop vectoriser counting lanes by the loop's narrowest type, and without
+    LLVM's machine instruction scheduler if not ``scheduler`` (`_llvm_options`).
 
     Called by the generated module itself, last.
     """
     install()
     from numba.core.dispatcher import Dispatcher
 
+    options = ((("--vectorizer-maximize-bandwidth",) if by_narrowest else ())
+               + (() if scheduler else ("--enable-misched=false",)))
     module = namespace["__name__"]
     for value in list(namespace.values()):
         if isinstance(value, Dispatcher) and value.py_func.__module__ == module:
-            _compile_with(value, (width, alignment), by_narrowest)
+            _compile_with(value, (width, alignment), options)
 
 
-def _compile_with(dispatcher, options: tuple[int | None, int], by_narrowest: bool) -> None:
+def _compile_with(dispatcher, options: tuple[int | None, int],
+                  llvm_options: tuple[str, ...]) -> None:
     compile_ = dispatcher.compile
 
     @functools.wraps(compile_)
@@ -120,9 +124,9 @@ def _compile_with(dispatcher, options: tuple[int | None, int], by_narrowest: boo
         previous = getattr(_state, "options", None)
         _state.options = options
         try:
-            if not by_narrowest:
+            if not llvm_options:
                 return compile_(sig)
-            with _by_narrowest_type():
+            with _llvm_options(llvm_options):
                 return compile_(sig)
         finally:
             _state.options = previous
@@ -130,32 +134,52 @@ def _compile_with(dispatcher, options: tuple[int | None, int], by_narrowest: boo
     dispatcher.compile = compile  # numba calls self.compile(sig) for a new signature
 
 
+#: Each LLVM option `_llvm_options` sets, and the value that resets it (LLVM's default).
+_RESETS = {"--vectorizer-maximize-bandwidth": "--vectorizer-maximize-bandwidth=false",
+           "--enable-misched=false": "--enable-misched=true"}
+
+
 @contextlib.contextmanager
-def _by_narrowest_type():
-    """LLVM's ``-vectorizer-maximize-bandwidth`` while the block runs: the loop
-    vectoriser may then give a loop as many lanes as a register holds of its narrowest
-    type (16 float32 in 512 bits), where it otherwise stops at its widest type's count
-    (8 float64). A float32 kernel keeps the nonlinear pendulum's angle and the sine's
-    reduction in float64 (`sweep.kernels.precision`), so without it the float32 lanes
-    filled half a register: 349 against 518 M trajectory-steps/s on the full scene
-    (AMD EPYC Zen 5, measured side by side; the same bits). The option is global to
-    LLVM, so it is set and reset while numba's compiler lock is held: no other
-    compilation of the process runs meanwhile, and reset only when the outermost
-    compilation (the kernel's, inside which its helpers compile) is done."""
+def _llvm_options(options: tuple[str, ...]):
+    """LLVM's command-line ``options`` while the block runs (each a key of `_RESETS`).
+
+    ``--vectorizer-maximize-bandwidth``: the loop vectoriser may give a loop as many
+    lanes as a register holds of its narrowest type (16 float32 in 512 bits), where it
+    otherwise stops at its widest type's count (8 float64). A float32 kernel keeps the
+    nonlinear pendulum's angle and the sine's reduction in float64
+    (`sweep.kernels.precision`), so without it the float32 lanes filled half a
+    register: 349 against 518 M trajectory-steps/s on the full scene (AMD EPYC Zen 5,
+    measured side by side; the same bits).
+
+    ``--enable-misched=false``: no machine instruction scheduler before register
+    allocation. A system's lane loop (`sweep.kernels.system`: four inlined stages of
+    several sines and a mass-matrix solve, one 644-instruction loop body on 512-bit
+    registers) is scheduled by it for parallelism into more live registers than the
+    32 the CPU has: 145 spills and reloads per iteration, against 35 in GCC's code of
+    the same C kernel. Left in the order of its source, the double pendulum ran at 304
+    against 285 M trajectory-steps/s (AMD EPYC Zen 5, 2 threads, side by side in one
+    process, the same bits: a scheduler reorders, it does not change an operation).
+
+    The options are global to LLVM, so they are set and reset while numba's compiler
+    lock is held: no other compilation of the process runs meanwhile, and reset only
+    when the outermost compilation (the kernel's, inside which its helpers compile) is
+    done."""
     import llvmlite.binding as llvm
     from numba.core.compiler_lock import global_compiler_lock
 
     with global_compiler_lock:
-        depth = getattr(_state, "narrowest", 0)  # the kernel's helpers compile inside it
+        depth = getattr(_state, "llvm_depth", 0)  # the kernel's helpers compile inside it
         if depth == 0:
-            llvm.set_option("", "--vectorizer-maximize-bandwidth")
-        _state.narrowest = depth + 1
+            for option in options:
+                llvm.set_option("", option)
+        _state.llvm_depth = depth + 1
         try:
             yield
         finally:
-            _state.narrowest = depth
+            _state.llvm_depth = depth
             if depth == 0:
-                llvm.set_option("", "--vectorizer-maximize-bandwidth=false")
+                for option in options:
+                    llvm.set_option("", _RESETS[option])
 
 
 def install() -> None:
