@@ -15,12 +15,13 @@ import xarray as xr
 
 from . import _config
 from .execution import RunContext, execute
+from .execution.local import allocate
 from .execution.progress import progress_bar
 from .grid import ParameterRows
 from .io import device_attributes, origin_attributes, run_attributes, status_variable
 from .kernels import failure_summary, status_counts
-from .kernels.network import NETWORK_OBSERVABLES, NetworkSpec, network_outputs
-from .kernels.system import SystemSpec, n_outputs
+from .kernels.network import NETWORK_OBSERVABLES, NetworkSpec
+from .kernels.system import SystemSpec
 from .observables import STROBE_SAMPLES
 from .physics.network import NETWORK_PARAMETERS, SwingNetwork
 from .physics.system import System, system_parameters
@@ -237,16 +238,9 @@ def run_system(system: System, grid: ParameterRows, *, progress=None, client=Non
 
 
 def allocate_system(spec, settings, n: int) -> dict[str, np.ndarray]:
-    """The arrays a system's kernel writes for ``n`` trajectories: ``out``, ``status``
-    and, with ``save_every``, ``saved`` (every coordinate, then every velocity)."""
-    network = isinstance(spec, NetworkSpec)
-    m = spec.n_nodes if network else len(spec.system.coordinates)
-    width = network_outputs(spec) if network else n_outputs(spec)
-    arrays = {"out": np.empty((n, width)), "status": np.empty(n, dtype=np.int8)}
-    if settings.save_every is not None:
-        n_saved = settings.n_steps // settings.save_every + 1
-        arrays["saved"] = np.full((n, 2 * m, n_saved), np.nan)
-    return arrays
+    """The arrays a system's or network's kernel writes for ``n`` trajectories
+    (`sweep.execution.local.allocate`, which a Dask worker calls too)."""
+    return allocate(spec, settings, n)
 
 
 def system_dataset(system, grid, settings, spec, arrays: dict) -> xr.Dataset:

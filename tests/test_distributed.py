@@ -114,6 +114,24 @@ def _worker_kernel_state(spec):
             "compiled": sum(stats.cache_misses.values())}
 
 
+
+def test_systems_on_the_cluster_are_identical(client):
+    """A double pendulum (chaotic starts, where one differing ulp grows visibly over
+    5 s) and a swing network with saved samples, chunked over the two worker
+    processes, give the local run's bits (their kernels are the ones
+    tests/test_vector_width.py and tests/test_networks.py compile)."""
+    grid = sweep.Grid(theta1_0=np.linspace(-3.0, 3.0, 8), theta2_0=np.linspace(-2.5, 2.5, 8))
+    local, remote = _both(client, sweep.DoublePendulum(), grid, t_end=5.0, dt=0.005,
+                          observe=("final",), chunk_size=16)
+    _same(local, remote)
+    network = sweep.SwingNetwork([(0, 1), (1, 2), (2, 3), (3, 4), (4, 0), (1, 3)],
+                                 power=[2.0, -1.0, 0.5, -0.5, -1.0], coupling=8.0)
+    grid = sweep.Grid(perturbed_node=[0, 2, 4], delta_theta=np.linspace(-3, 3, 7),
+                      delta_omega=np.linspace(-6, 6, 9))
+    local, remote = _both(client, network, grid, t_end=3.0, dt=0.01,
+                          observe=("final", "synchrony"), save_every=50, chunk_size=40)
+    _same(local, remote)
+
 def test_kernel_is_not_recompiled_per_task(client):
     # a spec no other test uses; the local run puts its machine code in numba's disk cache
     scene = sweep.Scene(model="linear", effects=(sweep.Damping(0.2),))

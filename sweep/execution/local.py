@@ -7,6 +7,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels import build, n_columns
+from ..kernels.network import NetworkSpec, network_outputs
+from ..kernels.system import SystemSpec
+from ..kernels.system import n_outputs as system_outputs
 
 __all__ = ["RunContext", "allocate", "integrate", "run_chunks"]
 
@@ -37,12 +40,20 @@ class RunContext:
 
 def allocate(spec, settings, n: int) -> dict[str, np.ndarray]:
     """The per-trajectory arrays a kernel writes for ``n`` trajectories: ``out``,
-    ``status``, and ``saved`` (with ``save_every``) and ``stats`` (adaptive methods)."""
-    arrays = {"out": np.empty((n, n_columns(spec)), dtype=np.float64),
+    ``status``, and ``saved`` (with ``save_every``: the single pendulum's angle and
+    velocity; a system's every coordinate, then every velocity; a network's every
+    node's angles, then velocities) and ``stats`` (adaptive methods)."""
+    if isinstance(spec, NetworkSpec):
+        width, n_saved_rows = network_outputs(spec), 2 * spec.n_nodes
+    elif isinstance(spec, SystemSpec):
+        width, n_saved_rows = system_outputs(spec), 2 * len(spec.system.coordinates)
+    else:
+        width, n_saved_rows = n_columns(spec), 2
+    arrays = {"out": np.empty((n, width), dtype=np.float64),
               "status": np.empty(n, dtype=np.int8)}
     if settings.save_every is not None:
         n_saved = settings.n_steps // settings.save_every + 1
-        arrays["saved"] = np.full((n, 2, n_saved), np.nan)
+        arrays["saved"] = np.full((n, n_saved_rows, n_saved), np.nan)
     if settings.adaptive:
         arrays["stats"] = np.zeros((n, 2), dtype=np.int64)
     return arrays
