@@ -20,7 +20,7 @@ from .execution.progress import progress_bar
 from .grid import ParameterRows
 from .io import device_attributes, origin_attributes, run_attributes, status_variable
 from .kernels import failure_summary, status_counts
-from .kernels.network import NETWORK_OBSERVABLES, NetworkSpec
+from .kernels.network import NETWORK_OBSERVABLES, NetworkSpec, network_arguments
 from .kernels.system import SystemSpec
 from .observables import STROBE_SAMPLES
 from .physics.network import NETWORK_PARAMETERS, SwingNetwork
@@ -229,7 +229,9 @@ def run_system(system: System, grid: ParameterRows, *, progress=None, client=Non
     arrays = allocate_system(spec, settings, n)
     todo = list(grid.chunks(chunk_size))
     with progress_bar(progress, n) as bar:
-        execute(RunContext(system, grid, spec, settings), todo, arrays,
+        execute(RunContext(system, grid, spec, settings,
+                           network_arguments(spec) if isinstance(spec, NetworkSpec) else ()),
+                todo, arrays,
                 lambda start, stop: bar.update(stop - start), client=client)
     failures = failure_summary(status_counts(arrays["status"]), n)
     if failures:

@@ -13,27 +13,29 @@ import sweep
 P, K, ALPHA = 1.0, 4.0, 0.3
 
 
-def test_two_nodes_are_one_pendulum_with_torque_cell_by_cell():
+def _two_nodes_against_the_pendulum(power, coupling, damping):
     """theta1'' = -P - a theta1' + K sin(theta2 - theta1), theta2'' = P - a theta2' +
     K sin(theta1 - theta2): delta = theta2 - theta1 obeys delta'' = 2P - a delta' -
     2K sin(delta), the single pendulum with g/L = 2K, damping a and torque 2P. The
     synchronous state has sin(delta*) = P / K. Perturbing node 1 by (d_theta, d_omega)
     starts delta at (delta* + d_theta, d_omega); the network's locked/running map must
     be the pendulum's, cell by cell, and delta must follow the pendulum's angle."""
-    network = sweep.SwingNetwork([(0, 1)], power=[-P, P], damping=ALPHA, coupling=K)
-    delta_star = math.asin(P / K)
+    network = sweep.SwingNetwork([(0, 1)], power=[-power, power], damping=damping,
+                                 coupling=coupling)
+    delta_star = math.asin(power / coupling)
     np.testing.assert_allclose(np.diff(network.synchronous_state()), delta_star, rtol=1e-14)
     d_theta = np.linspace(-np.pi, np.pi, 41)
     d_omega = np.linspace(-8.0, 8.0, 41)
     ds = sweep.run(network, sweep.Grid(perturbed_node=[1], delta_theta=d_theta,
                                        delta_omega=d_omega),
                    t_end=100.0, dt=0.01, observe=("final", "synchrony"))
-    scene = sweep.Scene(gravity=2 * K, length=1.0,
-                        effects=(sweep.Damping(ALPHA), sweep.Torque(2 * P)))
+    scene = sweep.Scene(gravity=2 * coupling, length=1.0,
+                        effects=(sweep.Damping(damping), sweep.Torque(2 * power)))
     pendulum = sweep.run(scene, sweep.Grid(theta0=delta_star + d_theta, omega0=d_omega),
                          t_end=100.0, dt=0.01, observe=("final",))
-    # locked: the relative frequency has decayed (e^{-a t / 2} ~ 3e-7 of its start at
-    # t = 100); running: it circulates at about 2P / a = 6.7 rad/s. 0.1 is between.
+    # locked: the relative frequency has decayed (e^{-a t / 2} <= 4e-6 of its start at
+    # t = 100 for the a >= 0.25 used here); running: it circulates at about 2P / a >= 6
+    # rad/s. 0.1 is between.
     locked_network = sweep.maps.synchronized(ds).values[0] == 1
     locked_pendulum = np.abs(pendulum.omega_final.values) <= 0.1
     assert 0.2 < locked_pendulum.mean() < 0.8  # both kinds of cell are on the map
@@ -43,6 +45,33 @@ def test_two_nodes_are_one_pendulum_with_torque_cell_by_cell():
     # damped (non-chaotic) flow: ~1e-11 rad measured; 1e-8 leaves room and still
     # rejects any error in a term (a wrong factor 2 moves delta by order 1)
     np.testing.assert_allclose(delta, pendulum.theta_final.values, rtol=0, atol=1e-8)
+
+
+def test_two_nodes_are_one_pendulum_with_torque_cell_by_cell():
+    _two_nodes_against_the_pendulum(P, K, ALPHA)
+
+
+def test_every_network_runs_the_kernel_compiled_once():
+    """The network is the CPU kernel's data, not its code: networks of 2 and 12 nodes
+    have the same kernel text, and a second network (other power, coupling and
+    damping) runs the kernel built for the first (a memo hit: nothing is generated or
+    compiled) and still gives its own pendulum's map cell by cell."""
+    from sweep.engine_systems import prepare_system
+    from sweep.kernels import cache, source
+
+    grid = sweep.Grid(perturbed_node=[1], delta_theta=np.linspace(-3, 3, 41),
+                      delta_omega=np.linspace(-8, 8, 41))
+    ring = sweep.SwingNetwork([(k, (k + 1) % 12) for k in range(12)],
+                              power=[1.0, -1.0] * 6, coupling=5.0)
+    specs = [prepare_system(network, grid, t_end=1.0, dt=0.01,
+                            observe=("final", "synchrony"))[1]
+             for network in (sweep.SwingNetwork([(0, 1)], power=[-P, P]), ring)]
+    assert specs[0] != specs[1] and specs[0].code == specs[1].code
+    assert source(specs[0].code) == source(specs[1].code)
+    _two_nodes_against_the_pendulum(P, K, ALPHA)
+    built = cache._build.cache_info()
+    _two_nodes_against_the_pendulum(0.8, 3.0, 0.25)
+    assert cache._build.cache_info().misses == built.misses
 
 
 def test_synchronous_state_solves_the_power_flow_equations():

@@ -16,8 +16,9 @@ __all__ = ["RunContext", "allocate", "integrate", "run_chunks"]
 
 class RunContext:
     """What every chunk needs: scene, grid, kernel spec and time settings, and the
-    kernel's extra arguments (``known``: `sweep._known.known_arguments` for a spec with
-    ``known_cells``, else ``()``).
+    kernel's extra arguments after ``saved`` (``known``: `sweep._known.known_arguments`
+    for a spec with ``known_cells``, a swing network's arrays
+    (`sweep.kernels.network.network_arguments`) on the CPU, else ``()``).
 
     A plain picklable object (a Dask task carries it); `table` gives a chunk's
     parameter rows.

@@ -29,6 +29,7 @@ import warnings
 from pathlib import Path
 
 from .. import _config
+from .network import NetworkSpec
 from .source import source
 from .spec import KernelSpec
 
@@ -149,6 +150,8 @@ def build(spec: KernelSpec):
         Once per process, when the cache folder could be changed by another user (see
         the module's docstring); kernels are then built in a private folder.
     """
+    if isinstance(spec, NetworkSpec):  # its CPU kernel takes the network as arguments
+        spec = spec.code
     return _build(spec, _config.vector_width(), _config.LANE_ALIGNMENT,
                   _config.SINGLE_BY_NARROWEST)
 

@@ -5,31 +5,45 @@ edges and the generated code (and its compile time) does not grow with the netwo
 
 Kernel contract (`sweep.kernels.source`'s fixed-step contract)::
 
-    kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
+    kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved,
+           src, dst, weight, power, sync)
 
 params : float64[n, 5]            perturbed_node, delta_theta, delta_omega, damping,
                                   coupling (`sweep.physics.network.NETWORK_PARAMETERS`)
 out : float64[n, n_outputs(spec)] ``final``: theta_final then omega_final per node;
                                   ``synchrony``: frequency_spread, order_parameter
 saved : float64[n, 2 N, n_saved]  every node's theta, then every omega (``save``)
+src, dst : int64[E]               the edges' nodes, ``src < dst`` (`network_arguments`)
+weight : float64[E]               their weights A_ij
+power : float64[N]                every node's P_i [1/s^2]
+sync : float64[N]                 the synchronous state's phases [rad]
 
 Trajectory ``i`` starts at the synchronous state (every omega 0) with node
 ``perturbed_node`` moved by ``(delta_theta, delta_omega)``. The edge sums run in a
 fixed order (the edges' row-major order), so the results do not depend on blocks,
 chunks or threads.
+
+The network is data, not code: the CPU kernel's source (`network_source`) depends only
+on the observables, saving, method, block and precision, so every network of a study
+(another topology, a repaired line, other powers) runs the kernel compiled once
+(`NetworkSpec.code`). The GPU kernel (`network_cuda_source`) holds the network as
+constants of its module.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
+
+import numpy as np
 
 from .. import methods as _methods
 from .lanes import blocks_head, indent
 from .spec import Status, check_block
 from .steppers import fused
 
-__all__ = ["NETWORK_OBSERVABLES", "NetworkSpec", "network_cuda_source", "network_outputs",
-           "network_source"]
+__all__ = ["NETWORK_ARGUMENTS", "NETWORK_OBSERVABLES", "NetworkSpec", "network_arguments",
+           "network_cuda_source", "network_outputs", "network_source"]
 
 NL = "\n"
 
@@ -79,12 +93,40 @@ class NetworkSpec:
     def n_nodes(self) -> int:
         return len(self.power)
 
+    @property
+    def code(self) -> NetworkSpec:
+        """What keys the CPU kernel (`sweep.kernels.build`): this spec without the
+        network, which the kernel takes as arguments (`network_arguments`); itself on
+        the GPU, whose kernel holds the network as constants."""
+        if self.device != "cpu":
+            return self
+        return dataclasses.replace(self, edges=(), power=(), synchronous=())
+
     def describe(self) -> str:
         """A one-line description for the generated module's docstring."""
-        return (f"swing network of {self.n_nodes} nodes and {len(self.edges)} edges, "
+        size = (f" of {self.n_nodes} nodes and {len(self.edges)} edges"
+                if self.device != "cpu" else "")
+        return (f"swing network{size}, "
                 f"observe={self.observe!r}, save={self.save!r}, method={self.method!r}, "
                 f"block={self.block!r}"
                 + (f", device={self.device!r}" if self.device != "cpu" else ""))
+
+
+#: The CPU kernel's arguments after ``saved`` (the module docstring).
+NETWORK_ARGUMENTS = ", src, dst, weight, power, sync"
+
+
+def network_arguments(spec: NetworkSpec) -> tuple[np.ndarray, ...]:
+    """The network as the CPU kernel's arguments ``(src, dst, weight, power, sync)``
+    (`NETWORK_ARGUMENTS`); ``()`` on the GPU."""
+    if spec.device != "cpu":
+        return ()
+    edges = spec.edges
+    return (np.array([int(e[0]) for e in edges], dtype=np.int64),
+            np.array([int(e[1]) for e in edges], dtype=np.int64),
+            np.array([float(e[2]) for e in edges], dtype=np.float64),
+            np.array(spec.power, dtype=np.float64),
+            np.array(spec.synchronous, dtype=np.float64))
 
 
 def network_outputs(spec: NetworkSpec) -> int:
@@ -111,18 +153,20 @@ def _stages(method, constants: dict[str, str], *, lanes: bool) -> list[str]:
     over = "for q in range(N):\n" + ("    for j in range(BLOCK):\n        " if lanes
                                       else "    ")
     pad = "        " if lanes else "    "
+    # the CPU kernel's network is its arguments, the GPU's its module's constants
+    given = "alpha, coupling" + (", src, dst, weight, power" if lanes else "")
     stages = []
     for s in range(method.stages):
         row = method.a[s][:s]
         kx = [f"k{j + 1}_th{at}" for j in range(s)]
         kv = [f"k{j + 1}_om{at}" for j in range(s)]
         if s == 0:
-            stages.append("accel(th, om, k1_th, k1_om, alpha, coupling)")
+            stages.append(f"accel(th, om, k1_th, k1_om, {given})")
             continue
         stages.append(
             f"{over}ths{at} = {fused(f'th{at}', row, kx, 'dt', constants)}\n"
             f"{pad}oms{at} = {fused(f'om{at}', row, kv, 'dt', constants)}\n"
-            f"accel(ths, oms, k{s + 1}_th, k{s + 1}_om, alpha, coupling)")
+            f"accel(ths, oms, k{s + 1}_th, k{s + 1}_om, {given})")
     kx = [f"k{j + 1}_th{at}" for j in range(method.stages)]
     kv = [f"k{j + 1}_om{at}" for j in range(method.stages)]
     stages.append(
@@ -132,35 +176,33 @@ def _stages(method, constants: dict[str, str], *, lanes: bool) -> list[str]:
 
 
 def _writes(spec: NetworkSpec, at: str) -> list[str]:
-    """The observables' writes into ``out[i]`` from ``th{at}``, ``om{at}``."""
-    n, writes, col = spec.n_nodes, [], 0
+    """The observables' writes into ``out[i]`` from ``th{at}``, ``om{at}`` (columns
+    in terms of the node count ``N``, so that the text does not depend on it)."""
+    writes, col = [], "0"
     for name in spec.observe:
         if name == "final":
             writes += [f"for q in range(N):\n    out[i, {col} + q] = th{at}\n"
-                       f"    out[i, {col + n} + q] = om{at}"]
-            col += 2 * n
+                       f"    out[i, {col} + N + q] = om{at}"]
+            col = "2 * N"
         else:
             writes += ["spread = 0.0\nsum_cos = 0.0\nsum_sin = 0.0\nfor q in range(N):\n"
                        f"    spread = max(spread, abs(om{at}))\n"
                        f"    sum_cos += vcos(th{at})\n    sum_sin += vsin(th{at})",
                        f"out[i, {col}] = spread",
-                       f"out[i, {col + 1}] = math.sqrt(sum_cos * sum_cos + sum_sin * sum_sin) "
+                       f"out[i, {col} + 1] = math.sqrt(sum_cos * sum_cos + sum_sin * sum_sin) "
                        "/ N"]
-            col += 2
     return writes
 
 
 def network_source(spec: NetworkSpec, header: str) -> str:
-    """The module text: ``header`` (imports and ``JIT``), the network as constants, the
-    accelerations and the kernel."""
+    """The module text: ``header`` (imports and ``JIT``), the accelerations and the
+    kernel, which takes the network as arguments (the module docstring)."""
     method = _method(spec)
     from .vecmath import SIN_RANGE
 
     constants: dict[str, str] = {}
     stages = _stages(method, constants, lanes=True)
-    n = spec.n_nodes
     writes = _writes(spec, "[q, j]")
-    width = network_outputs(spec)
     save_first = save_step = ""
     if spec.save:
         save_first = ("for j in range(n_real):\n    for q in range(N):\n"
@@ -176,34 +218,27 @@ def network_source(spec: NetworkSpec, header: str) -> str:
                       "            saved[i, q, k_save] = math.nan") if spec.save else "pass"
     stage_arrays = NL.join(f"k{s + 1}_th = np.empty((N, BLOCK))\n"
                            f"k{s + 1}_om = np.empty((N, BLOCK))" for s in range(method.stages))
-    edges = spec.edges
     return header + f'''
-N = {n}
-SRC = {_array([int(e[0]) for e in edges], "int64")}
-DST = {_array([int(e[1]) for e in edges], "int64")}
-WEIGHT = {_array([float(e[2]) for e in edges], "float64")}
-POWER = {_array([float(p) for p in spec.power], "float64")}
-SYNC = {_array([float(x) for x in spec.synchronous], "float64")}
-
 
 @njit(inline="always", **JIT)
-def accel(x, v, kx, kv, alpha, coupling):
+def accel(x, v, kx, kv, alpha, coupling, src, dst, weight, power):
     """kx = v; kv = P - alpha v + K sum_edges A sin(x_other - x_self), edge by edge."""
-    for q in range(N):
+    for q in range(power.shape[0]):
         for j in range(BLOCK):
             kx[q, j] = v[q, j]
-            kv[q, j] = vfma(-alpha[j], v[q, j], POWER[q])
-    for e in range(SRC.shape[0]):
-        a = SRC[e]
-        c = DST[e]
-        w = WEIGHT[e]
+            kv[q, j] = vfma(-alpha[j], v[q, j], power[q])
+    for e in range(src.shape[0]):
+        a = src[e]
+        c = dst[e]
+        w = weight[e]
         for j in range(BLOCK):
             f = w * coupling[j] * vsin(x[c, j] - x[a, j])
             kv[a, j] += f
             kv[c, j] -= f
 
 
-{blocks_head(spec.block)}    n = params.shape[0]
+{blocks_head(spec.block, arguments=NETWORK_ARGUMENTS)}    n = params.shape[0]
+    N = power.shape[0]
 {indent(NL.join(constants.values()), 1)}
     th = np.empty((N, BLOCK))
     om = np.empty((N, BLOCK))
@@ -217,7 +252,7 @@ def accel(x, v, kx, kv, alpha, coupling):
         n_real = min(BLOCK, n - base)
         for q in range(N):
             for j in range(BLOCK):
-                th[q, j] = SYNC[q]
+                th[q, j] = sync[q]
                 om[q, j] = 0.0
         for j in range(BLOCK):
             i = min(base + j, n - 1)  # padding lanes repeat the last trajectory
@@ -249,7 +284,7 @@ def accel(x, v, kx, kv, alpha, coupling):
 {indent(NL.join(writes), 4)}
             else:
                 status[i] = {int(Status.ANGLE_OUT_OF_RANGE)} if finite else {int(Status.NONFINITE)}
-                for col in range({width}):
+                for col in range(out.shape[1]):
                     out[i, col] = math.nan
 {indent(failed_samples, 4)}
 '''

@@ -14,7 +14,8 @@ which the grid returns to its synchronous state.
 
 A network is data (the adjacency as a matrix, an edge list or a ``networkx`` graph);
 its kernel loops over its edges (`sweep.kernels.network`), so a step costs time
-linear in the edges and compiling costs the same for 4 nodes or 100. The grid perturbs
+linear in the edges; on the CPU the kernel takes the network as arguments, so it is
+compiled once for every network (4 nodes or 100, any lines and powers). The grid perturbs
 one node at a time from the synchronous state: axes ``perturbed_node`` (its index),
 ``delta_theta`` [rad] and ``delta_omega`` [rad/s], besides ``damping`` and ``coupling``.
 """
