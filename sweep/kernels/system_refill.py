@@ -30,6 +30,7 @@ __all__ = ["system_refill_kernel"]
 
 NL = "\n"
 _STEP = re.compile(r"\bstep\b")  # the block kernel's step count, in the step's times
+_K_STATE = re.compile(r"\bk_state\b")  # the block kernel's state index, in the samples'
 
 
 def system_refill_kernel(spec, parts, finish: str) -> str:
@@ -38,7 +39,8 @@ def system_refill_kernel(spec, parts, finish: str) -> str:
     Parameters
     ----------
     spec : sweep.kernels.system.SystemSpec
-        With ``stop_early`` (``observe == ("flip",)``, no saving) and ``block > 1``.
+        With ``stop_early`` (``observe`` one of `sweep.kernels.system.STOPPING`, no
+        saving) and ``block > 1``.
     parts : sweep.kernels.system._Parts
         Its per-trajectory pieces.
     finish : str
@@ -49,11 +51,18 @@ def system_refill_kernel(spec, parts, finish: str) -> str:
     -------
     str
     """
+    from .system import CATALOGUE_ARGUMENTS
+
     state, symbols = parts.state, parts.symbols
     load = [f"{x} = params[i, {k}]" for k, x in enumerate(state + symbols)]
     load += parts.hoisted + parts.first + ["ks = 0", "finished = False"]
+    if parts.strobe_first:  # an idle lane's copy writes nothing
+        load += ["if live:"] + [indent(line, 1) for line in parts.strobe_first]
     body = [_STEP.sub("ks", line) for line in parts.body]
-    observe = ["if flip_t < math.inf:"] + [indent(line, 1) for line in parts.stopped] + [
+    # the samples of the lane's own step ks (the block kernel's k_state)
+    observe = [_K_STATE.sub("ks", line)
+               for line in parts.strobe_sample + parts.attractor_sample]
+    observe += [f"if {parts.stop_test}:"] + [indent(line, 1) for line in parts.stopped] + [
         "if done or ks >= n_steps:", "    finished = True", "    n_finished += 1"]
     refill = [finish, "if first + taken * n_groups < n:", "    i = first + taken * n_groups",
               "    taken += 1", "else:", "    i = first  # idle: a copy, never written",
@@ -73,7 +82,8 @@ def system_refill_kernel(spec, parts, finish: str) -> str:
     observe_loop = lane_loop(NL.join(observe), {k: v for k, v in lane.items() if k != "ks"},
                              level=3, head=head)
     refill_loop = lane_loop(NL.join(refill), lane, level=4, head=skip_unless("finished"))
-    return groups_head(spec.block) + f'''\
+    more = CATALOGUE_ARGUMENTS if "attractor" in spec.observe else ""
+    return groups_head(spec.block, more) + f'''\
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(parts.constants.values()), 1)}
