@@ -146,3 +146,27 @@ def test_a_catalogue_that_does_not_fit_is_refused_before_any_compute(system, gri
     kwargs = {"observe": ("attractor",), **kwargs}
     with pytest.raises(ValueError, match=match):
         sweep.run(system, grid, t_end=10 * PERIOD, dt=PERIOD / 40, progress=False, **kwargs)
+
+
+def test_one_kernel_serves_every_catalogue():
+    """The catalogue is the kernel's data, not its source: catalogues of 1 and 3
+    attractors (periods 1 to 4, another number of samples) give the same kernel spec and
+    source, so a new pilot compiles nothing. A sweep.Forcing(on=...) on one coordinate
+    is a drive too: its frequency sets the samples' period."""
+    from sweep.engine_systems import prepare_system
+    from sweep.kernels import build
+    from sweep.kernels.system import system_kernel
+
+    small = _catalogue()
+    large = {"theta": np.ones((3, 2, 8)), "omega": np.ones((3, 2, 8)),
+             "period": np.array([1, 2, 4])}
+    specs = [prepare_system(SYSTEM, GRID, observe=("attractor",), attractors=catalogue,
+                            stop_early=True, t_end=800 * PERIOD, dt=PERIOD / 40)[1]
+             for catalogue in (small, large)]
+    assert specs[0] == specs[1] and system_kernel(specs[0]) == system_kernel(specs[1])
+    assert build(specs[0]) is build(specs[1])
+    forced = sweep.DoublePendulum(effects=(sweep.Damping(0.5),
+                                           sweep.Forcing(1.5, 2.0, on="theta2")))
+    spec = prepare_system(forced, GRID, observe=("attractor",), attractors=small,
+                          t_end=10 * np.pi, dt=np.pi / 100)[1]
+    assert spec.strobe_frequency == forced.drive_frequency_parameter.symbol

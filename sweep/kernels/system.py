@@ -572,9 +572,6 @@ def system_kernel(spec: SystemSpec) -> str:
     """The kernel body (see the module docstring)."""
     parts = _parts(spec)
     state, symbols, lane = parts.state, parts.symbols, parts.lane
-    if spec.device == "cuda" and "attractor" in spec.observe:
-        raise ValueError("observable 'attractor' is not available for a system on the GPU "
-                         "yet; accepted: device='cpu'")
     if spec.refill:
         from .system_refill import system_refill_kernel
 
@@ -660,6 +657,9 @@ def system_cuda_kernel(spec: SystemSpec) -> tuple[str, str]:
     per-trajectory parts as the CPU kernel, and its physics as device functions."""
     from .cuda import cuda_module, device_functions
 
+    if "attractor" in spec.observe:  # `sweep.engine_systems` refuses it before this
+        raise ValueError("observable 'attractor' is not available for a system on the GPU "
+                         "yet; accepted: device='cpu'")
     parts = _parts(spec)
     state, symbols = parts.state, parts.symbols
     loads = [f"{x} = _param({k}, params, flat, columns, strides, sizes, offsets, values)"
