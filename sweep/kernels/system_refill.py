@@ -1,7 +1,8 @@
 """A system's early-stop kernel with lane refill (`sweep.kernels.system`, ``stop_early``):
 a lane whose trajectory has flipped (or reached ``t_end``, or started below the lowest
-flipping energy) writes its outputs and takes the next waiting trajectory, so no SIMD
-lane idles while its block's slowest trajectory finishes.
+flipping energy), or settled on a catalogued attractor (``attractor``), writes its
+outputs and takes the next waiting trajectory, so no SIMD lane idles while its block's
+slowest trajectory finishes.
 
 The single pendulum's refill kernel (`sweep.kernels.refill`) in the systems' terms: one
 group of lanes per thread (group ``b`` of ``G`` takes the trajectories ``b, b + G, b +
