@@ -170,3 +170,18 @@ def test_one_kernel_serves_every_catalogue():
     spec = prepare_system(forced, GRID, observe=("attractor",), attractors=small,
                           t_end=10 * np.pi, dt=np.pi / 100)[1]
     assert spec.strobe_frequency == forced.drive_frequency_parameter.symbol
+
+
+def test_a_pilot_catalogue_of_a_system(full):
+    """`sweep.maps.pilot_catalogue` of a system: the pilot is its strobe run over the
+    thinned grid (here not thinned: 12 points per axis), whatever the map observes, so
+    its catalogue is the full run's; a grid that varies a parameter is refused."""
+    _, _, catalogue = full
+    found = maps.pilot_catalogue(SYSTEM, GRID, 12, observe=("attractor",), stop_early=True,
+                                 **{k: v for k, v in RUN.items() if k != "progress"})
+    for key in ("theta", "omega", "period"):
+        np.testing.assert_array_equal(found[key], catalogue[key])
+    assert maps.pilot_grid(GRID, 5, SYSTEM).axes["theta1_0"].size == 5
+    with pytest.raises(ValueError, match="the grid varies pivot_amplitude; accepted: a grid "
+                                         r"that varies only the initial state \(theta1_0"):
+        maps.pilot_grid(sweep.Grid(theta1_0=[0.1], pivot_amplitude=[0.1, 0.2]), 5, SYSTEM)
