@@ -21,11 +21,12 @@ from .grid import ParameterRows
 from .io import device_attributes, origin_attributes, run_attributes, status_variable
 from .kernels import failure_summary, status_counts
 from .kernels.network import NETWORK_OBSERVABLES, NetworkSpec, network_arguments
-from .kernels.system import SystemSpec
+from .kernels.system import STOPPING, SystemSpec
 from .observables import STROBE_SAMPLES
 from .physics.network import NETWORK_PARAMETERS, SwingNetwork
 from .physics.system import System, system_parameters
 from .settings import CUDA_CHUNK, _block, _check_device, default_chunk_size, validate_settings
+from .system_attractors import catalogue_arguments, catalogue_attributes, check_catalogue
 from .system_observables import SYSTEM_OBSERVABLES, resolve_system_observe, variables
 
 __all__ = ["allocate_system", "prepare_system", "run_system", "system_dataset",
@@ -34,7 +35,7 @@ __all__ = ["allocate_system", "prepare_system", "run_system", "system_dataset",
 #: `sweep.run`'s arguments that a system run does not take yet, with the value that
 #: means "not used"; any other value is refused before any compute.
 _NOT_YET = {"rtol": None, "atol": None, "specialize": True, "estimate_error": None,
-            "checkpoint": None, "resume": False, "attractors": None}
+            "checkpoint": None, "resume": False}
 
 
 def _check_not_yet(system: System, given: dict) -> None:
@@ -91,21 +92,23 @@ def _prepare_network(network, grid, settings, observe, save_every, stop_early,
 
 
 def _check_strobe(system: System, grid: ParameterRows, names, settings):
-    """With ``strobe`` observed: the system's drive-frequency parameter (it must have
-    one), every frequency on the grid > 0 with a period of whole steps; else None."""
+    """With ``strobe`` (or ``attractor``) observed: the system's drive-frequency
+    parameter (it must have one), every frequency on the grid > 0 with a period of whole
+    steps; else None."""
     from ._timesteps import check_sampling_period
 
-    if "strobe" not in names:
+    if "strobe" not in names and "attractor" not in names:
         return None
     drive = system.drive_frequency_parameter
+    sampled = "strobe" if "strobe" in names else "attractor"
     if drive is None:
-        raise ValueError(f"observable 'strobe' samples once per drive period, and "
+        raise ValueError(f"observable {sampled!r} samples once per drive period, and "
                          f"this {system.title} has no periodic drive; accepted: a driven "
                          "system, e.g. sweep.DoublePendulum(..., pivot_amplitude=a, "
                          "pivot_frequency=nu), or sweep.DeclaredSystem(..., "
                          "drive_frequency_axis=<its frequency parameter>)")
     frequencies = grid.axes.get(drive.axis, np.array([system.parameters()[drive.axis]]))
-    check_sampling_period("strobe", frequencies, settings.dt, axis=drive.axis,
+    check_sampling_period(sampled, frequencies, settings.dt, axis=drive.axis,
                           period="drive")
     return drive
 
@@ -113,9 +116,11 @@ def _check_strobe(system: System, grid: ParameterRows, names, settings):
 def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
                    t_transient=0.0, observe=None, save_every=None,
                    method="rk4", chunk_size=None, stop_early=False, strobe_samples=None,
-                   check_stability=True, device="cpu", dtype="float64", **not_yet):
+                   check_stability=True, device="cpu", dtype="float64", attractors=None,
+                   **not_yet):
     """Validate a system run (before any compute); return its settings, kernel spec and
-    chunk size.
+    chunk size (`run_system` takes the checked catalogue from
+    `sweep.system_attractors.check_catalogue`).
 
     Raises
     ------
@@ -156,6 +161,9 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
         if strobe_samples is not None:
             raise ValueError(f"strobe_samples={strobe_samples!r} is not available for a "
                              "SwingNetwork; accepted: strobe_samples=None")
+        if attractors is not None:
+            raise ValueError("attractors= is not available for a SwingNetwork; accepted: "
+                             "attractors=None")
         return settings, _prepare_network(system, grid, settings, observe, save_every,
                                           stop_early, device), int(chunk_size)
     names = resolve_system_observe(("final", "winding") if observe is None else observe)
@@ -165,13 +173,20 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
                          "flip, lyapunov, strobe, or a save_every")
     strobe_samples = STROBE_SAMPLES if strobe_samples is None else strobe_samples
     check_strobe_samples(strobe_samples, names)
+    check_catalogue(system, attractors, names, grid)
     drive = _check_strobe(system, grid, names, settings)
     check_flag("check_stability", check_stability)
-    if stop_early and (names != ("flip",) or save_every is not None):
+    if stop_early and (names not in STOPPING or save_every is not None):
         raise ValueError(
-            "stop_early stops a system's trajectory at its first flip, so it observes only "
-            f"'flip' and saves nothing; got observe={names!r}, save_every={save_every!r}; "
-            "accepted: observe=('flip',) and save_every=None, or stop_early=False")
+            "stop_early stops a system's trajectory at its first flip (observe=('flip',)) "
+            "or once it settled on a catalogued attractor (observe=('attractor',) or "
+            "('strobe', 'attractor'), with attractors=), and saves nothing; got "
+            f"observe={names!r}, save_every={save_every!r}; accepted: one of those and "
+            "save_every=None, or stop_early=False")
+    if device == "cuda" and "attractor" in names:
+        raise ValueError("observable 'attractor' is not available for a system on the GPU "
+                         "yet (the systems' CUDA kernel takes no catalogue); accepted: "
+                         "device='cpu'")
     damping = "damping" in grid.effects(system)
     spec = SystemSpec(system=system.declaration_with_effects,
                       derived=system.derived(jacobian="lyapunov" in names), observe=names,
@@ -220,6 +235,11 @@ def run_system(system: System, grid: ParameterRows, *, progress=None, client=Non
     keep = kwargs.pop("keep_checkpoint", False)
     check_flag("keep_checkpoint", keep)
     settings, spec, chunk_size = prepare_system(system, grid, **kwargs)
+    catalogue = check_catalogue(system, kwargs.get("attractors"), spec.observe, grid) \
+        if not isinstance(spec, NetworkSpec) else None
+    # the kernel's arguments after saved: the catalogue's arrays, or a network's
+    extra = catalogue_arguments(system, catalogue) if catalogue is not None else \
+        network_arguments(spec) if isinstance(spec, NetworkSpec) else ()
     system = system.switched_on(tuple(grid.axes))  # as prepare_system: the table's columns
     if client is not None:
         from .execution.dask import check_client
@@ -229,14 +249,14 @@ def run_system(system: System, grid: ParameterRows, *, progress=None, client=Non
     arrays = allocate_system(spec, settings, n)
     todo = list(grid.chunks(chunk_size))
     with progress_bar(progress, n) as bar:
-        execute(RunContext(system, grid, spec, settings,
-                           network_arguments(spec) if isinstance(spec, NetworkSpec) else ()),
-                todo, arrays,
+        execute(RunContext(system, grid, spec, settings, extra), todo, arrays,
                 lambda start, stop: bar.update(stop - start), client=client)
     failures = failure_summary(status_counts(arrays["status"]), n)
     if failures:
         warnings.warn(failures, RuntimeWarning, stacklevel=3)
-    return system_dataset(system, grid, settings, spec, arrays)
+    ds = system_dataset(system, grid, settings, spec, arrays)
+    ds.attrs.update(catalogue_attributes(catalogue))
+    return ds
 
 
 def allocate_system(spec, settings, n: int) -> dict[str, np.ndarray]:
@@ -304,7 +324,8 @@ def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
                  coordinates_names=" ".join(c.name for c in coordinates),
                  effects=_effects_attribute(system, spec))
     if spec.stop_early:
-        attrs["stop_early"] = "at the first flip"
+        attrs["stop_early"] = "at the first flip" if "flip" in spec.observe else \
+            "once settled on a catalogued attractor"
     if "strobe" in spec.observe:  # what `sweep.maps.basins` reads of the samples
         attrs.update(strobe_samples=spec.strobe_samples,
                      strobe_frequency=system.drive_frequency_parameter.axis,

@@ -249,9 +249,12 @@ def run_arguments(ds: xr.Dataset) -> dict:
             kwargs[tolerance] = float(a[tolerance])
     if "attractors_theta" in a:  # the attractor catalogue (sweep.run's attractors=)
         samples = int(a["attractors_samples"])
+        # a system's rings have a row per coordinate (sweep.system_attractors)
+        shape = (-1, int(a["attractors_coordinates"]), samples) \
+            if "attractors_coordinates" in a else (-1, samples)
         kwargs["attractors"] = {
             name: np.atleast_1d(np.asarray(a[f"attractors_{name}"], dtype=np.float64))
-            .reshape(-1, samples) for name in ("theta", "omega")}
+            .reshape(shape) for name in ("theta", "omega")}
         kwargs["attractors"]["period"] = np.atleast_1d(
             np.asarray(a["attractors_period"], dtype=np.int64))
     return kwargs

@@ -25,13 +25,22 @@ coordinate, units, meaning); `sweep.kernels.system` writes their kernel source a
   (``nu`` the system's drive frequency, `sweep.physics.System.drive_frequency_parameter`),
   oldest first, over a last dimension ``strobe``; NaN for samples the run did not reach.
   They are the state at those steps exactly, the same bits as ``save_every`` saves.
+- ``attractor``: as the single pendulum's ``attractor`` (the same variable, units and
+  meaning): the index of the attractor of the run's catalogue (``sweep.run(...,
+  attractors=sweep.maps.attractor_catalogue(pilot))``) on which the trajectory's
+  stroboscopic points (every coordinate and velocity, angles modulo 2 pi; at the
+  ``strobe`` observable's times ``t0 + n_transient dt + m 2 pi / nu``, every one of
+  them) fell within ``ATTRACTOR_TOL`` of that orbit's successive points for
+  ``ATTRACTOR_MATCHES`` drive periods running; -1 if none did. With ``stop_early`` a
+  trajectory stops there, so a driven system's basin map costs only each start's
+  transient. The catalogue enters the kernel as arrays (`sweep.kernels.system`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .observables import LYAPUNOV_EVERY
+from .observables import LYAPUNOV_EVERY, OBSERVABLES
 
 __all__ = ["SYSTEM_OBSERVABLES", "SystemObservable", "resolve_system_observe", "variables"]
 
@@ -65,6 +74,7 @@ SYSTEM_OBSERVABLES = {o.name: o for o in (
     SystemObservable("flip", "system", stops=True),
     SystemObservable("lyapunov", "system"),
     SystemObservable("strobe", "coordinate", sampled=True),
+    SystemObservable("attractor", "system", stops=True),
 )}
 
 
@@ -136,4 +146,6 @@ def variables(name: str, coordinates, energy_units: str) -> list[tuple[str, str,
                 for c in coordinates] + \
             [(f"{c.velocity}_strobe", c.velocity_units, f"{c.velocity} {when}")
              for c in coordinates]
+    if name == "attractor":  # the single pendulum's variable, units and meaning
+        return [OBSERVABLES["attractor"].variables[0]]
     raise ValueError(f"unknown system observable {name!r}")

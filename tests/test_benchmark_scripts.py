@@ -370,6 +370,24 @@ def test_compile_time_script(tmp_path):
         (tmp_path / "compile_time_quick.md").read_text()
 
 
+def test_system_basins_script(tmp_path):
+    """benchmarks/system_basins.py on the 12 x 12 map of tests/test_system_attractors.py
+    (the same kernels) over 400 periods: the labels that differ from the full run's are
+    counted and rerun twice as long, where each settles where the catalogue said (or
+    was left at -1 by it); both files written."""
+    system_basins = importlib.import_module("system_basins")
+    assert system_basins.main(["--size", "12", "--pilot", "12", "--periods", "400",
+                               "--out", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "system_basins.json").read_text())
+    assert result["grid"] == [12, 12] and result["attractors_catalogue"] >= 1
+    assert result["full_seconds"] > 0 and result["map_seconds"] > 0
+    rerun = result["differing_rerun_twice_as_long"]
+    assert rerun["starts"] == result["differing"]
+    assert rerun["agree_with_catalogue"] + rerun["catalogue_unresolved"] == rerun["starts"]
+    text = (tmp_path / "system_basins.md").read_text()
+    assert text.startswith("# A driven double pendulum's basin map by the attractor")
+
+
 def test_double_pendulum_script(tmp_path):
     """benchmarks/double_pendulum.py --quick: sweep, NumPy and (with gcc) every C build
     checked against sweep after 100 steps, the flip map's band the same with and

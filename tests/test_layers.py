@@ -24,6 +24,7 @@ LAYERS = {
     "sweep._known": 1,  # the known-cells rule reads the hits of sweep.observables
     "sweep.physics": 1, "sweep.methods": 1, "sweep.observables": 1,
     "sweep.system_observables": 1,
+    "sweep.system_attractors": 1,  # a system's catalogue as arrays: numpy alone
     "sweep.kernels": 2, "sweep.grid": 2, "sweep.stability": 2,
     "sweep.execution": 3, "sweep.io": 3, "sweep.settings": 3,
     "sweep.engine": 4, "sweep.engine_systems": 4,

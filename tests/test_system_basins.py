@@ -162,7 +162,7 @@ def test_maps_not_yet_taking_a_systems_samples_say_so():
                    observe=("final", "strobe"), strobe_samples=2, progress=False)
     with pytest.raises(ValueError, match="not available for a system's stroboscopic "
                                          r"samples yet; accepted: sweep\.maps\.basins"):
-        maps.attractor_catalogue(ds)
+        maps.continuation(ds, "point")
     undriven = sweep.run(sweep.DoublePendulum(), sweep.Points(theta1_0=[0.1]), t_end=4.0,
                          dt=0.01, observe=("final",), progress=False)
     with pytest.raises(ValueError, match="basins of a system need its stroboscopic "

@@ -124,7 +124,7 @@ def _two_forced_pendula(Coordinate, Parameter, SystemDeclaration):
     (SYSTEM, {"dt": 0.003}, "the drive period 2 pi / 6.28318"),
     (SYSTEM, {"observe": ("final",), "strobe_samples": 8}, "read only by the 'strobe'"),
     (SYSTEM, {"strobe_samples": 1}, "strobe_samples must be an int from 2 to 4096"),
-    (SYSTEM, {"stop_early": True}, "observes only 'flip'"),
+    (SYSTEM, {"stop_early": True}, "stop_early stops a system's trajectory at its first flip"),
 ])
 def test_bad_strobe_runs_are_refused_before_any_compute(system, kwargs, match):
     args = {"t_end": 3.0, "dt": DT, "observe": ("strobe",), "progress": False, **kwargs}

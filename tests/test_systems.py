@@ -244,7 +244,8 @@ def test_dataset_round_trips_through_netcdf(tmp_path):
     (lambda: sweep.run(sweep.DoublePendulum(), sweep.Grid(theta1_0=[0.1]), t_end=1, dt=0.1,
                        method="dopri5"), "fixed-step explicit Runge-Kutta"),
     (lambda: sweep.run(sweep.DoublePendulum(), sweep.Grid(theta1_0=[0.1]), t_end=1, dt=0.1,
-                       observe=("final", "flip"), stop_early=True), "observes only 'flip'"),
+                       observe=("final", "flip"), stop_early=True),
+     "stop_early stops a system's trajectory at its first flip"),
     (lambda: sweep.run(sweep.DoublePendulum(), sweep.Grid(theta1_0=[0.1]), t_end=1, dt=0.1,
                        observe=("amplitude",)), "unknown observable 'amplitude'"),
 ])

@@ -78,7 +78,7 @@ def system_quantities(system: System) -> dict[str, Quantity]:
     """
     declaration = system.declaration
     coordinates = declaration.coordinates
-    meaningless = set()
+    meaningless = {"attractor"}  # it needs an attractor catalogue (sweep.run's attractors=)
     if not any(c.angular for c in coordinates):
         meaningless.add("flip")  # no angle can pass an upright position
     if declaration.lagrangian is None and declaration.potential is None:

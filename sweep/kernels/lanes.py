@@ -35,14 +35,14 @@ def lane_loop(body: str, lane: dict[str, str], *, level: int, head: str = "",
                   level)
 
 
-def blocks_head(block: int, known: bool = False, arguments: str = "") -> str:
+def blocks_head(block: int, known: bool = False, more: str = "") -> str:
     """The head of a fixed-step kernel module's body: ``BLOCK``, the Python ``kernel``
     (the contract of `sweep.kernels.source`) that spreads the blocks over threads
     (`sweep.kernels.threads.run_blocks`), and the signature of the compiled ``blocks``
     over a range of blocks, whose body follows (with ``known``: the two arguments of
-    `sweep.kernels.KernelSpec.known_cells` after ``saved``; then ``arguments``, more of
-    them as source, each after a comma: a swing network's arrays)."""
-    extra = (KNOWN_ARGUMENTS if known else "") + arguments
+    `sweep.kernels.KernelSpec.known_cells` after ``saved``; ``more``: further arguments
+    after those, as ``", a, b"``: a system's attractor catalogue, a swing network)."""
+    extra = (KNOWN_ARGUMENTS if known else "") + more
     return f'''
 BLOCK = {block}
 
@@ -60,6 +60,9 @@ def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{
 
 #: The kernel arguments of `sweep.kernels.KernelSpec.known_cells`, after ``saved``.
 KNOWN_ARGUMENTS = ", known, known_axes"
+#: A system kernel's attractor catalogue (observable ``attractor``), after ``saved``
+#: (`sweep.kernels.system`; `sweep.system_attractors.catalogue_arguments` makes them).
+CATALOGUE_ARGUMENTS = ", cat_points, cat_next, cat_owner"
 
 
 def indent(code: str, level: int) -> str:

@@ -306,11 +306,48 @@ def system_strobe_table(ds: xr.Dataset):
     return tables[0], tables[1], angular, dims, positions, velocities
 
 
+def _system_rings(ds: xr.Dataset, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """A system run's catalogued rings (``attractors_*`` attributes,
+    `sweep.system_attractors.catalogue_attributes`) as (k, m, ``width``) tables, each
+    extended backwards along its own orbit or cut to its last ``width`` samples, as
+    `_catalogue_rings` does for one angle (a coordinate that is not an angle repeats
+    without turns)."""
+    attrs = ds.attrs
+    samples, m = int(attrs["attractors_samples"]), int(attrs["attractors_coordinates"])
+    theta, omega = (np.asarray(attrs[f"attractors_{name}"], dtype=np.float64)
+                    .reshape(-1, m, samples) for name in ("theta", "omega"))
+    period = np.atleast_1d(np.asarray(attrs["attractors_period"], dtype=np.int64))
+    angles = set(str(attrs.get("strobe_angular", "")).split())
+    angular = np.array([name in angles for name in str(attrs["strobe_positions"]).split()])
+    out_theta = np.empty((theta.shape[0], m, width))
+    out_omega = np.empty_like(out_theta)
+    for a, p in enumerate(period):
+        turn = np.where(angular, theta[a, :, -1] - theta[a, :, -1 - p], 0.0)
+        for k in range(1, width + 1):  # k-th sample from the end
+            back = max(0, (k - samples + p - 1) // p)  # orbits to step back
+            j = samples - k + back * p
+            out_theta[a, :, -k] = theta[a, :, j] - back * turn if back else theta[a, :, j]
+            out_omega[a, :, -k] = omega[a, :, j]
+    return out_theta, out_omega
+
+
 def _system_basins(ds: xr.Dataset, *, max_period: int, tol: float) -> xr.DataArray:
-    """`basins` of a driven system's run (`system_strobe_table`)."""
+    """`basins` of a driven system's run (`system_strobe_table`); a trajectory that a
+    run with an attractor catalogue matched (``attractor >= 0``: it may have stopped
+    before its samples show a period) stands for its catalogued ring, as in the single
+    pendulum's `_identify_with_catalogue`."""
     position, velocity, angular, dims, positions, velocities = system_strobe_table(ds)
-    labels, catalogue = identify_attractors(position, velocity, max_period=max_period,
-                                            tol=tol, angular=angular)
+    index = None
+    if "attractor" in ds and "attractors_theta" in ds.attrs:
+        index = ds["attractor"].transpose(*dims).values.ravel()
+        index = np.where(np.isfinite(index), index, -1).astype(np.int64)
+    if index is None or not (index >= 0).any():
+        labels, catalogue = identify_attractors(position, velocity, max_period=max_period,
+                                                tol=tol, angular=angular)
+    else:
+        labels, catalogue = _identify_with_catalogue(
+            position[index < 0], velocity[index < 0], index, None, max_period=max_period,
+            tol=tol, rings=_system_rings(ds, position.shape[2]), angular=angular)
     shape = tuple(ds.sizes[d] for d in dims)
     out = xr.DataArray(labels.reshape(shape), coords=map_coords(ds, dims), dims=dims,
                        name="basins")
@@ -440,7 +477,8 @@ def _catalogue_rings(attrs, width: int) -> tuple[np.ndarray, np.ndarray]:
     return out_theta, out_omega
 
 
-def _identify_with_catalogue(theta, omega, index, attrs, *, max_period: int, tol: float):
+def _identify_with_catalogue(theta, omega, index, attrs, *, max_period: int, tol: float,
+                             rings=None, angular=None):
     """`identify_attractors` for a run with an attractor catalogue. A trajectory the
     kernel matched to catalogued attractor ``a`` (``index >= 0``) stopped before its
     own samples could show a period; it stands for that attractor's ring (extended to
@@ -448,16 +486,18 @@ def _identify_with_catalogue(theta, omega, index, attrs, *, max_period: int, tol
     ``omega``: their samples only, in order) and one row per matched attractor,
     weighted by its matches, are identified together: the labels, sizes and order (ties
     included) are those of identifying every row, at the cost of the unmatched rows
-    only."""
+    only. A system's (``theta``, ``omega`` of shape (n, m, P)) gives its ``rings``
+    (`_system_rings`) and ``angular`` flags."""
     matched = index >= 0
     counts = np.bincount(index[matched], minlength=0)
     used = np.flatnonzero(counts)  # catalogued attractors this run matched
-    rings = _catalogue_rings(attrs, theta.shape[1])
+    if rings is None:
+        rings = _catalogue_rings(attrs, theta.shape[1])
     unmatched = np.flatnonzero(~matched)
     table = [np.concatenate([t, r[used]]) for t, r in zip((theta, omega), rings)]
     weights = np.concatenate([np.ones(unmatched.size, dtype=np.int64), counts[used]])
     part, catalogue = identify_attractors(*table, max_period=max_period, tol=tol,
-                                          weights=weights)
+                                          weights=weights, angular=angular)
     labels = np.empty(index.size, dtype=np.int32)
     labels[unmatched] = part[:unmatched.size]
     ring_label = np.full(max(counts.size, 1), UNRESOLVED, dtype=np.int32)
@@ -514,7 +554,12 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
     dict
         ``theta``, ``omega``: ndarray, shape (m, P) [rad, rad/s]: the stroboscopic ring
         (oldest first, angle unwrapped) of one trajectory on each of the m attractors,
-        in label order; ``period``: ndarray (m,) of int, forcing periods.
+        in label order; ``period``: ndarray (m,) of int, forcing periods. Of a driven
+        system with several coordinates (a run of `sweep.DoublePendulum` with a pivot
+        drive, ...): ``theta`` and ``omega`` of shape (m, c, P), the rings of its c
+        coordinates and of their velocities (angles unwrapped), and ``coordinates``,
+        their names; pass it to ``sweep.run(system, grid, observe=("attractor",),
+        attractors=...)``.
 
     Raises
     ------
@@ -523,6 +568,8 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
     """
     max_period = check_max_period(max_period)
     tol = check_tolerance(tol)
+    if isinstance(ds, xr.Dataset) and "strobe_positions" in ds.attrs:
+        return _system_catalogue(ds, labels, max_period=max_period, tol=tol)
     flat_theta, flat_omega, dims = strobe_table(ds)
     if labels is None:
         labels = basins(ds, max_period=max_period, tol=tol)
@@ -544,6 +591,34 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
         else:
             theta[label], omega[label] = flat_theta[row], flat_omega[row]
     return {"theta": theta, "omega": omega, "period": period}
+
+
+def _system_catalogue(ds: xr.Dataset, labels, *, max_period: int, tol: float) -> dict:
+    """`attractor_catalogue` of a driven system's run (its rings of every coordinate)."""
+    position, velocity, _, dims, positions, _ = system_strobe_table(ds)
+    if labels is None:
+        labels = basins(ds, max_period=max_period, tol=tol)
+    flat = labels.transpose(*dims).values.ravel()
+    period = np.asarray(labels.attrs["attractor_period"], dtype=np.int64)
+    if period.size == 0:
+        raise ValueError("attractor_catalogue: the run resolved no attractor (every "
+                         "trajectory is unresolved); accepted: a run whose trajectories "
+                         "settle, e.g. a longer t_end or t_transient")
+    index = None
+    if "attractor" in ds and "attractors_theta" in ds.attrs:
+        index = ds["attractor"].transpose(*dims).values.ravel()
+        index = np.where(np.isfinite(index), index, -1).astype(np.int64)
+        rings = _system_rings(ds, position.shape[2])
+    theta = np.empty((period.size,) + position.shape[1:])
+    omega = np.empty_like(theta)
+    for label in range(period.size):
+        row = int(np.flatnonzero(flat == label)[0])
+        if index is not None and index[row] >= 0:
+            theta[label], omega[label] = rings[0][index[row]], rings[1][index[row]]
+        else:
+            theta[label], omega[label] = position[row], velocity[row]
+    return {"theta": theta, "omega": omega, "period": period,
+            "coordinates": tuple(positions)}
 
 
 def amplitude(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:

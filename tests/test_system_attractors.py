@@ -1,0 +1,187 @@
+"""Basins of a driven system by the attractor catalogue (``sweep.run(system, grid,
+observe=("attractor",), attractors=catalogue, stop_early=True)``): the catalogue's
+labels must be those `sweep.maps.basins` gives the full stroboscopic run, a trajectory
+that is never stopped must keep the very samples of a run without a catalogue, and a
+catalogue that does not fit the run is refused before any compute.
+"""
+
+import numpy as np
+import pytest
+from test_system_strobe import _two_forced_pendula
+
+import sweep
+from sweep import _config, maps
+from sweep.observables import OBSERVABLES
+from sweep.physics import Coordinate, Parameter, SystemDeclaration
+
+#: The damped double pendulum on a fast-driven pivot (the docs' example, as in
+#: tests/test_system_basins.py): coexisting attractors of periods 1 and 4.
+SYSTEM = sweep.DoublePendulum(pivot_amplitude=0.1, pivot_frequency=60.0,
+                              effects=(sweep.Damping(0.5),))
+PERIOD = 2 * np.pi / 60.0
+#: 800 drive periods (84 s): every start of GRID has converged to within basins' tol =
+#: 1e-3 of its attractor by the last 16 samples (at 400 periods 32 of the 144 have not:
+#: a slow spiral onto a period-1 orbit, turning by about a third per period, still
+#: looks like a period-3 orbit to the last 16 samples; the catalogue route already
+#: labels those with the period-1 attractor that the longer run confirms).
+RUN = dict(t_end=800 * PERIOD, dt=PERIOD / 40, t_transient=784 * PERIOD, progress=False)
+#: 12 x 12 starts at rest, none exactly upright (a start at theta = +-pi stays on the
+#: unstable upright equilibrium, which the full run would then catalogue).
+GRID = sweep.Grid(theta1_0=np.linspace(-3, 3, 12), theta2_0=np.linspace(-3, 3, 12))
+
+
+@pytest.fixture(scope="module")
+def full():
+    """The full stroboscopic run of GRID, its basins and its catalogue."""
+    ds = sweep.run(SYSTEM, GRID, observe=("strobe",), **RUN)
+    return ds, maps.basins(ds), maps.attractor_catalogue(ds)
+
+
+def _same_partition(a, b) -> bool:
+    """Whether label maps ``a`` and ``b`` are the same up to renaming the labels >= 0
+    (-1, unresolved, stays -1)."""
+    pairs = set(zip(a.ravel().tolist(), b.ravel().tolist()))
+    left, right = [p[0] for p in pairs], [p[1] for p in pairs]
+    return len(set(left)) == len(pairs) == len(set(right)) and \
+        all((x < 0) == (y < 0) for x, y in pairs)
+
+
+def test_the_catalogues_labels_are_the_basins_of_the_full_strobe_run(full):
+    """The catalogue (the full run's attractors, in basins' label order) run with
+    ``stop_early`` from t = 0 (no transient: each start stops after its own
+    ATTRACTOR_MATCHES periods on an attractor) labels every one of the 144 starts as
+    `sweep.maps.basins` labels the full run: the same integers, as the catalogue's
+    attractor k is basins' label k. The variable is the single pendulum's
+    ``attractor``, and the catalogue is kept in the attributes."""
+    _, labels, catalogue = full
+    assert catalogue["theta"].shape == (len(labels.attrs["attractor_period"]), 2, 16)
+    assert catalogue["coordinates"] == ("theta1", "theta2")
+    assert sorted(labels.attrs["attractor_period"].tolist()) == [1, 1, 1, 1, 4]
+    route = sweep.run(SYSTEM, GRID, observe=("attractor",), attractors=catalogue,
+                      stop_early=True, **dict(RUN, t_transient=0.0))
+    np.testing.assert_array_equal(route["attractor"].values, labels.values)
+    assert (route["attractor"].values >= 0).all()
+    _, units, long_name = OBSERVABLES["attractor"].variables[0]
+    assert route["attractor"].attrs == {"units": units, "long_name": long_name}
+    assert route.attrs["stop_early"] == "once settled on a catalogued attractor"
+    np.testing.assert_array_equal(sweep.io.run_arguments(route)["attractors"]["theta"],
+                                  catalogue["theta"])
+
+
+def test_a_trajectory_never_stopped_keeps_the_samples_of_a_run_without_catalogue(
+        full, monkeypatch):
+    """A catalogue of the largest attractor only: the starts it does not match run to
+    t_end and must have the very bits of the full run's samples (with lane refill and
+    without); those it matches stop, and `sweep.maps.basins` of the run (their rows
+    standing for the catalogued ring) gives the full run's partition. Without
+    ``stop_early`` the catalogue changes no sample at all."""
+    ds, labels, catalogue = full
+    one = {"theta": catalogue["theta"][:1], "omega": catalogue["omega"][:1],
+           "period": catalogue["period"][:1]}
+    runs = {}
+    for refill in (True, False):
+        monkeypatch.setattr(_config, "REFILL", refill)
+        runs[refill] = sweep.run(SYSTEM, GRID, observe=("strobe", "attractor"),
+                                 attractors=one, stop_early=True, **RUN)
+    route = runs[True]
+    matched = route["attractor"].values == 0
+    np.testing.assert_array_equal(matched, labels.values == 0)
+    assert 0 < matched.sum() < matched.size
+    for name in ("theta1_strobe", "theta2_strobe", "omega1_strobe", "omega2_strobe"):
+        assert runs[False][name].values.tobytes() == route[name].values.tobytes()
+        assert route[name].values[~matched].tobytes() == ds[name].values[~matched].tobytes()
+    assert _same_partition(maps.basins(route).values, labels.values)
+    whole = sweep.run(SYSTEM, GRID, observe=("strobe", "attractor"), attractors=one, **RUN)
+    for name in ("theta1_strobe", "omega2_strobe"):
+        assert whole[name].values.tobytes() == ds[name].values.tobytes()
+    np.testing.assert_array_equal(whole["attractor"].values, route["attractor"].values)
+
+
+def test_a_declared_system_with_a_drive_frequency_axis():
+    """Two uncoupled forced pendula declared as one system (tests/test_system_basins.py,
+    60 drive periods): the catalogue of the full run labels the 15 x 15 starts as
+    `sweep.maps.basins` does."""
+    period = 2 * np.pi / 0.75
+    run = dict(t_end=60 * period, dt=period / 100, t_transient=44 * period, progress=False)
+    system = sweep.DeclaredSystem(_two_forced_pendula(Coordinate, Parameter, SystemDeclaration),
+                                  drive_frequency_axis="frequency", friction=0.15,
+                                  amplitude=0.3, frequency=0.75)
+    starts = np.linspace(-2.5, 2.5, 15)
+    grid = sweep.Grid(p1_0=starts, p2_0=starts)
+    ds = sweep.run(system, grid, observe=("strobe",), **run)
+    labels = maps.basins(ds)
+    route = sweep.run(system, grid, observe=("attractor",), stop_early=True,
+                      attractors=maps.attractor_catalogue(ds), **run)
+    np.testing.assert_array_equal(route["attractor"].values, labels.values)
+
+
+def _catalogue(k=1, m=2, samples=4):
+    return {"theta": np.zeros((k, m, samples)), "omega": np.zeros((k, m, samples)),
+            "period": np.ones(k, dtype=int)}
+
+
+@pytest.mark.parametrize("system, grid, kwargs, match", [
+    (SYSTEM, GRID, {"attractors": _catalogue(m=3)},
+     r"points of 3 coordinates \(rings of shape \(1, 3, 4\)\), but DoublePendulum has 2"),
+    (SYSTEM, GRID, {"attractors": {"theta": np.zeros((1, 4)), "omega": np.zeros((1, 4)),
+                                   "period": [1]}},
+     "points of 1 coordinates"),
+    (SYSTEM, GRID, {"attractors": dict(_catalogue(), coordinates=("p1", "p2"))},
+     r"a catalogue of coordinates \('p1', 'p2'\), but DoublePendulum has"),
+    (SYSTEM, GRID, {"attractors": dict(_catalogue(), period=[3])}, "periods \\[3\\]"),
+    (sweep.DoublePendulum(), sweep.Grid(theta1_0=[0.1]), {"attractors": _catalogue()},
+     "this DoublePendulum has no periodic drive; accepted: attractors=None"),
+    (SYSTEM, GRID, {"attractors": _catalogue(), "observe": ("strobe",)},
+     "attractors= is given but observe has no 'attractor'"),
+    (SYSTEM, GRID, {"attractors": None},
+     "observable 'attractor' matches the run against an attractor catalogue"),
+    (SYSTEM, sweep.Grid(theta1_0=[0.1], pivot_amplitude=[0.1, 0.2]),
+     {"attractors": _catalogue()}, "the grid varies pivot_amplitude"),
+    (SYSTEM, GRID, {"attractors": _catalogue(), "observe": ("final", "attractor"),
+                    "stop_early": True},
+     r"or once it settled on a catalogued attractor \(observe=\('attractor',\)"),
+])
+def test_a_catalogue_that_does_not_fit_is_refused_before_any_compute(system, grid, kwargs,
+                                                                     match):
+    kwargs = {"observe": ("attractor",), **kwargs}
+    with pytest.raises(ValueError, match=match):
+        sweep.run(system, grid, t_end=10 * PERIOD, dt=PERIOD / 40, progress=False, **kwargs)
+
+
+def test_one_kernel_serves_every_catalogue():
+    """The catalogue is the kernel's data, not its source: catalogues of 1 and 3
+    attractors (periods 1 to 4, another number of samples) give the same kernel spec and
+    source, so a new pilot compiles nothing. A sweep.Forcing(on=...) on one coordinate
+    is a drive too: its frequency sets the samples' period."""
+    from sweep.engine_systems import prepare_system
+    from sweep.kernels import build
+    from sweep.kernels.system import system_kernel
+
+    small = _catalogue()
+    large = {"theta": np.ones((3, 2, 8)), "omega": np.ones((3, 2, 8)),
+             "period": np.array([1, 2, 4])}
+    specs = [prepare_system(SYSTEM, GRID, observe=("attractor",), attractors=catalogue,
+                            stop_early=True, t_end=800 * PERIOD, dt=PERIOD / 40)[1]
+             for catalogue in (small, large)]
+    assert specs[0] == specs[1] and system_kernel(specs[0]) == system_kernel(specs[1])
+    assert build(specs[0]) is build(specs[1])
+    forced = sweep.DoublePendulum(effects=(sweep.Damping(0.5),
+                                           sweep.Forcing(1.5, 2.0, on="theta2")))
+    spec = prepare_system(forced, GRID, observe=("attractor",), attractors=small,
+                          t_end=10 * np.pi, dt=np.pi / 100)[1]
+    assert spec.strobe_frequency == forced.drive_frequency_parameter.symbol
+
+
+def test_a_pilot_catalogue_of_a_system(full):
+    """`sweep.maps.pilot_catalogue` of a system: the pilot is its strobe run over the
+    thinned grid (here not thinned: 12 points per axis), whatever the map observes, so
+    its catalogue is the full run's; a grid that varies a parameter is refused."""
+    _, _, catalogue = full
+    found = maps.pilot_catalogue(SYSTEM, GRID, 12, observe=("attractor",), stop_early=True,
+                                 **{k: v for k, v in RUN.items() if k != "progress"})
+    for key in ("theta", "omega", "period"):
+        np.testing.assert_array_equal(found[key], catalogue[key])
+    assert maps.pilot_grid(GRID, 5, SYSTEM).axes["theta1_0"].size == 5
+    with pytest.raises(ValueError, match="the grid varies pivot_amplitude; accepted: a grid "
+                                         r"that varies only the initial state \(theta1_0"):
+        maps.pilot_grid(sweep.Grid(theta1_0=[0.1], pivot_amplitude=[0.1, 0.2]), 5, SYSTEM)
