@@ -284,7 +284,8 @@ class SystemExplorer(Explorer):
         first two angles' initial values); every axis must be one of the system's
         (`axes`). One-value axes set the start or a parameter.
     quantity : str, optional
-        A key of `system_quantities` (default: ``log10:flip_time``).
+        A key of `system_quantities` (default: ``log10:flip_time``); a driven system's
+        ``basins`` and ``period`` run as `driven_quantities` says.
     resolution : int, default `SYSTEM_RESOLUTION` (200)
         Pixels per axis: a quarter of the pendulum's 400 x 400, since a system's step
         costs several of the pendulum's.
@@ -446,7 +447,8 @@ class SystemExplorer(Explorer):
             Control("dt", "dt [s]", "float", float(s.dt), minimum=0.0, strict=True,
                     help="time step", group="run"),
             Control("t_transient", "t_transient [s]", "float", float(s.t_transient),
-                    minimum=0.0, help="lyapunov_max starts after it", group="run"),
+                    minimum=0.0, help="lyapunov_max starts after it; a driven system's "
+                    "strobe samples are counted from it", group="run"),
             Control("method", "method", "choice", s.method, choices=methods,
                     help="fixed-step explicit integrator (what a system takes)", group="run"),
             Control("resolution", "resolution [pixels per axis]", "int", int(s.resolution),
