@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import sweep
+from sweep import maps
 from sweep.explore.model import InvalidInput, centres
 from sweep.explore.networks import NetworkExplorer, explorer_for
 from sweep.explore.systems import SystemExplorer, SystemTrajectory
@@ -251,6 +252,136 @@ def test_bad_input_is_refused_naming_the_value_and_what_is_accepted(make, words)
         make()
     for word in words:
         assert word in str(info.value)
+
+
+# ------------------------------------------------------------------ driven systems
+#: The docs' double Kapitza pendulum (pivot a cos(nu t), a = 0.1 m, nu = 60 rad/s),
+#: damped harder (c = 2/s against the docs' 0.5) so that 100 drive periods (10.5 s,
+#: 4000 steps) settle most starts: the 8 x 8 window below has 7 attractors and 32
+#: unresolved starts, so it checks labels, their order and the unresolved ones.
+DRIVEN = sweep.DoublePendulum(pivot_amplitude=0.1, pivot_frequency=60.0,
+                              effects=(sweep.Damping(2.0),))
+PERIOD = 2 * np.pi / 60.0  # s
+DRIVEN_RUN = dict(t_end=100 * PERIOD, dt=PERIOD / 40)
+#: Pixels per axis of the driven maps: 64 starts, one 16-lane kernel that the explorer,
+#: the reference run and both snippets share (one compilation).
+M = 8
+
+
+def driven(system=DRIVEN, **extra):
+    grid = sweep.Grid(theta1_0=np.linspace(-3, 3, M), theta2_0=np.linspace(-3, 3, M))
+    return SystemExplorer(system, grid, resolution=M, **{**DRIVEN_RUN, **extra})
+
+
+def test_a_driven_systems_basins_map_is_maps_basins_of_the_same_run(tmp_path):
+    """The basins (and period) map of a driven double pendulum equals `sweep.maps.basins`
+    (`sweep.maps.period`) of `sweep.run` of the window's starts, cell by cell: the same
+    kernel on the same floats gives the same samples to the bit, so the same labels
+    (exact, unresolved ones included); the run file and the Python the page shows give
+    them again."""
+    e = driven(quantity="basins")
+    assert list(e.quantities())[:2] == ["basins", "period"]
+    assert e.state.quantity == "basins"
+    result = e.compute()
+    ds = reference(e, observe=("strobe",))
+    expected = maps.basins(ds)
+    np.testing.assert_array_equal(result.values, plane(expected))
+    attractors = len(expected.attrs["attractor_period"])
+    unresolved = int((result.values == -1).sum())
+    assert attractors >= 2 and unresolved > 0  # the window has both
+    # the legend: "unresolved" (drawn black) first, then each attractor with its period
+    # and each angle's turns per drive period
+    assert result.legend[0] == (-1.0, "unresolved")
+    period = int(expected.attrs["attractor_period"][0])
+    assert result.legend[1] == (0.0, f"attractor 0: period {period}, turns/period "
+                                     "theta1 +0, theta2 +0")
+    assert result.summary.startswith(f"{attractors} attractors; {unresolved} of {M * M} "
+                                     "starts unresolved")
+    # the period map of the same samples
+    e.update(quantity="period")
+    periods = e.compute()
+    np.testing.assert_array_equal(periods.values, plane(maps.period(ds)))
+    assert periods.summary.startswith("periods 1")
+    # the snippets reproduce the basins map
+    e.update(quantity="basins")
+    scope = {}
+    exec(e.python_snippet(), scope)  # the snippet the page shows
+    np.testing.assert_array_equal(plane(scope["image"]), result.values)
+    path = tmp_path / "basins.toml"
+    path.write_text(e.toml_text())
+    system, grid, kwargs = load_run(path, {})
+    assert system == DRIVEN and tuple(kwargs["observe"]) == ("strobe",)
+    again = maps.basins(sweep.run(system, grid, progress=False, **kwargs))
+    np.testing.assert_array_equal(plane(again), result.values)
+    pytest.importorskip("panel")
+    from sweep.explore.app import _palette
+
+    colours = _palette(result)  # categorical, the unresolved black as the pendulum's
+    assert colours[0] == "#000000" and "#000000" not in colours[1:]
+    assert len(set(colours[1:])) == len(colours) - 1
+
+
+def test_every_kind_of_drive_offers_basins():
+    """A forcing on one coordinate and a declared system's drive_frequency_axis are
+    drives as the pivot is (no compute: the quantities and the run's checks)."""
+    from test_system_strobe import _two_forced_pendula
+
+    from sweep.physics import Coordinate, Parameter, SystemDeclaration
+
+    forced = sweep.DoublePendulum(effects=(sweep.Forcing(1.0, 2.0, on="theta1"),))
+    e = driven(forced, quantity="basins", t_end=20 * np.pi, dt=np.pi / 200)  # W = 2/s
+    assert {"basins", "period"} <= set(e.quantities())
+    assert e.state.scene.drive_frequency_parameter.axis == "forcing_frequency_theta1"
+    declared = sweep.DeclaredSystem(_two_forced_pendula(Coordinate, Parameter,
+                                                        SystemDeclaration),
+                                    drive_frequency_axis="frequency", frequency=0.75)
+    e = SystemExplorer(declared, sweep.Grid(p1_0=np.linspace(-2.5, 2.5, M),
+                                            p2_0=np.linspace(-2.5, 2.5, M)),
+                       resolution=M, quantity="basins", t_end=60 * 2 * np.pi / 0.75,
+                       dt=2 * np.pi / 75)
+    assert e.run_kwargs()["observe"] == ("strobe",)
+
+
+@pytest.mark.parametrize("make, control, words", [
+    # no drive: the map is refused, naming it, what would drive the system, what is offered
+    (lambda: double().update(quantity="basins"), "quantity",
+     ["'basins'", "pivot_frequency", "Forcing", "drive_frequency_axis", "var:theta1_final"]),
+    (lambda: double(quantity="period"), "explore", ["'period'", "periodic drive"]),
+    # a step that does not divide the drive period: sweep.run's message, with a dt that does
+    (lambda: driven(quantity="basins", dt=100 * PERIOD / 1001), "explore",
+     ["drive period", "not a whole number of steps", "e.g. dt = 0.0104719"]),
+    (lambda: driven().update(dt=100 * PERIOD / 1001, quantity="basins"), "dt",
+     ["drive period", "e.g. dt = "]),
+    # fewer drive periods than strobe samples: every start would be unresolved
+    (lambda: driven(quantity="basins", t_end=10 * PERIOD), "explore",
+     ["t_end = 1.047", "reaches 11 of the strobe_samples = 16", "t_end >= 1.5708"]),
+    (lambda: driven(quantity="period").update(t_transient=95 * PERIOD), "t_transient",
+     ["reaches 6 of the strobe_samples = 16", "t_end >= 11.5192"]),
+])
+def test_driven_maps_refuse_what_cannot_give_them(make, control, words):
+    with pytest.raises(InvalidInput) as info:
+        make()
+    assert info.value.control == control
+    for word in words:
+        assert word in str(info.value)
+
+
+def test_explore_refuses_basins_of_an_undriven_system():
+    pytest.importorskip("panel")
+    grid = sweep.Grid(theta1_0=np.linspace(-1, 1, N), theta2_0=np.linspace(-1, 1, N))
+    with pytest.raises(InvalidInput, match="'basins' is not a map of DoublePendulum "
+                                           r"\(a basins map reads the samples once per "
+                                           "period of a periodic drive"):
+        sweep.explore(sweep.DoublePendulum(), grid, quantity="basins", **RUN)
+
+
+def test_strobe_samples_reach_only_the_maps_that_read_them():
+    """strobe_samples given to the explorer goes to the driven maps' runs, not to the
+    others (sweep.run refuses samples nothing reads)."""
+    e = driven(strobe_samples=32)
+    assert "strobe_samples" not in e.run_kwargs()  # the flip map
+    e.update(quantity="basins")
+    assert e.run_kwargs()["strobe_samples"] == 32
 
 
 # ------------------------------------------------------------------ swing networks

@@ -69,3 +69,44 @@ def test_double_pendulum_in_a_real_browser(system_app, driver):  # noqa: F811 - 
     assert driver.execute_script(set_value, "mass2 [kg]", 3.0)
     changed = _wait(driver, _MAP, lambda s: s["n"] == N * N and s["sum"] != home["sum"])
     assert changed["weighted"] != home["weighted"]
+
+
+#: The page's colour mapper and colour bar: the palette and the legend's labels.
+_COLOURS = """
+const m = Bokeh.documents[0].get_model_by_name('map');
+const bar = m.right.find(r => r.color_mapper);
+if (!bar) return null;
+const o = bar.major_label_overrides;  // a Map in BokehJS 3, keyed by tick
+const entries = o instanceof Map ? Array.from(o.entries()) : Object.entries(o);
+entries.sort((a, b) => Number(a[0]) - Number(b[0]));
+return {palette: Array.from(bar.color_mapper.palette), labels: entries.map(e => e[1])};
+"""
+
+
+def test_a_driven_double_pendulums_basins_in_a_real_browser(driver, tmp_path):  # noqa: F811
+    """The basins map of tests/test_explore_systems.py's driven double pendulum (44 x 44
+    pixels: its 11 x 11 preview shares that test's 16-lane kernel): categorical colours,
+    "unresolved" in black, the attractors counted on the status line."""
+    try:
+        from sweep.explore.system_app import SystemExplorerApp
+    except ImportError as exc:
+        _missing(f"Panel/Bokeh are not importable ({exc})")
+    from test_explore_systems import DRIVEN, DRIVEN_RUN
+
+    n = 44
+    grid = sweep.Grid(theta1_0=np.linspace(-3, 3, n), theta2_0=np.linspace(-3, 3, n))
+    app = SystemExplorerApp(DRIVEN, grid, quantity="basins", resolution=n, **DRIVEN_RUN)
+    app.serve(port=0)
+    try:
+        driver.get(app.url)
+        _wait(driver, _MAP, lambda s: s["n"] == n * n and s["stage"] == "final"
+              and "basins" in s["title"], 90)
+        status = _wait(driver, _TEXTS, lambda texts: len(texts) == 1, 30, "attractors;")[0]
+        assert f"of {n * n} starts unresolved" in status
+        colours = driver.execute_script(_COLOURS)
+        assert colours["labels"][0] == "unresolved" and colours["palette"][0] == "#000000"
+        assert all(label.startswith("attractor ") for label in colours["labels"][1:])
+        assert "#000000" not in colours["palette"][1:]
+        driver.save_screenshot(str(tmp_path / "driven-basins.png"))
+    finally:
+        app.stop()

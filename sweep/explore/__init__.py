@@ -42,8 +42,8 @@ def explore(scene, grid, **run_kwargs):
         [s], ``method``, ``device``, ``t0``, ``dtype``, ``strobe_samples``, ...; and
         ``quantity`` (a key of `sweep.explore.model.QUANTITIES`, default: basins for a
         forced scene, the final well for damping alone, else motion; for a system a key
-        of `sweep.explore.systems.system_quantities`, default ``log10:flip_time``) and
-        ``resolution``.
+        of `sweep.explore.systems.system_quantities`, default ``log10:flip_time``, and
+        for a driven system also ``basins`` and ``period``) and ``resolution``.
         ``observe``, ``stop_early`` and ``attractors`` are set per map and ignored.
 
     Returns

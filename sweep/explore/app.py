@@ -520,8 +520,10 @@ class _Session:
                         f"{s.resolution} x {s.resolution}…")
             pilot = " (pilot catalogue included)" if result.catalogue is not None else ""
             route = f"; {result.route}" if result.route and result.stage == "final" else ""
+            found = f"; {result.summary}" if result.summary and result.stage == "final" \
+                else ""
             self.status.object = (f"**{word}** {nx} x {ny} in {result.seconds:.2f} s"
-                                  f"{pilot}{route}{more}")
+                                  f"{pilot}{route}{found}{more}")
             self.caption.object = f"*{result.description}*"
             self.map.title.text = f"{self.explorer.quantity_info(s.quantity).label}"
         seconds = result.seconds + (result.preview_seconds if result.stage == "final" else 0)

@@ -47,7 +47,8 @@ from ..observables import STROBE_SAMPLES_RANGE
 from ..physics import BASE_PARAMETERS, EFFECTS, MODELS, Scene, parameters
 
 __all__ = ["AXES_INITIAL", "CancelToken", "Cancelled", "Control", "Explorer", "InvalidInput",
-           "MapResult", "QUANTITIES", "Quantity", "Requests", "State", "Trajectory", "View"]
+           "MapResult", "QUANTITIES", "Quantity", "Requests", "State", "Trajectory", "View",
+           "label_summary"]
 
 #: The initial-state axes (always offered as map axes).
 AXES_INITIAL = ("theta0", "omega0")
@@ -401,6 +402,10 @@ class MapResult:
     preview_seconds : float
         A final map's: wall time of the preview `Explorer.stages` computed before it
         (shown or not) [s]; 0 when none was (a cached map).
+    summary : str
+        Basins and period maps: what the labels found, in words (`label_summary`: the
+        attractors or periods and the unresolved starts), for the page's status line;
+        "" for other maps.
     """
 
     state: State
@@ -422,6 +427,7 @@ class MapResult:
     run_seconds: float = 0.0
     numbers: Any = None
     preview_seconds: float = 0.0
+    summary: str = ""
 
 
 @dataclass
@@ -708,8 +714,11 @@ class Explorer:
         """`sweep.run` keyword arguments of ``state``'s map (without the catalogue)."""
         state = state or self.state
         q = self.quantity_info(state.quantity)
+        extra = dict(state.extra)
+        if "strobe" not in q.observe:  # sweep.run refuses samples nothing reads
+            extra.pop("strobe_samples", None)
         kwargs = dict(t_end=state.t_end, dt=state.dt, t_transient=state.t_transient,
-                      method=state.method, observe=q.observe, **dict(state.extra))
+                      method=state.method, observe=q.observe, **extra)
         if q.stop_early:
             kwargs["stop_early"] = True
         if state.device != "cpu":
@@ -1225,7 +1234,8 @@ class Explorer:
                          legend=legend, title=title,
                          description=str(da.attrs.get("long_name", name)), da=da,
                          ds=None if preview else ds,
-                         seconds=0.0, catalogue=catalogue)
+                         seconds=0.0, catalogue=catalogue,
+                         summary=label_summary(state.quantity, values))
 
     def value_at(self, result: MapResult, x: float, y: float) -> tuple[int, int]:
         """Indices ``(row, column)`` of the pixel of ``result`` nearest ``(x, y)``."""
@@ -1533,11 +1543,50 @@ def _meaning(quantity: str, da, value: float) -> str:
         a = da.attrs
         try:
             period = int(np.atleast_1d(a["attractor_period"])[k])
-            turns = float(np.atleast_1d(a["attractor_turns_per_period"])[k])
-            return f"attractor {k}: period {period}, {turns:+g} turns/period"
+            if "attractor_turns_per_period" in a:  # the pendulum
+                turns = float(np.atleast_1d(a["attractor_turns_per_period"])[k])
+                return f"attractor {k}: period {period}, {turns:+g} turns/period"
+            # a system: turns per period of each angle (sweep.maps.basins' attributes)
+            prefix = "attractor_turns_per_period_"
+            turns = ", ".join(f"{key[len(prefix):]} {float(np.atleast_1d(a[key])[k]):+g}"
+                              for key in a if key.startswith(prefix))
+            return f"attractor {k}: period {period}" + \
+                (f", turns/period {turns}" if turns else "")
         except (KeyError, IndexError):
             return f"attractor {k}"
     return f"{k}"
+
+
+def label_summary(quantity: str, values: np.ndarray) -> str:
+    """What a basins or period map's labels found, in words, for the status line:
+    ``"3 attractors; 12 of 4096 starts unresolved (-1: not settled by t_end, chaotic, a
+    period over max_period, or failed)"``; "" for other maps.
+
+    Parameters
+    ----------
+    quantity : str
+        ``"basins"`` or ``"period"`` (others give "").
+    values : ndarray
+        The map's labels (`sweep.maps.basins`: attractor labels, -1 unresolved;
+        `sweep.maps.period`: periods in drive periods, -1 none found).
+    """
+    if quantity not in ("basins", "period"):
+        return ""
+    v = np.asarray(values)
+    found = np.unique(v[v >= 0]).astype(np.int64)
+    missing = int(np.count_nonzero(v < 0))
+    if quantity == "basins":
+        text = f"{found.size} attractor{'s' if found.size != 1 else ''}"
+        why = "not settled by t_end, chaotic, a period over max_period, or failed"
+        name = "unresolved"
+    else:
+        text = (f"periods {', '.join(str(int(p)) for p in found)}" if found.size else
+                "no period")
+        why = "not settled by t_end, chaotic, quasi-periodic, a longer period, or failed"
+        name = "without a period"
+    if missing:
+        text += f"; {missing} of {v.size} starts {name} ({why})"
+    return text
 
 
 # ------------------------------------------------------------------------ requests

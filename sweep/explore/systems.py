@@ -4,7 +4,11 @@ pendulum's `Explorer` with what depends on the system read from its declaration.
 
 - the quantities are the variables of the system's observables
   (`sweep.system_observables`: ``final``, ``winding``, ``energy``, ``flip``,
-  ``lyapunov``; every time in seconds also as its log10), not a list per system;
+  ``lyapunov``; every time in seconds also as its log10), not a list per system; a
+  driven system (`sweep.physics.System.drive_frequency_parameter`: a double pendulum's
+  pivot drive, a single `sweep.Forcing` on one coordinate, a `sweep.DeclaredSystem`'s
+  ``drive_frequency_axis``) also has ``basins`` and ``period``, `sweep.maps.basins` and
+  `sweep.maps.period` of its stroboscopic samples (`driven_quantities`);
 - the axes are the system's grid axes (every coordinate's initial value and velocity,
   its parameters, ``damping``);
 - the controls are its declaration's parameters (units, long names, bounds) and the
@@ -26,13 +30,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import maps
 from ..grid import Grid
 from ..kernels import Status
 from ..methods import METHODS
+from ..observables import STROBE_SAMPLES
 from ..physics.coupled import CoupledPendula
 from ..physics.declared import DeclaredSystem
 from ..physics.double import DoublePendulum
+from ..physics.network import SwingNetwork
 from ..physics.system import SYSTEM_DAMPING, System, initial_parameters
+from ..settings import validate_settings
 from ..system_observables import SYSTEM_OBSERVABLES, variables
 from .model import (
     PASSTHROUGH,
@@ -49,7 +57,8 @@ from .model import (
     check_arguments,
 )
 
-__all__ = ["SYSTEM_RESOLUTION", "SystemExplorer", "SystemTrajectory", "system_quantities"]
+__all__ = ["SYSTEM_RESOLUTION", "SystemExplorer", "SystemTrajectory", "driven_quantities",
+           "system_quantities"]
 
 
 def _always(system) -> bool:
@@ -71,19 +80,24 @@ def system_quantities(system: System) -> dict[str, Quantity]:
     angle has no flip map, one declared by accelerations without a potential no
     energy map.
 
+    A driven system (`sweep.physics.System.drive_frequency_parameter`) has
+    `driven_quantities` first: ``basins`` and ``period``.
+
     Returns
     -------
     dict of str to sweep.explore.model.Quantity
-        Keys ``var:<variable>`` (``var:theta1_final``) and ``log10:<variable>``.
+        Keys ``var:<variable>`` (``var:theta1_final``), ``log10:<variable>`` and, driven,
+        ``basins`` and ``period``.
     """
     declaration = system.declaration
     coordinates = declaration.coordinates
+    out: dict[str, Quantity] = driven_quantities() \
+        if system.drive_frequency_parameter is not None else {}
     meaningless = {"attractor"}  # it needs an attractor catalogue (sweep.run's attractors=)
     if not any(c.angular for c in coordinates):
         meaningless.add("flip")  # no angle can pass an upright position
     if declaration.lagrangian is None and declaration.potential is None:
         meaningless.add("energy")  # accelerations without a potential: no energy
-    out: dict[str, Quantity] = {}
     for observable in SYSTEM_OBSERVABLES.values():
         if observable.name in meaningless or observable.sampled:  # strobe: a sequence
             continue
@@ -99,6 +113,32 @@ def system_quantities(system: System) -> dict[str, Quantity]:
                 observable.stops, _always, lambda ds, name=name: ds[name],
                 observable.name == "winding", expression=f'ds["{name}"]')
     return out
+
+
+def driven_quantities() -> dict[str, Quantity]:
+    """The maps of a driven system's stroboscopic samples: ``basins`` (attractor labels,
+    `sweep.maps.basins`: every coordinate and velocity, each angle modulo 2 pi; -1
+    unresolved) and ``period`` (`sweep.maps.period`, in drive periods; -1 none found).
+
+    Both run with ``observe=("strobe",)`` and the explorer's own ``t_end``, ``dt`` and
+    ``t_transient`` (the run controls), as the single pendulum's explorer runs its forced
+    basins, and ``strobe_samples`` as given to the explorer (default 16, `sweep.run`'s:
+    two repeats of the longest period `sweep.maps.basins` looks for, 8). Nothing is
+    changed behind the controls, so the snippets and run files are what ran: the samples
+    are the last ``strobe_samples`` drive periods before ``t_end``, so ``t_end`` sets
+    how long a start has to settle; one that has not (or is chaotic) is labelled -1,
+    drawn black and counted on the status line (`sweep.explore.model.label_summary`).
+    `SystemExplorer.validate` refuses a ``t_end`` that reaches fewer samples (every
+    start would be unresolved), and `sweep.run` a ``dt`` that does not divide the drive
+    period, with a ``dt`` that does. No ``stop_early`` and no pilot catalogue: a
+    system's run takes neither with ``strobe``.
+    """
+    return {q.name: q for q in (
+        Quantity("basins", "attractor basins (driven)", ("strobe",), False, _always,
+                 maps.basins, True, expression="maps.basins(ds)"),
+        Quantity("period", "period map (driven): drive periods", ("strobe",), False,
+                 _always, maps.period, True, expression="maps.period(ds)"),
+    )}
 
 
 def default_system_quantity(quantities: dict[str, Quantity]) -> str:
@@ -244,7 +284,8 @@ class SystemExplorer(Explorer):
         first two angles' initial values); every axis must be one of the system's
         (`axes`). One-value axes set the start or a parameter.
     quantity : str, optional
-        A key of `system_quantities` (default: ``log10:flip_time``).
+        A key of `system_quantities` (default: ``log10:flip_time``); a driven system's
+        ``basins`` and ``period`` run as `driven_quantities` says.
     resolution : int, default `SYSTEM_RESOLUTION` (200)
         Pixels per axis: a quarter of the pendulum's 400 x 400, since a system's step
         costs several of the pendulum's.
@@ -406,7 +447,8 @@ class SystemExplorer(Explorer):
             Control("dt", "dt [s]", "float", float(s.dt), minimum=0.0, strict=True,
                     help="time step", group="run"),
             Control("t_transient", "t_transient [s]", "float", float(s.t_transient),
-                    minimum=0.0, help="lyapunov_max starts after it", group="run"),
+                    minimum=0.0, help="lyapunov_max starts after it; a driven system's "
+                    "strobe samples are counted from it", group="run"),
             Control("method", "method", "choice", s.method, choices=methods,
                     help="fixed-step explicit integrator (what a system takes)", group="run"),
             Control("resolution", "resolution [pixels per axis]", "int", int(s.resolution),
@@ -441,11 +483,56 @@ class SystemExplorer(Explorer):
 
     # -- validation and updates ------------------------------------------------------
     def _check_quantity(self, state: State) -> None:
-        """Refuse a quantity that is not a map of the system (`Explorer.validate`)."""
+        """Refuse a quantity that is not a map of the system (`Explorer.validate`); a
+        driven system's map asked of an undriven one says what would drive it."""
         if state.quantity not in self._registry:
+            why = ""
+            if state.quantity in driven_quantities() and \
+                    not isinstance(state.scene, SwingNetwork):
+                why = (f" (a {state.quantity} map reads the samples once per period of "
+                       "a periodic drive, and it has none: drive it, e.g. "
+                       "sweep.DoublePendulum(..., pivot_amplitude=a, pivot_frequency=nu), "
+                       "effects=(sweep.Forcing(A, W, on='theta1'),), or "
+                       "sweep.DeclaredSystem(..., drive_frequency_axis=...))")
             raise ValueError(f"quantity {state.quantity!r} is not a map of "
-                             f"{type(state.scene).__name__}; accepted: "
+                             f"{type(state.scene).__name__}{why}; accepted: "
                              f"{', '.join(self._registry)}")
+
+    def validate(self, state: State, control: str) -> State:
+        """`Explorer.validate` (the checks `sweep.run` makes, a ``dt`` that does not
+        divide the drive period included), and for a map of the stroboscopic samples
+        (`driven_quantities`) a ``t_end`` that reaches all ``strobe_samples`` of them
+        after ``t_transient``, at the longest drive period of the map."""
+        state = super().validate(state, control)
+        if "strobe" in self._registry[state.quantity].observe:
+            try:
+                self._check_samples(state)
+            except ValueError as exc:
+                raise InvalidInput(control, str(exc)) from None
+        return state
+
+    def _check_samples(self, state: State) -> None:
+        """Refuse a run whose samples (every ``P`` steps from step ``n_transient`` up to
+        ``n_steps``, ``P`` steps a drive period) are fewer than ``strobe_samples``."""
+        kwargs = self.run_kwargs(state)
+        samples = int(kwargs.get("strobe_samples", STROBE_SAMPLES))
+        settings = validate_settings(t_end=state.t_end, dt=state.dt,
+                                     t0=kwargs.get("t0", 0.0), t_transient=state.t_transient,
+                                     save_every=None, method=state.method)
+        drive = state.scene.drive_frequency_parameter.axis
+        grid = self.grid(state)
+        nu = float(np.min(grid.axes[drive])) if drive in grid.axes else \
+            float(state.scene.parameters()[drive])
+        steps = round(2 * math.pi / (nu * state.dt))  # whole: sweep.run checked it
+        reached = (settings.n_steps - settings.n_transient) // steps + 1
+        if reached < samples:
+            needed = settings.t0 + (settings.n_transient + (samples - 1) * steps) * state.dt
+            raise ValueError(
+                f"t_end = {state.t_end!r} s reaches {reached} of the strobe_samples = "
+                f"{samples} samples of the {state.quantity} map (one per drive period "
+                f"2 pi / {drive} = {steps * state.dt:.6g} s, from t_transient = "
+                f"{state.t_transient!r} s; {drive} = {nu!r} rad/s); accepted: t_end >= "
+                f"{needed:.6g} s, and more to let the starts settle")
 
     def update(self, **changes) -> State:
         """`Explorer.update` (``model`` is the single pendulum's and is refused)."""
