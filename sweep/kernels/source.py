@@ -223,6 +223,8 @@ def system_module(spec: SystemSpec) -> str:
 
 _HOISTED = re.compile(r"(hoisted_values = np\.empty\(\(\d+, BLOCK\))\)")
 _STROBE_PERIOD = re.compile(r"(sb_S = round\(TWO_PI / \(\w+) \* dt\)\)")
+#: the tangent vector's first value and the exponent's sum: float64 lanes (`_system_single`)
+_TANGENT_START = re.compile(r"^(\s*(?:ly_\w+|acc_ly) = )F\(([^()]*)\)$", re.MULTILINE)
 _FLIP_TIME = re.compile(r"^(\s*at_\w+ = t0 \+ \(.*\)) \* dt$", re.MULTILINE)
 
 
@@ -247,6 +249,9 @@ def _system_single(spec: SystemSpec, text: str) -> str:
     text = text.replace("F(math.pi)", "math.pi").replace("TWO_PI = F(2.0) * math.pi",
                                                          "TWO_PI = 2.0 * math.pi")
     text = _HOISTED.sub(r"\1, dtype=np.float32)", text)
+    # lyapunov: the tangent vector and the exponent's sum stay float64 (its stages read
+    # the float32 Jacobian, widened exactly); their first values as float64 literals
+    text = _TANGENT_START.sub(r"\1\2", text)
     text = float64_phases(text, phases)  # a no-op where no function reads the time
     # the times on the float64 clock: a strobe period's steps, the energy at t_end
     text = _STROBE_PERIOD.sub(r"\1 * dt_clock))", text).replace(
