@@ -430,3 +430,18 @@ def test_float32_lyapunov_of_a_driven_system_is_float64s():
     assert chaotic64.mean() > 0.5
     error = np.sqrt(2) * chaotic64.std() / np.sqrt(chaotic64.size)
     assert abs(chaotic32.mean() - chaotic64.mean()) < 3 * error
+
+
+def test_a_hoisted_pair_read_by_a_phase_is_recomputed_once():
+    """A hoisted ``x7, x8 = vsincos(ph)`` whose sine a phase reads: the statement is
+    recomputed once in place of both reads (x8 is then the recomputed value, read as
+    ``F(x8)`` outside the phase)."""
+    from sweep.kernels.phases import find, float64_function
+
+    hoisted = ["x7, x8 = vsincos(ph)", "x9 = x7 * fq"]
+    lines = ["x7 = hoisted_values[0, j]", "x8 = hoisted_values[1, j]",
+             "y = vsin(x7 * t) + x8 * w", "return y"]
+    phases = find([lines], hoisted, {"ph", "fq"})
+    assert phases.parameters == {"ph"} and phases.hoisted == ("x7, x8 = vsincos(ph)",)
+    assert float64_function(lines, phases.hoisted, phases.parameters) == [
+        "x7, x8 = vsincos(ph)", "y = vsin(x7 * t) + F(x8) * w", "return y"]

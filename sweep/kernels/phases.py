@@ -188,8 +188,9 @@ def find(functions, hoisted, parameters) -> Phases:
     for lines in functions:
         need |= _Flow(lines, table, parameters).needed()
     names = {d[1] for d in need if d[0] == "hoisted"}
+    # in order, once each (a statement may assign two names)
     return Phases(frozenset(d[1] for d in need if d[0] == "parameter"),
-                  tuple(table[name][0] for name in table if name in names))
+                  tuple(dict.fromkeys(table[name][0] for name in table if name in names)))
 
 
 class _Unwrap(ast.NodeTransformer):
@@ -222,7 +223,9 @@ def float64_function(lines, hoisted, parameters) -> list[str]:
     # read), in order, once each (a statement may assign two names)
     closure = {d[1] for d in need if d[0] == "hoisted"}
     again = list(dict.fromkeys(line for name, (line, _) in table.items() if name in closure))
-    wide = need | {("time",)}  # the float64 definitions
+    closure |= {name for line in again for name in _targets(_parse(line))}
+    # the float64 definitions
+    wide = need | {("hoisted", name) for name in closure} | {("time",)}
     out: list[str] = []
     placed = False
     for i, (line, statement) in enumerate(zip(lines, flow.statements)):
