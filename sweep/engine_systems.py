@@ -206,24 +206,14 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
 
 
 def _check_single(system: System, spec: SystemSpec) -> None:
-    """Refuse float32 where a system's kernel does not have it yet: on the GPU, with
-    the tangent dynamics, and for dynamics that read the time (a driven pivot: its
-    phase would need the float64 clock that the single pendulum's drives keep)."""
-    from .kernels.system import uses_time
-
+    """Refuse float32 where a system's kernel does not have it yet: on the GPU.
+    (Dynamics that read the time run in float32 with their drives' phases in float64,
+    `sweep.kernels.phases`; ``lyapunov`` with its tangent vector in float64.)"""
     where = type(system).__name__
     if spec.device != "cpu":
         raise ValueError(f"dtype='float32' for a system ({where}) runs on the CPU only yet; "
                          f"got device={spec.device!r}; accepted: device='cpu', or "
                          "dtype='float64'")
-    if "lyapunov" in spec.observe:
-        raise ValueError(f"observable 'lyapunov' is not available in float32 for a system "
-                         f"({where}) yet; accepted: dtype='float64', or observe without "
-                         "'lyapunov'")
-    if uses_time(spec):
-        raise ValueError(f"dtype='float32' is not available for a system whose dynamics read "
-                         f"the time ({where} with a driven pivot) yet; accepted: "
-                         "dtype='float64', or no drive")
 
 
 def run_system(system: System, grid: ParameterRows, *, progress=None, client=None,

@@ -47,6 +47,7 @@ from .adaptive import adaptive_kernel
 from .cuda import cuda_kernel, device_functions
 from .fixed import fixed_kernel
 from .network import NetworkSpec, network_cuda_source, network_source
+from .phases import float64_phases
 from .precision import (
     HEADER,
     clock,
@@ -66,7 +67,7 @@ from .spec import (
     method_of,
     tangent,
 )
-from .system import SystemSpec, system_source
+from .system import SystemSpec, drive_phases, system_source
 from .terms import accel_jacobian_source, accel_source, energy_source
 
 __all__ = ["source", "system_module"]
@@ -222,6 +223,9 @@ def system_module(spec: SystemSpec) -> str:
 
 
 _HOISTED = re.compile(r"(hoisted_values = np\.empty\(\(\d+, BLOCK\))\)")
+_STROBE_PERIOD = re.compile(r"(sb_S = round\(TWO_PI / \(\w+) \* dt\)\)")
+#: the tangent vector's first value and the exponent's sum: float64 lanes (`_system_single`)
+_TANGENT_START = re.compile(r"^(\s*(?:ly_\w+|acc_ly) = )F\(([^()]*)\)$", re.MULTILINE)
 _FLIP_TIME = re.compile(r"^(\s*at_\w+ = t0 \+ \(.*\)) \* dt$", re.MULTILINE)
 
 
@@ -238,12 +242,21 @@ def _system_single(spec: SystemSpec, text: str) -> str:
     """A system's CPU module in float32 (`sweep.kernels.precision`, as the single
     pendulum's): float literals and parameter loads as float32, the float32 sine, the
     step in float32 on a float64 clock; the angles, ``2 pi``, the flip's thresholds
-    and times, and the observables' accumulators stay float64."""
+    and times, the observables' accumulators and the drives' phases
+    (`sweep.kernels.phases`) stay float64."""
     angles = {c.symbol for c in spec.system.coordinates if c.angular}
-    text = clock(_single_module(text, _SYSTEM_VECMATH_IMPORT, angles))
+    phases = drive_phases(spec)
+    text = clock(_single_module(text, _SYSTEM_VECMATH_IMPORT, angles | phases.parameters))
     text = text.replace("F(math.pi)", "math.pi").replace("TWO_PI = F(2.0) * math.pi",
                                                          "TWO_PI = 2.0 * math.pi")
     text = _HOISTED.sub(r"\1, dtype=np.float32)", text)
+    # lyapunov: the tangent vector and the exponent's sum stay float64 (its stages read
+    # the float32 Jacobian, widened exactly); their first values as float64 literals
+    text = _TANGENT_START.sub(r"\1\2", text)
+    text = float64_phases(text, phases)  # a no-op where no function reads the time
+    # the times on the float64 clock: a strobe period's steps, the energy at t_end
+    text = _STROBE_PERIOD.sub(r"\1 * dt_clock))", text).replace(
+        "t0 + n_steps * dt)", "t0 + n_steps * dt_clock)")
     return _FLIP_TIME.sub(r"\1 * dt_clock", text)
 
 

@@ -50,14 +50,14 @@ from .lanes import (
     lane_loop,
     scalar_lanes,
 )
+from .phases import Phases
+from .phases import bodies as phase_bodies
+from .phases import find as find_phases
 from .rewrite import Rewritten, rewrite
 from .spec import Status, check_block
 from .steppers import fused
 
-__all__ = ["CATALOGUE_ARGUMENTS", "SystemSpec", "n_outputs", "system_source"]
-
-#: The kernel's arguments after ``saved`` with the ``attractor`` observable: the
-#: attractor catalogue as arrays (see the module docstring).
+__all__ = ["CATALOGUE_ARGUMENTS", "SystemSpec", "drive_phases", "n_outputs", "system_source"]
 
 NL = "\n"
 
@@ -185,6 +185,19 @@ def uses_time(spec: SystemSpec) -> bool:
     derived = spec.derived
     return "t" in IDENTIFIER.findall(NL.join(derived.accel_lines + derived.energy_lines
                                             + derived.jacobian_lines))
+
+
+def drive_phases(spec: SystemSpec) -> Phases:
+    """What the drive phases of a float32 kernel read (`sweep.kernels.phases`): the
+    parameters kept float64 and the hoisted statements recomputed in float64; nothing
+    in float64 or for dynamics that do not read the time."""
+    if spec.dtype == "float64" or not uses_time(spec):
+        return Phases(frozenset(), ())
+    coords = spec.system.coordinates
+    state = [c.symbol for c in coords] + [c.velocity_symbol for c in coords]
+    symbols = _symbols(spec)
+    physics, fast = _physics(spec, state, symbols)
+    return find_phases(phase_bodies(physics), fast.hoisted, symbols)
 
 
 def _physics(spec: SystemSpec, state: list[str],
@@ -444,8 +457,10 @@ def _parts(spec: SystemSpec) -> _Parts:
     flip = "flip" in spec.observe
     angles = [c.symbol for c in _angles(spec)]
     # float32 (`sweep.kernels.precision`): the angles stay float64, as the single
-    # pendulum's, so that their float32 increments do not round a growing angle
-    lane = {x: "float64" if x in angles else spec.dtype for x in state + symbols}
+    # pendulum's, so that their float32 increments do not round a growing angle; so do
+    # the parameters a drive's phase reads (`sweep.kernels.phases`)
+    wide = set(angles) | drive_phases(spec).parameters
+    lane = {x: "float64" if x in wide else spec.dtype for x in state + symbols}
     first = []
     if "winding" in spec.observe or flip:
         first += [f"well_{q} = round({q} / TWO_PI)" for q in angles]
