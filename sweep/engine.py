@@ -54,6 +54,7 @@ from .settings import (  # re-exported: sweep.engine.RunSettings, validate_setti
     validate_method,  # noqa: F401
     validate_settings,
 )
+from .system_attractors import catalogue_parts
 
 __all__ = ["run", "prepare", "warm_up", "estimate_error", "default_chunk_size", "RunSettings",
            "METHODS"]
@@ -335,13 +336,7 @@ def attractor_orbits(attractors) -> tuple:
     accepted = ("accepted: a catalogue from sweep.maps.attractor_catalogue(run), a mapping "
                 "with 'theta', 'omega' (m x P stroboscopic rings, finite) and 'period' "
                 "(m ints, 1 <= period <= P / 2: a ring shows its orbit twice)")
-    try:
-        theta = np.asarray(attractors["theta"], dtype=np.float64)
-        omega = np.asarray(attractors["omega"], dtype=np.float64)
-        period = np.asarray(attractors["period"])
-    except (KeyError, TypeError, ValueError, IndexError):
-        raise ValueError(f"attractors must be an attractor catalogue, got {attractors!r}; "
-                         f"{accepted}") from None
+    theta, omega, period = catalogue_parts(attractors, accepted)
     if theta.ndim != 2 or theta.shape != omega.shape or period.shape != theta.shape[:1] \
             or theta.shape[0] == 0 or not np.all(np.isfinite(theta)) \
             or not np.all(np.isfinite(omega)) or not np.issubdtype(period.dtype, np.integer) \

@@ -13,7 +13,22 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["catalogue_arguments", "catalogue_attributes", "check_catalogue", "initial_axes"]
+__all__ = ["catalogue_arguments", "catalogue_attributes", "catalogue_parts", "check_catalogue",
+           "initial_axes"]
+
+
+def catalogue_parts(attractors, accepted: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A catalogue's ``theta``, ``omega`` (float64) and ``period`` as arrays, for the
+    single pendulum's checks (`sweep.engine.attractor_orbits`) and a system's; anything
+    that is not such a mapping is refused, naming it and ``accepted``."""
+    try:
+        theta = np.asarray(attractors["theta"], dtype=np.float64)
+        omega = np.asarray(attractors["omega"], dtype=np.float64)
+        period = np.asarray(attractors["period"])
+    except (KeyError, TypeError, ValueError, IndexError):
+        raise ValueError(f"attractors must be an attractor catalogue, got {attractors!r}; "
+                         f"{accepted}") from None
+    return theta, omega, period
 
 
 def initial_axes(system) -> tuple[str, ...]:
@@ -75,13 +90,7 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
                 f"of this system, a mapping with 'theta', 'omega' (k x {m} x P rings of its "
                 f"{m} coordinates and of their velocities, finite) and 'period' (k ints, "
                 "1 <= period <= P / 2: a ring shows its orbit twice)")
-    try:
-        theta = np.asarray(attractors["theta"], dtype=np.float64)
-        omega = np.asarray(attractors["omega"], dtype=np.float64)
-        period = np.asarray(attractors["period"])
-    except (KeyError, TypeError, ValueError, IndexError):
-        raise ValueError(f"attractors must be an attractor catalogue, got {attractors!r}; "
-                         f"{accepted}") from None
+    theta, omega, period = catalogue_parts(attractors, accepted)
     given = attractors.get("coordinates") if hasattr(attractors, "get") else None
     expected = tuple(c.name for c in coordinates)
     if theta.ndim != 3 or theta.shape[1] != m:

@@ -574,11 +574,7 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
     if labels is None:
         labels = basins(ds, max_period=max_period, tol=tol)
     flat = labels.transpose(*dims).values.ravel()
-    period = np.asarray(labels.attrs["attractor_period"], dtype=np.int64)
-    if period.size == 0:
-        raise ValueError("attractor_catalogue: the run resolved no attractor (every "
-                         "trajectory is unresolved); accepted: a run whose trajectories "
-                         "settle, e.g. a longer t_end or t_transient")
+    period = _resolved_periods(labels)
     index = _catalogued(ds, dims)
     if index is not None and (index >= 0).any():  # matched rows: their catalogued ring
         rings = _catalogue_rings(ds.attrs, flat_theta.shape[1])
@@ -593,17 +589,24 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
     return {"theta": theta, "omega": omega, "period": period}
 
 
+def _resolved_periods(labels: xr.DataArray) -> np.ndarray:
+    """The periods of the attractors ``labels`` found (`basins`' attributes); refuses a
+    run that resolved none."""
+    period = np.asarray(labels.attrs["attractor_period"], dtype=np.int64)
+    if period.size == 0:
+        raise ValueError("attractor_catalogue: the run resolved no attractor (every "
+                         "trajectory is unresolved); accepted: a run whose trajectories "
+                         "settle, e.g. a longer t_end or t_transient")
+    return period
+
+
 def _system_catalogue(ds: xr.Dataset, labels, *, max_period: int, tol: float) -> dict:
     """`attractor_catalogue` of a driven system's run (its rings of every coordinate)."""
     position, velocity, _, dims, positions, _ = system_strobe_table(ds)
     if labels is None:
         labels = basins(ds, max_period=max_period, tol=tol)
     flat = labels.transpose(*dims).values.ravel()
-    period = np.asarray(labels.attrs["attractor_period"], dtype=np.int64)
-    if period.size == 0:
-        raise ValueError("attractor_catalogue: the run resolved no attractor (every "
-                         "trajectory is unresolved); accepted: a run whose trajectories "
-                         "settle, e.g. a longer t_end or t_transient")
+    period = _resolved_periods(labels)
     index = None
     if "attractor" in ds and "attractors_theta" in ds.attrs:
         index = ds["attractor"].transpose(*dims).values.ravel()
