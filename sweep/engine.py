@@ -28,6 +28,7 @@ from .grid import Grid, ParameterRows
 from .kernels import (
     KernelSpec,
     build,
+    catalogue_argument,
     check_dtype,
     check_method_fits,
     check_observables_fit,
@@ -276,7 +277,6 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
         device=device,
         strobe_samples=int(strobe_samples),
         dtype=dtype,
-        attractors=orbits,
         known_cells=known_cells is not None,
     )
     _check_angle_range(grid, spec)
@@ -322,9 +322,10 @@ def check_one_scene(grid: ParameterRows) -> None:
 
 
 def attractor_orbits(attractors) -> tuple:
-    """The kernel's attractor catalogue (`sweep.kernels.KernelSpec.attractors`) from a
-    catalogue of stroboscopic rings (`sweep.maps.attractor_catalogue`): per attractor,
-    the last ``period`` points of its ring, ``(theta mod 2 pi, omega)``; ``()`` for None.
+    """The orbits of an attractor catalogue (for the kernel's ``catalogue`` argument,
+    `sweep.kernels.catalogue_argument`) from a catalogue of stroboscopic rings
+    (`sweep.maps.attractor_catalogue`): per attractor, the last ``period`` points of its
+    ring, ``(theta mod 2 pi, omega)``; ``()`` for None.
 
     Raises
     ------
@@ -584,8 +585,10 @@ def run(
         from .execution.dask import check_client
 
         check_client(client)
+    catalogue = _catalogue(spec, attractors)
     store = _open_checkpoint(checkpoint, resume, scene=scene, grid=grid, settings=settings,
-                             spec=spec, chunk_size=int(chunk_size))
+                             spec=spec, chunk_size=int(chunk_size),
+                             **({} if catalogue is None else {"catalogue": catalogue}))
     # every per-trajectory array the kernel writes (out, status, [saved], [stats]); a
     # checkpoint stores and restores these, a distributed task returns its rows of them
     persisted = _allocate(spec, settings, n)
@@ -600,7 +603,8 @@ def run(
             bar.update(stop - start)
 
         execute(RunContext(scene, grid, spec, settings,
-                           known_arguments(known_cells) if spec.known_cells else ()),
+                           (() if catalogue is None else (catalogue,))
+                           + (known_arguments(known_cells) if spec.known_cells else ())),
                 todo, persisted, finished, client=client)
     if store is not None and not keep_checkpoint:
         store.remove()
@@ -623,6 +627,16 @@ def run(
                                   t0=t0, t_transient=t_transient, method=method, rtol=rtol,
                                   atol=atol, dtype=dtype))
     return ds
+
+
+def _catalogue(spec: KernelSpec, attractors) -> np.ndarray | None:
+    """The kernel's ``catalogue`` argument for a spec with the ``attractor`` observable
+    (`sweep.kernels.snippets.catalogue_argument` of the checked ``attractors``), else
+    None: the catalogue is data the kernel reads, not part of its text, so every
+    catalogue runs the same compiled kernel."""
+    if "attractor" not in spec.observe:
+        return None
+    return catalogue_argument(attractor_orbits(attractors), spec.dtype)
 
 
 def _refuse_known_cells(system: System):
@@ -678,9 +692,11 @@ def warm_up(scene: Scene, grid: Grid, **kwargs) -> KernelSpec:
         What was compiled.
     """
     settings, spec, _ = prepare(scene, grid, **kwargs)
+    catalogue = _catalogue(spec, kwargs.get("attractors"))
     _integrate(build(spec), grid.table(scene, 0, 0), settings,
                _allocate(spec, settings, 0),  # no trajectories: compiles, runs nothing
-               no_known_arguments() if spec.known_cells else ())
+               (() if catalogue is None else (catalogue,))
+               + (no_known_arguments() if spec.known_cells else ()))
     io.warm_up()
     return spec
 

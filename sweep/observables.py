@@ -367,9 +367,10 @@ OBSERVABLES: dict[str, Observable] = {
                  "ATTRACTOR_TOL of the successive points of that attractor's orbit for "
                  "ATTRACTOR_MATCHES forcing periods running; -1 if it never was"),
             ),
-            # the catalogue's points are pasted in by the kernel generator: CAT_TH, CAT_OM
-            # (angle in [0, 2 pi), velocity), CAT_NEXT (the orbit's next point), CAT_A
-            # (the attractor of each point), N_POINTS
+            # the catalogue is the kernel's argument ``catalogue`` (after ``saved``, or
+            # ``stats``; `sweep.kernels.snippets.catalogue_argument`): per point of the
+            # orbits, its angle in [0, 2 pi), velocity, the orbit's next point and its
+            # attractor; the kernel's text does not depend on it
             init=(
                 "acc_at_S = round(TWO_PI / (W * dt))\n"
                 "acc_at_k = 0\n"
@@ -380,15 +381,15 @@ OBSERVABLES: dict[str, Observable] = {
                 "if acc_at_k == 0 and acc_at_n < ATTRACTOR_MATCHES:\n"
                 "    acc_at_w = th - TWO_PI * math.floor(th / TWO_PI)\n"
                 "    acc_at_q = -1\n"
-                "    for acc_at_c in range(N_POINTS):\n"
-                "        acc_at_d = abs(acc_at_w - CAT_TH[acc_at_c])\n"
+                "    for acc_at_c in range(catalogue.shape[0]):\n"
+                "        acc_at_d = abs(acc_at_w - catalogue[acc_at_c, 0])\n"
                 "        if min(acc_at_d, TWO_PI - acc_at_d) < ATTRACTOR_TOL and "
-                "abs(om - CAT_OM[acc_at_c]) < ATTRACTOR_TOL:\n"
+                "abs(om - catalogue[acc_at_c, 1]) < ATTRACTOR_TOL:\n"
                 "            acc_at_q = acc_at_c\n"
                 "            break\n"
                 "    if acc_at_q < 0:\n"
                 "        acc_at_n = 0\n"
-                "    elif acc_at_n > 0 and acc_at_q == CAT_NEXT[acc_at_j]:\n"
+                "    elif acc_at_n > 0 and acc_at_q == catalogue[acc_at_j, 2]:\n"
                 "        acc_at_n += 1\n"
                 "    else:\n"
                 "        acc_at_n = 1\n"
@@ -397,7 +398,7 @@ OBSERVABLES: dict[str, Observable] = {
                 "if acc_at_k == acc_at_S:\n"
                 "    acc_at_k = 0"
             ),
-            final="out[i, COL] = CAT_A[acc_at_j] if acc_at_n >= ATTRACTOR_MATCHES else -1",
+            final="out[i, COL] = catalogue[acc_at_j, 3] if acc_at_n >= ATTRACTOR_MATCHES else -1",
             settled="SETTLED = acc_at_n >= ATTRACTOR_MATCHES",
             steady=True,
             requires_forcing=True,

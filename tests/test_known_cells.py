@@ -214,16 +214,14 @@ def test_a_run_on_known_cells_is_the_same_on_a_dask_cluster(wada_catalogue):
 def test_option_off_changes_no_kernel_source():
     """The known-cells code is pasted in only with known_cells=True: without it the
     kernel takes the contract's arguments and reads nothing of it."""
-    catalogue = (((0.5, 1.0), (1.5, -1.0)),)
     for refill in (False, True):
         spec = KernelSpec("nonlinear", ("damping", "forcing"), ("strobe", "attractor"),
-                          stop_early=True, refill=refill, attractors=catalogue)
+                          stop_early=True, refill=refill)
         text = source(spec)
         assert "known" not in text and "acc_kn" not in text
         with_known = source(KernelSpec(spec.model, spec.effects, spec.observe,
-                                       stop_early=True, refill=refill,
-                                       attractors=catalogue, known_cells=True))
-        assert "saved, known, known_axes)" in with_known
+                                       stop_early=True, refill=refill, known_cells=True))
+        assert "saved, catalogue, known, known_axes)" in with_known
         assert hashlib.sha1(text.encode()).digest() != \
             hashlib.sha1(with_known.encode()).digest()
 

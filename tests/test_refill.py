@@ -31,11 +31,12 @@ def _table(n, seed=3):
     return params
 
 
-def _call(spec, params, n_transient=150 * 20):
+def _call(spec, params, n_transient=150 * 20, extra=()):
+    """``extra``: the kernel's arguments after ``saved`` (an attractor catalogue)."""
     out = np.full((params.shape[0], kernels.n_columns(spec)), -7.0)
     status = np.full(params.shape[0], 99, dtype=np.int8)
     kernels.build(spec)(params, 0.0, DT, N_STEPS, n_transient, 1, out, status,
-                        np.empty((0, 2, 0)))
+                        np.empty((0, 2, 0)), *extra)
     return out, status
 
 

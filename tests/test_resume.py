@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
-from shared_kernels import EVERY, EVERY_ADAPTIVE
+from shared_kernels import EVERY, EVERY_ADAPTIVE, WADA_PILOT, WADA_SCENE
 
 import sweep
 from sweep import cli
@@ -163,6 +163,27 @@ def test_checkpoint_of_another_run_is_refused_naming_the_difference(change, mess
                   **{**KWARGS, **change.get("kwargs", {})})
     assert counter.calls == 0  # refused before any compute
     assert sorted(p.name for p in folder.iterdir()) == before  # and nothing touched
+
+
+def test_a_resume_with_another_attractor_catalogue_is_refused(wada_catalogue, tmp_path,
+                                                                monkeypatch):
+    """The catalogue is the kernel's data, not part of its spec: the fingerprint holds
+    its digest, so a resume with another catalogue (one attractor fewer) is refused
+    before any compute, and one with the same catalogue gives the uninterrupted run."""
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, 9), omega0=np.linspace(-4, 4, 9))
+    run = dict(WADA_PILOT, attractors=wada_catalogue)
+    folder = tmp_path / "ck"
+    interrupted(monkeypatch, folder, 2, scene=WADA_SCENE, grid=grid, **run)
+    partial = {name: values[1:] for name, values in wada_catalogue.items()}
+    counter = Interrupt(monkeypatch, None)
+    with pytest.raises(ValueError, match=r"belongs to a different run: .*catalogue\.sha256"):
+        sweep.run(WADA_SCENE, grid, chunk_size=CHUNK, checkpoint=folder, resume=True,
+                  **{**KWARGS, **run, "attractors": partial})
+    assert counter.calls == 0
+    resumed = sweep.run(WADA_SCENE, grid, chunk_size=CHUNK, checkpoint=folder, resume=True,
+                        **{**KWARGS, **run})
+    assert counter.calls == len(range(0, grid.size, CHUNK)) - 2
+    identical(resumed, sweep.run(WADA_SCENE, grid, **run))
 
 
 def test_sweep_version_is_part_of_the_fingerprint(tmp_path, monkeypatch):

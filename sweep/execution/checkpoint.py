@@ -28,7 +28,8 @@ that one is alive, naming it; a lock left by a dead process on this host is take
 
 The manifest records a fingerprint of everything that determines the results: the
 scene, the grid (axis names, sizes and a SHA-256 of each axis's values), the
-time-stepping settings, the kernel spec, the chunk size and the sweep version. Resuming
+time-stepping settings, the kernel spec, the attractor catalogue (a SHA-256 of the
+kernel's ``catalogue`` argument), the chunk size and the sweep version. Resuming
 with a checkpoint whose fingerprint differs is refused with a ValueError that names
 each difference.
 
@@ -82,7 +83,8 @@ def _chunk_name(start: int, stop: int) -> str:
     return f"chunk-{start:012d}-{stop:012d}.npz"
 
 
-def fingerprint(*, scene, grid, settings, spec, chunk_size: int, version: str) -> dict:
+def fingerprint(*, scene, grid, settings, spec, chunk_size: int, version: str,
+                catalogue=None) -> dict:
     """JSON-ready description of everything that determines a run's results.
 
     Parameters
@@ -94,6 +96,9 @@ def fingerprint(*, scene, grid, settings, spec, chunk_size: int, version: str) -
     chunk_size : int
     version : str
         The sweep version.
+    catalogue : numpy.ndarray, optional
+        The kernel's ``catalogue`` argument (the ``attractor`` observable's,
+        `sweep.kernels.snippets.catalogue_argument`): data, not part of the spec.
 
     Returns
     -------
@@ -127,6 +132,9 @@ def fingerprint(*, scene, grid, settings, spec, chunk_size: int, version: str) -
                    "fastmath": repr(_config.FASTMATH)},
         "chunk_size": int(chunk_size),
     }
+    if catalogue is not None:
+        fp["catalogue"] = {"shape": list(np.shape(catalogue)), "sha256": hashlib.sha256(
+            np.ascontiguousarray(catalogue, dtype="<f8").tobytes()).hexdigest()}
     return json.loads(json.dumps(fp))  # tuples -> lists, as they read back
 
 

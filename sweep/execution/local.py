@@ -16,9 +16,11 @@ __all__ = ["RunContext", "allocate", "integrate", "run_chunks"]
 
 class RunContext:
     """What every chunk needs: scene, grid, kernel spec and time settings, and the
-    kernel's extra arguments after ``saved`` (``known``: `sweep._known.known_arguments`
-    for a spec with ``known_cells``, a swing network's arrays
-    (`sweep.kernels.network.network_arguments`) on the CPU, else ``()``).
+    kernel's arguments after ``saved`` (``stats``) (``known``: the ``attractor``
+    observable's catalogue, `sweep.kernels.snippets.catalogue_argument`, then for a
+    spec with ``known_cells`` `sweep._known.known_arguments`; a system's catalogue,
+    `sweep.system_attractors.catalogue_arguments`; a swing network's arrays,
+    `sweep.kernels.network.network_arguments`, on the CPU; else ``()``).
 
     A plain picklable object (a Dask task carries it); `table` gives a chunk's
     parameter rows.
@@ -63,11 +65,12 @@ def allocate(spec, settings, n: int) -> dict[str, np.ndarray]:
 def integrate(kernel, table, settings, arrays: dict[str, np.ndarray], known: tuple = ()) -> None:
     """Run ``kernel`` on the parameter rows ``table``, writing into ``arrays`` (same
     rows): the one call of the kernel contract, shared by local runs and workers
-    (``known``: the arguments a known-cells kernel takes after ``saved``)."""
+    (``known``: the arguments the kernel takes after ``saved``, or ``stats``:
+    `RunContext`)."""
     if settings.adaptive:
         kernel(table, settings.t0, settings.t_end, settings.dt, settings.t_transient,
                settings.rtol, settings.atol, arrays["out"], arrays["status"],
-               arrays["stats"])
+               arrays["stats"], *known)
     else:
         saved = arrays.get("saved")
         kernel(table, settings.t0, settings.dt, settings.n_steps, settings.n_transient,

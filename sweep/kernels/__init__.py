@@ -18,6 +18,7 @@ the engine, the execution back ends or the maps.
 """
 
 from .cache import build, compiled
+from .snippets import catalogue_argument
 from .source import source
 from .spec import (
     DEVICES,
@@ -36,8 +37,8 @@ from .spec import (
     status_counts,
 )
 
-__all__ = ["DEVICES", "DTYPES", "KernelSpec", "Status", "build", "check_device", "check_dtype",
-           "compiled",
+__all__ = ["DEVICES", "DTYPES", "KernelSpec", "Status", "build", "catalogue_argument",
+           "check_device", "check_dtype", "compiled",
            "check_method_fits",
            "check_observables_fit", "check_tangent_fits", "declarations", "failure_summary",
            "method_of", "n_columns", "source", "status_counts"]

@@ -34,7 +34,7 @@ from __future__ import annotations
 from .. import _config
 from ..observables import OBSERVABLES
 from .lanes import IDENTIFIER, allocate, indent, lane_loop, lane_snippet, skip_unless
-from .snippets import snippets
+from .snippets import kernel_arguments, snippets
 from .spec import KernelSpec, Status, n_columns
 from .steppers import at_node, combination, fused, rk_stages
 from .terms import accel_call, drive_line, drive_nodes, load_lines
@@ -156,19 +156,20 @@ else:
             done, lane, level=3, head=skip_unless("active"), stores=["active"])
     else:
         control_loop = lane_loop(control, lane, level=3, head=skip_unless("active"))
+    extra = kernel_arguments(spec)  # the attractor observable's catalogue
     return f'''
 from sweep.kernels.vecmath import inverse_fifth_root as vroot5
 
 BLOCK = {spec.block}
 
 
-def kernel(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats):
+def kernel(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats{extra}):
     run_blocks(blocks, (params.shape[0] + BLOCK - 1) // BLOCK,
-               params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats)
+               params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats{extra})
 
 
 @njit(nogil=True, **JIT)
-def blocks(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats,
+def blocks(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats{extra},
            b_first, b_stop):
     TWO_PI = 2.0 * math.pi
     t_obs = t0 + t_transient

@@ -32,6 +32,7 @@ from .lanes import indent
 from .snippets import (
     failed_samples,
     failed_status,
+    kernel_arguments,
     ok_test,
     renormalisations,
     snippets,
@@ -159,9 +160,10 @@ def _param(column, params, flat, columns, strides, sizes, offsets, values):
     return params[column]
 '''
 
-#: The module's ``kernel``: the CPU kernels' contract around the CUDA ``_thread``.
+#: The module's ``kernel``: the CPU kernels' contract around the CUDA ``_thread``
+#: (``{arguments}``: the arguments after ``saved``; ``{on_device}``: them on the GPU).
 _LAUNCHER = '''\
-def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved):
+def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{arguments}):
     """Run one GPU thread per trajectory and copy the outputs back (the CPU kernels'
     contract). ``params``: the chunk's rows described (`sweep.grid.GridRows`: a few
     hundred bytes go to the GPU, and each thread reads its own parameters from it, see
@@ -177,7 +179,7 @@ def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved)
         warnings.filterwarnings("ignore", ".*Grid size .* under-utilization")
         _thread[(n + THREADS - 1) // THREADS, THREADS](
             cuda.to_device(rows.template), t0, dt, n_steps, n_transient, save_every, d_out,
-            d_status, d_saved, rows.start, cuda.to_device(rows.columns),
+            d_status, d_saved{on_device}, rows.start, cuda.to_device(rows.columns),
             cuda.to_device(rows.strides), cuda.to_device(rows.sizes),
             cuda.to_device(rows.offsets), cuda.to_device(rows.values))
     out[...] = d_out.copy_to_host()
@@ -231,15 +233,19 @@ def cuda_kernel(spec: KernelSpec, method) -> str:
                     "flat = first + i", "TWO_PI = 2.0 * math.pi", "k_state = 0"]
                    + parts["preamble"] + first
                    + ["for step in range(n_steps):", indent(NL.join(loop), 1)] + finish)
-    return cuda_module(body)
+    return cuda_module(body, kernel_arguments(spec))
 
 
 
 def cuda_module(thread_body: str, arguments: str = "") -> str:
     """A CUDA kernel module's body from a thread's code: ``_param``, the ``_thread``
     kernel (``thread_body``, indented once, reading its parameters with ``_param``) and
-    the ``kernel`` launcher with the CPU contract; shared by the systems' kernels
-    (`sweep.kernels.system`)."""
+    the ``kernel`` launcher with the CPU contract (``arguments``: the arrays it takes
+    after ``saved``, as source, ``""`` or starting with ``", "``, copied to the GPU for
+    the thread, e.g. `sweep.kernels.snippets.kernel_arguments`); shared by the systems'
+    kernels (`sweep.kernels.system`)."""
+    names = [name.strip() for name in arguments.split(",") if name.strip()]
+    on_device = "".join(f", cuda.to_device(np.ascontiguousarray({name}))" for name in names)
     return f'''
 THREADS = {THREADS_PER_BLOCK}
 
@@ -247,9 +253,9 @@ THREADS = {THREADS_PER_BLOCK}
 {_PARAMETER}
 
 @cuda.jit
-def _thread(params, t0, dt, n_steps, n_transient, save_every, out, status, saved, first,
+def _thread(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{arguments}, first,
             columns, strides, sizes, offsets, values):
 {indent(_device(thread_body), 1)}
 
 
-{_LAUNCHER}'''
+{_LAUNCHER.format(arguments=arguments, on_device=on_device)}'''

@@ -35,14 +35,13 @@ def lane_loop(body: str, lane: dict[str, str], *, level: int, head: str = "",
                   level)
 
 
-def blocks_head(block: int, known: bool = False, more: str = "") -> str:
+def blocks_head(block: int, extra: str = "") -> str:
     """The head of a fixed-step kernel module's body: ``BLOCK``, the Python ``kernel``
     (the contract of `sweep.kernels.source`) that spreads the blocks over threads
     (`sweep.kernels.threads.run_blocks`), and the signature of the compiled ``blocks``
-    over a range of blocks, whose body follows (with ``known``: the two arguments of
-    `sweep.kernels.KernelSpec.known_cells` after ``saved``; ``more``: further arguments
-    after those, as ``", a, b"``: a system's attractor catalogue, a swing network)."""
-    extra = (KNOWN_ARGUMENTS if known else "") + more
+    over a range of blocks, whose body follows (``extra``: the arguments after
+    ``saved``, as source, `sweep.kernels.snippets.kernel_arguments`; a system's
+    attractor catalogue, `CATALOGUE_ARGUMENTS`; a swing network's arrays)."""
     return f'''
 BLOCK = {block}
 

@@ -237,7 +237,7 @@ def accel(x, v, kx, kv, alpha, coupling, src, dst, weight, power):
             kv[c, j] -= f
 
 
-{blocks_head(spec.block, more=NETWORK_ARGUMENTS)}    n = params.shape[0]
+{blocks_head(spec.block, NETWORK_ARGUMENTS)}    n = params.shape[0]
     N = power.shape[0]
 {indent(NL.join(constants.values()), 1)}
     th = np.empty((N, BLOCK))

@@ -23,14 +23,20 @@ from ..observables import OBSERVABLES
 from .fixed import NL, _drives, _finish, _first_lines, _lane_dtypes, _load, _parameters
 from .lanes import (
     IDENTIFIER,
-    KNOWN_ARGUMENTS,
     allocate,
     indent,
     lane_loop,
     lane_snippet,
     skip_unless,
 )
-from .snippets import KNOWN_STATE, known_head, known_source, snippets, stop_source
+from .snippets import (
+    KNOWN_STATE,
+    kernel_arguments,
+    known_head,
+    known_source,
+    snippets,
+    stop_source,
+)
 from .spec import KernelSpec, n_columns
 from .steppers import STEPPERS
 
@@ -198,8 +204,7 @@ finished = False"""
         observe_loop = indent(_DUE, 3) + NL + indent(observe_loop, 1)
     refill_loop = lane_loop(refill, lane, level=4,
                             head=skip_unless("finished"))
-    extra = KNOWN_ARGUMENTS if spec.known_cells else ""
-    return groups_head(spec.block, extra) + f'''\
+    return groups_head(spec.block, kernel_arguments(spec)) + f'''\
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(parts["preamble"]), 1)}

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import re
 
+import numpy as np
+
 from ..observables import (
     ATTRACTOR_MATCHES,
     ATTRACTOR_TOL,
@@ -11,12 +13,13 @@ from ..observables import (
     STROBE_TOL,
     STROBE_TOL_FLOAT32,
 )
-from .lanes import indent
+from .lanes import KNOWN_ARGUMENTS, indent
 from .spec import KernelSpec, Status
 from .terms import tension_terms
 
-__all__ = ["KNOWN_STATE", "KNOWN_STOPPED", "failed_samples", "failed_status", "finite_test",
-           "known_final", "known_head", "known_init", "known_source", "ok_test",
+__all__ = ["CATALOGUE_ARGUMENT", "KNOWN_STATE", "KNOWN_STOPPED", "catalogue_argument",
+           "failed_samples", "failed_status", "finite_test",
+           "kernel_arguments", "known_final", "known_head", "known_init", "known_source", "ok_test",
            "renormalisations", "snippets", "stop_source"]
 
 #: The known-cells stop's count of hits once the trajectory stopped on known cells
@@ -29,27 +32,70 @@ KNOWN_STATE = {"acc_kn_S": "int64", "acc_kn_next": "int64", "acc_kn_n": "int64",
 
 
 def _counts(code: str, spec: KernelSpec) -> str:
-    """``NSTROBE`` -> the spec's number of stroboscopic samples; the attractor
-    catalogue's names (``CAT_TH``, ``CAT_OM``, ``CAT_NEXT``, ``CAT_A``, ``N_POINTS``,
-    ``ATTRACTOR_TOL``, ``ATTRACTOR_MATCHES``) -> its points as tuples and the
-    constants (`sweep.observables`, the ``attractor`` observable)."""
+    """``NSTROBE`` -> the spec's number of stroboscopic samples; ``ATTRACTOR_TOL``,
+    ``ATTRACTOR_MATCHES`` -> the constants of the ``attractor`` observable
+    (`sweep.observables`), whose catalogue is the kernel's argument ``catalogue``
+    (`catalogue_argument`), not part of its text."""
     code = code.replace("NSTROBE", str(spec.strobe_samples))
-    if "CAT_" not in code and "ATTRACTOR_" not in code:
+    if "ATTRACTOR_" not in code:
         return code
-    th, om, following, owner = [], [], [], []
-    for a, orbit in enumerate(spec.attractors):
-        start = len(th)
-        for k, (theta, omega) in enumerate(orbit):
-            th.append(repr(float(theta)))
-            om.append(repr(float(omega)))
-            following.append(str(start + (k + 1) % len(orbit)))
-            owner.append(str(a))
-    for name, values in (("CAT_TH", th), ("CAT_OM", om), ("CAT_NEXT", following),
-                         ("CAT_A", owner)):
-        code = re.sub(rf"\b{name}\b", "(" + ", ".join(values) + ",)", code)
-    return (code.replace("N_POINTS", str(len(th)))
-            .replace("ATTRACTOR_TOL", repr(ATTRACTOR_TOL))
+    return (code.replace("ATTRACTOR_TOL", repr(ATTRACTOR_TOL))
             .replace("ATTRACTOR_MATCHES", str(ATTRACTOR_MATCHES)))
+
+
+#: The kernel argument of the ``attractor`` observable's catalogue (`catalogue_argument`).
+CATALOGUE_ARGUMENT = ", catalogue"
+
+
+def kernel_arguments(spec: KernelSpec) -> str:
+    """The arguments a single pendulum's kernel takes after ``saved`` (an adaptive
+    kernel: after ``stats``), as source (``""`` or starting with ``", "``): the
+    ``attractor`` observable's ``catalogue`` (`catalogue_argument`), then with
+    `KernelSpec.known_cells` ``known`` and ``known_axes``."""
+    return (CATALOGUE_ARGUMENT if "attractor" in spec.observe else "") + \
+        (KNOWN_ARGUMENTS if spec.known_cells else "")
+
+
+def catalogue_argument(orbits, dtype: str = "float64") -> np.ndarray:
+    """The kernel's ``catalogue`` argument (the ``attractor`` observable's) from an
+    attractor catalogue's orbits.
+
+    Parameters
+    ----------
+    orbits : sequence of sequence of (float, float)
+        Per attractor, its orbit's stroboscopic points ``(theta mod 2 pi [rad], omega
+        [rad/s])`` in the order the orbit visits them (`sweep.engine.attractor_orbits`).
+    dtype : {"float64", "float32"}
+        The kernel's working precision (`KernelSpec.dtype`): a float32 kernel compares
+        its state with the points rounded to float32.
+
+    Returns
+    -------
+    numpy.ndarray
+        C-contiguous, of ``dtype``, shape ``(n_points, 4)``: per point of the orbits, one
+        after the other, its angle [rad], its velocity [rad/s], the row of its orbit's
+        next point and the index of its attractor (both whole numbers).
+
+    Raises
+    ------
+    ValueError
+        For no orbit, an orbit without a point, or a point that is not finite.
+    """
+    rows = []
+    for a, orbit in enumerate(orbits):
+        orbit = [(float(theta), float(omega)) for theta, omega in orbit]
+        if not orbit:
+            rows = []
+            break
+        start = len(rows)
+        rows += [(theta, omega, start + (k + 1) % len(orbit), a)
+                 for k, (theta, omega) in enumerate(orbit)]
+    table = np.array(rows, dtype=np.float64).reshape(-1, 4)
+    if not len(table) or not np.isfinite(table).all():
+        raise ValueError(f"the 'attractor' observable's catalogue must hold at least one "
+                         f"orbit, each with at least one point, every point finite; got "
+                         f"{orbits!r}")
+    return np.ascontiguousarray(table, dtype=dtype)
 
 
 _TOLERANCE = re.compile(r"STROBE_TOL\(([^()]*)\)")

@@ -14,8 +14,11 @@ out : float64[n, n_columns(spec)]     observables, in observe order
 status : int8[n]                      Status code per trajectory
 saved : float64[n, 2, n_saved]        theta, omega at steps 0, k, 2k, ... (spec.save)
 
-With `KernelSpec.known_cells` a fixed-step kernel takes two arguments more, after
-``saved``: ``known`` (int32[n0, n1]) and ``known_axes`` (float64[5]); see
+With the ``attractor`` observable a kernel takes the attractor catalogue after
+``saved`` (an adaptive kernel: after ``stats``): ``catalogue`` (float[n_points, 4] in
+the spec's dtype, `sweep.kernels.snippets.catalogue_argument`), so one kernel serves
+every catalogue. With `KernelSpec.known_cells` a fixed-step kernel takes two arguments
+more, after those: ``known`` (int32[n0, n1]) and ``known_axes`` (float64[5]); see
 `sweep.kernels.snippets.known_source`.
 
 Adaptive kernels (embedded pairs, per-trajectory step-size control)::

@@ -4,7 +4,6 @@ and the checks that a method and observables fit a scene."""
 from __future__ import annotations
 
 import enum
-import math
 import re
 from dataclasses import dataclass
 
@@ -121,7 +120,9 @@ class KernelSpec:
         The effects whose terms exist, in canonical order; given as names (``"damping"``),
         effect classes or declarations.
     observe : tuple of str
-        Observable names in canonical (`OBSERVABLES`) order.
+        Observable names in canonical (`OBSERVABLES`) order. With ``attractor`` the
+        kernel takes the attractor catalogue as an argument, ``catalogue``
+        (`sweep.kernels.snippets.catalogue_argument`): one kernel for every catalogue.
     save : bool
         Whether sampled trajectories are written.
     method : str or sweep.methods.ButcherTableau or sweep.methods.SplittingMethod
@@ -158,16 +159,12 @@ class KernelSpec:
         (`sweep.kernels.precision`; float32 for fixed-step methods only). The clock
         ``t0 + n dt`` is formed in float64 and rounded once; observables accumulate
         and report in float64.
-    attractors : tuple of tuple of (float, float)
-        The attractor catalogue of the ``attractor`` observable: per attractor, its
-        orbit's stroboscopic points ``(theta mod 2 pi, omega)`` in the order the orbit
-        visits them (pasted into the kernel as constants; empty without it).
     block : int
         Trajectories per block of the fixed-step, refill and adaptive kernels (SIMD
         lanes; a multiple of 8, or 1 for a few trajectories, each alone). Results do not
         depend on it (a test checks it); `_config.BLOCK` by default.
     known_cells : bool
-        With ``stop_early`` and an attractor catalogue: the kernel takes two more
+        With ``stop_early`` and the ``attractor`` observable: the kernel takes two more
         arguments, ``known`` (int32[n0, n1], per cell of a map over theta0 x omega0
         ``4 L + h``: the index ``L`` of the catalogued attractor its start settles on
         and the hits ``h`` (1..3) that stop a trajectory there, -1 unknown;
@@ -190,24 +187,14 @@ class KernelSpec:
     device: str = "cpu"
     strobe_samples: int = STROBE_SAMPLES
     dtype: str = "float64"
-    attractors: tuple = ()
     known_cells: bool = False
 
     def __post_init__(self) -> None:
         check_device(self.device)
         check_dtype(self.dtype)
-        attractors = tuple(tuple((float(theta), float(omega)) for theta, omega in orbit)
-                           for orbit in self.attractors)
-        object.__setattr__(self, "attractors", attractors)
-        if ("attractor" in self.observe) != bool(attractors) or any(not o for o in attractors) \
-                or not all(math.isfinite(x) for orbit in attractors for point in orbit
-                           for x in point):
-            raise ValueError("the 'attractor' observable needs an attractor catalogue and a "
-                             "catalogue needs the observable; accepted: both or neither, "
-                             "each orbit with at least one point, every point finite")
-        if self.known_cells and not (self.stop_early and attractors
+        if self.known_cells and not (self.stop_early and "attractor" in self.observe
                                      and self.device == "cpu" and self.dtype == "float64"):
-            raise ValueError("known_cells needs stop_early, an attractor catalogue, "
+            raise ValueError("known_cells needs stop_early, the 'attractor' observable, "
                              "device='cpu' and dtype='float64'; accepted: all four, or "
                              "known_cells=False")
         if self.device == "cuda":  # one thread per trajectory: no lanes to refill or share
@@ -255,8 +242,6 @@ class KernelSpec:
                 f"refill={self.refill!r}, device={self.device!r}, "
                 f"strobe_samples={self.strobe_samples!r}"
                 + (f", dtype={self.dtype!r}" if self.dtype != "float64" else "")
-                + (f", attractors: {len(self.attractors)} orbits of "
-                   f"{sum(map(len, self.attractors))} points" if self.attractors else "")
                 + (", known_cells=True" if self.known_cells else ""))
 
 
