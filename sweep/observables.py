@@ -370,7 +370,12 @@ OBSERVABLES: dict[str, Observable] = {
             # the catalogue is the kernel's argument ``catalogue`` (after ``saved``, or
             # ``stats``; `sweep.kernels.snippets.catalogue_argument`): per point of the
             # orbits, its angle in [0, 2 pi), velocity, the orbit's next point and its
-            # attractor; the kernel's text does not depend on it
+            # attractor; the kernel's text does not depend on it. The scan runs from the
+            # last point down, without a break and with `&` (no branch but the loop's),
+            # so the first matching point wins, as a forward scan with a break would
+            # find it: with the points in memory that loop matched the speed of the
+            # constants it replaced (the break cost the catalogue map 1.5-2 % CPU,
+            # Zen 5, single thread)
             init=(
                 "acc_at_S = round(TWO_PI / (W * dt))\n"
                 "acc_at_k = 0\n"
@@ -381,12 +386,11 @@ OBSERVABLES: dict[str, Observable] = {
                 "if acc_at_k == 0 and acc_at_n < ATTRACTOR_MATCHES:\n"
                 "    acc_at_w = th - TWO_PI * math.floor(th / TWO_PI)\n"
                 "    acc_at_q = -1\n"
-                "    for acc_at_c in range(catalogue.shape[0]):\n"
+                "    for acc_at_c in range(catalogue.shape[0] - 1, -1, -1):\n"
                 "        acc_at_d = abs(acc_at_w - catalogue[acc_at_c, 0])\n"
-                "        if min(acc_at_d, TWO_PI - acc_at_d) < ATTRACTOR_TOL and "
-                "abs(om - catalogue[acc_at_c, 1]) < ATTRACTOR_TOL:\n"
+                "        if (abs(om - catalogue[acc_at_c, 1]) < ATTRACTOR_TOL) & "
+                "(min(acc_at_d, TWO_PI - acc_at_d) < ATTRACTOR_TOL):\n"
                 "            acc_at_q = acc_at_c\n"
-                "            break\n"
                 "    if acc_at_q < 0:\n"
                 "        acc_at_n = 0\n"
                 "    elif acc_at_n > 0 and acc_at_q == catalogue[acc_at_j, 2]:\n"

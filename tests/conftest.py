@@ -52,10 +52,9 @@ def pytest_runtest_protocol(item, nextitem):
 def wada_catalogue():
     """The forced Wada map's attractor catalogue, from its 21 x 21 pilot.
 
-    A catalogue is pasted into the kernel as constants, so each different catalogue is a
-    kernel of its own (seconds of compiling): the tests that need *a* catalogue of this
-    scene, not one from their own pilot, share this one (and so its kernels, in memory
-    and in numba's disk cache, whichever worker compiled them)."""
+    The tests that need *a* catalogue of this scene, not one from their own pilot, share
+    this one: its pilot runs once per process. (A catalogue is the kernel's argument, so
+    every catalogue shares the kernels of its run settings.)"""
     from sweep import maps
 
     grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, 21),
