@@ -265,8 +265,10 @@ DRIVEN = sweep.DoublePendulum(pivot_amplitude=0.1, pivot_frequency=60.0,
                               effects=(sweep.Damping(2.0),))
 PERIOD = 2 * np.pi / 60.0  # s
 DRIVEN_RUN = dict(t_end=100 * PERIOD, dt=PERIOD / 40)
-#: Pixels per axis of the driven maps: 64 starts, one 16-lane kernel that the explorer,
-#: the reference run and both snippets share (one compilation).
+#: Pixels per axis of the driven maps: 64 starts, one 16-lane kernel that the explorer's
+#: exact route, the reference run and both snippets share (one compilation); the
+#: catalogue route's pilot (21 x 21) and its stopping run take the 64-lane kernels that
+#: tests/test_system_attractors.py compiles (the same declaration, another damping).
 M = 8
 
 
