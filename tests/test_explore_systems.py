@@ -5,6 +5,8 @@ input, and the snippets that reproduce a map."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -263,8 +265,10 @@ DRIVEN = sweep.DoublePendulum(pivot_amplitude=0.1, pivot_frequency=60.0,
                               effects=(sweep.Damping(2.0),))
 PERIOD = 2 * np.pi / 60.0  # s
 DRIVEN_RUN = dict(t_end=100 * PERIOD, dt=PERIOD / 40)
-#: Pixels per axis of the driven maps: 64 starts, one 16-lane kernel that the explorer,
-#: the reference run and both snippets share (one compilation).
+#: Pixels per axis of the driven maps: 64 starts, one 16-lane kernel that the explorer's
+#: exact route, the reference run and both snippets share (one compilation); the
+#: catalogue route's pilot (21 x 21) and its stopping run take the 64-lane kernels that
+#: tests/test_system_attractors.py compiles (the same declaration, another damping).
 M = 8
 
 
@@ -274,15 +278,18 @@ def driven(system=DRIVEN, **extra):
 
 
 def test_a_driven_systems_basins_map_is_maps_basins_of_the_same_run(tmp_path):
-    """The basins (and period) map of a driven double pendulum equals `sweep.maps.basins`
-    (`sweep.maps.period`) of `sweep.run` of the window's starts, cell by cell: the same
-    kernel on the same floats gives the same samples to the bit, so the same labels
-    (exact, unresolved ones included); the run file and the Python the page shows give
-    them again."""
+    """The basins map of a driven double pendulum by the exact route (and its period
+    map) equals `sweep.maps.basins` (`sweep.maps.period`) of `sweep.run` of the window's
+    starts, cell by cell: the same kernel on the same floats gives the same samples to
+    the bit, so the same labels (exact, unresolved ones included); the run file and the
+    Python the page shows give them again."""
     e = driven(quantity="basins")
     assert list(e.quantities())[:2] == ["basins", "period"]
     assert e.state.quantity == "basins"
+    e.update(route="exact")
     result = e.compute()
+    assert result.route == f"exact route: {M * M} starts run to t_end"
+    assert result.catalogue is None
     ds = reference(e, observe=("strobe",))
     expected = maps.basins(ds)
     np.testing.assert_array_equal(result.values, plane(expected))
@@ -460,3 +467,120 @@ def test_bad_network_input_is_refused(change, words):
         e.update(**change)
     for word in words:
         assert word in str(info.value)
+
+
+# ------------------------------------------------ driven basins: the catalogue route
+def _point(labels, label: int) -> np.ndarray:
+    """basins' attractor ``label`` as one point (theta1, theta2, omega1, omega2)."""
+    return np.array([labels.attrs[f"attractor_{n}"][label]
+                     for n in ("theta1", "theta2", "omega1", "omega2")])
+
+
+def _same_place(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two attractor points are within 0.1 (rad, rad/s) of each other, angles
+    modulo 2 pi: one attractor seen at two stages of a start's slow convergence (the
+    points below differ by at most 0.03), while this window's distinct attractors (arms
+    down or upright) are pi apart in an angle."""
+    d = np.abs(a - b)
+    d[:2] = np.minimum(np.mod(d[:2], 2 * np.pi), 2 * np.pi - np.mod(d[:2], 2 * np.pi))
+    return bool((d < 0.1).all())
+
+
+#: A zoom of the driven window with starts the two routes label differently.
+ZOOM = ((-3.0, 0.5), (-1.0, 3.4))
+
+
+def test_the_catalogue_route_labels_the_starts_as_the_exact_route(monkeypatch):
+    """A driven system's basins map takes the catalogue route by default: a 21 x 21
+    pilot over the home window (one strobe run, `sweep.maps.pilot_catalogue`), then the
+    window's run observing strobe and attractor with the catalogue and stop_early, and
+    `sweep.maps.basins`. Its labels are the exact route's (the full strobe run: the
+    same integers, unresolved ones included) but where the catalogue legitimately
+    labels a start the exact route has not resolved yet: the catalogue stopped it (its
+    strobe points within 1e-3 of a catalogued orbit 3 periods running), and the exact
+    route's last 16 samples call it unresolved (a spiral onto the orbit still wider than
+    basins' tol) or an "attractor" at the same place (a period-8 ring around the
+    catalogue's period-1 point; the 4 corners of the home window, still creeping onto
+    both arms upright at |omega| ~ 5e-3 rad/s, each called a period-1 point where it is
+    at t_end). 4 of the 64 starts at home, 4 in the zoom. Two of the home corners were
+    not stopped: their samples are the exact route's, but the stopped corners' split
+    of the creeping points renumbers theirs (labels are ordered by basin size)."""
+    calls = []
+    pilot = maps.pilot_catalogue
+    monkeypatch.setattr(maps, "pilot_catalogue",
+                        lambda *a, **k: calls.append(a) or pilot(*a, **k))
+    e = driven(quantity="basins")
+    assert e.state.catalogue and e.uses_pilot()
+    route = next(c for c in e.run_controls() if c.name == "route")
+    assert route.value == "catalogue" and route.choices == ("catalogue", "exact")
+    for window, expected in ((None, 4), (ZOOM, 4)):
+        if window is not None:
+            e.zoom(*window)
+        result = e.compute()
+        stopped = plane(result.ds["attractor"]) >= 0
+        assert 0 < stopped.sum() < M * M
+        assert result.route == (f"catalogue route (21 x 21 pilot, "
+                                f"{len(result.catalogue['period'])} attractors): "
+                                f"{stopped.sum()} of {M * M} starts stopped on the catalogue")
+        exact = e.compute(dataclasses.replace(e.state, catalogue=False))
+        assert exact.catalogue is None and exact.route.startswith("exact route")
+        differ = result.values != exact.values
+        assert differ.sum() == expected
+        assert stopped[differ].sum() >= expected - 2 and (result.values[differ] >= 0).all()
+        for ours, theirs in zip(result.values[differ], exact.values[differ]):
+            assert theirs == -1 or _same_place(_point(result.da, ours),
+                                               _point(exact.da, theirs))
+    assert len(calls) == 1  # one pilot for the home window and the zoom
+
+
+def test_the_catalogue_is_reused_on_zoom_and_rebuilt_when_the_system_changes(
+        monkeypatch, tmp_path):
+    """One pilot per system, run settings and start: zooms, pans, a new resolution and
+    the exact route's maps reuse it (no new pilot run), a changed parameter or t_end
+    runs a new one over the new system; the page's Python reproduces the catalogue
+    route's map to the bit, and its run file (a run file takes no pilot for a system
+    yet) says so and gives the exact route's map."""
+    calls = []
+    pilot = maps.pilot_catalogue
+    monkeypatch.setattr(maps, "pilot_catalogue",
+                        lambda *a, **k: calls.append((a, k)) or pilot(*a, **k))
+    e = driven(quantity="basins")
+    first = e.compute()
+    e.zoom((-2.0, 1.0), (-2.5, 0.5))
+    e.compute()
+    e.zoom((-1.5, 1.5), (-2.5, 0.5))  # a pan
+    e.update(resolution=M + 2)
+    panned = e.compute()
+    assert len(calls) == 1 and panned.catalogue is first.catalogue
+    home = calls[0][0][1]
+    np.testing.assert_array_equal(home.axes["theta1_0"], centres(-3.0 - 3 / 7, 3 + 3 / 7, 21))
+    scope = {}
+    exec(e.python_snippet(), scope)  # the catalogue route, its own pilot included
+    np.testing.assert_array_equal(plane(scope["image"]), panned.values)
+    assert len(calls) == 2 and calls[1][1] == calls[0][1]  # its pilot is the explorer's
+    for name in home.dims:
+        np.testing.assert_array_equal(calls[1][0][1].axes[name], home.axes[name])
+    assert "stopped on the catalogue" in panned.route
+    text = e.toml_text()
+    assert "by the catalogue route" in text and "runs the exact" in text
+    path = tmp_path / "basins.toml"
+    path.write_text(text)
+    system, grid, kwargs = load_run(path, {})
+    assert tuple(kwargs["observe"]) == ("strobe",) and "attractors" not in kwargs
+    e.update(route="exact")
+    exact = e.compute()
+    np.testing.assert_array_equal(
+        plane(maps.basins(sweep.run(system, grid, progress=False, **kwargs))), exact.values)
+    assert len(calls) == 2
+    e.update(route="catalogue", pivot_amplitude=0.12)
+    again = e.compute()
+    assert len(calls) == 3 and calls[2][0][0].pivot_amplitude == 0.12
+    assert again.catalogue is not first.catalogue
+    e.update(t_end=110 * PERIOD)
+    e.compute()
+    assert len(calls) == 4 and calls[3][1]["t_end"] == 110 * PERIOD
+    with pytest.raises(InvalidInput, match="route must be one of catalogue, exact, got "
+                                           "'known cells'"):
+        e.update(route="known cells")
+    with pytest.raises(InvalidInput, match="route: DoublePendulum has no basins map"):
+        double().update(route="exact")

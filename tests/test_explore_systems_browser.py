@@ -85,8 +85,10 @@ return {palette: Array.from(bar.color_mapper.palette), labels: entries.map(e => 
 
 def test_a_driven_double_pendulums_basins_in_a_real_browser(driver, tmp_path):  # noqa: F811
     """The basins map of tests/test_explore_systems.py's driven double pendulum (44 x 44
-    pixels: its 11 x 11 preview shares that test's 16-lane kernel): categorical colours,
-    "unresolved" in black, the attractors counted on the status line."""
+    pixels, by the catalogue route: its pilot, preview and map share the 64-lane
+    kernels of that test's catalogue route and of tests/test_system_attractors.py):
+    categorical colours, "unresolved" in black, the route and the attractors counted on
+    the status line."""
     try:
         from sweep.explore.system_app import SystemExplorerApp
     except ImportError as exc:
@@ -103,6 +105,8 @@ def test_a_driven_double_pendulums_basins_in_a_real_browser(driver, tmp_path):  
               and "basins" in s["title"], 90)
         status = _wait(driver, _TEXTS, lambda texts: len(texts) == 1, 30, "attractors;")[0]
         assert f"of {n * n} starts unresolved" in status
+        assert "(pilot catalogue included); catalogue route (21 x 21 pilot, " in status
+        assert f"of {n * n} starts stopped on the catalogue; " in status
         colours = driver.execute_script(_COLOURS)
         assert colours["labels"][0] == "unresolved" and colours["palette"][0] == "#000000"
         assert all(label.startswith("attractor ") for label in colours["labels"][1:])

@@ -300,6 +300,11 @@ class State:
         background map of the home window (`Explorer.known`; `sweep.run`'s
         ``known_cells``) where the run allows it (`Explorer.uses_known`); False: the
         exact route (the catalogue alone).
+    catalogue : bool, default True
+        A driven system's basins over its initial state (`sweep.explore.systems.
+        SystemExplorer`): stop each start on a pilot's attractor catalogue (the
+        catalogue route); False: the exact route (every start's strobe run to
+        ``t_end``, then `sweep.maps.basins`). The single pendulum's explorer ignores it.
     """
 
     scene: Scene
@@ -314,6 +319,7 @@ class State:
     extra: tuple = ()
     device: str = "cpu"
     known_cells: bool = True
+    catalogue: bool = True
 
 
 def centres(lo: float, hi: float, n: int) -> np.ndarray:
@@ -524,6 +530,9 @@ class Explorer:
         On a keyword `sweep.run` does not take or the explorer cannot use.
     """
 
+    #: Points per initial-state axis of the pilot that catalogues the attractors.
+    pilot_points = PILOT_POINTS
+
     def __init__(self, scene: Scene, grid: Grid, *, quantity: str | None = None,
                  resolution: int = 400, cache: OrderedDict | None = None,
                  **run_kwargs) -> None:
@@ -723,6 +732,14 @@ class Explorer:
             kwargs["stop_early"] = True
         if state.device != "cpu":
             kwargs["device"] = state.device
+        return kwargs
+
+    def map_kwargs(self, state: State, catalogue: dict | None) -> dict:
+        """`sweep.run` keyword arguments of ``state``'s map run: `run_kwargs` with the
+        attractor catalogue (`catalogue`) where there is one."""
+        kwargs = self.run_kwargs(state)
+        if catalogue is not None:
+            kwargs["attractors"] = catalogue
         return kwargs
 
     def uses_pilot(self, state: State | None = None) -> bool:
@@ -944,7 +961,7 @@ class Explorer:
     def catalogue(self, state: State | None = None) -> dict | None:
         """The attractor catalogue of ``state`` (forced basins over the initial state):
         `sweep.maps.pilot_catalogue` over the home window's grid (`pilot_state`), thinned
-        to `PILOT_POINTS` per axis; cached per scene and settings.
+        to `pilot_points` per axis; cached per scene, settings and start.
 
         One catalogue for every zoom: the catalogue is compiled into the kernel, so a new
         one costs a compilation (seconds), while the labels do not depend on it (a
@@ -956,10 +973,10 @@ class Explorer:
             return None
         pilot = self.pilot_state(state)
         key = (pilot.scene, pilot.view, pilot.resolution, pilot.t_end, pilot.dt,
-               pilot.t_transient, pilot.method, pilot.extra, pilot.device)
+               pilot.t_transient, pilot.method, pilot.extra, pilot.device, pilot.start)
         if key not in self._catalogues:
             self._catalogues[key] = maps.pilot_catalogue(
-                pilot.scene, self.grid(pilot), PILOT_POINTS, **self.run_kwargs(pilot))
+                pilot.scene, self.grid(pilot), self.pilot_points, **self.run_kwargs(pilot))
             while len(self._catalogues) > 8:
                 self._catalogues.popitem(last=False)
         return self._catalogues[key]
@@ -1031,10 +1048,8 @@ class Explorer:
         with self._lock:
             cancel.check()
             begin = time.perf_counter()
-            kwargs = self.run_kwargs(state)
             catalogue = self.catalogue(state)
-            if catalogue is not None:
-                kwargs["attractors"] = catalogue
+            kwargs = self.map_kwargs(state, catalogue)
             known = self.known(state)
             if known is not None:
                 kwargs["known_cells"] = known

@@ -41,6 +41,7 @@ from ..physics.double import DoublePendulum
 from ..physics.network import SwingNetwork
 from ..physics.system import SYSTEM_DAMPING, System, initial_parameters
 from ..settings import validate_settings
+from ..system_attractors import initial_axes
 from ..system_observables import SYSTEM_OBSERVABLES, variables
 from .model import (
     PASSTHROUGH,
@@ -53,11 +54,13 @@ from .model import (
     Quantity,
     State,
     View,
+    _grid_text,
     _toml_value,
     check_arguments,
 )
 
-__all__ = ["SYSTEM_RESOLUTION", "SystemExplorer", "SystemTrajectory", "driven_quantities",
+__all__ = ["CATALOGUE_OBSERVE", "SYSTEM_PILOT_POINTS", "SYSTEM_RESOLUTION", "SYSTEM_ROUTES",
+           "SystemExplorer", "SystemTrajectory", "driven_quantities",
            "system_quantities"]
 
 
@@ -121,21 +124,23 @@ def driven_quantities() -> dict[str, Quantity]:
     unresolved) and ``period`` (`sweep.maps.period`, in drive periods; -1 none found).
 
     Both run with ``observe=("strobe",)`` and the explorer's own ``t_end``, ``dt`` and
-    ``t_transient`` (the run controls), as the single pendulum's explorer runs its forced
-    basins, and ``strobe_samples`` as given to the explorer (default 16, `sweep.run`'s:
-    two repeats of the longest period `sweep.maps.basins` looks for, 8). Nothing is
-    changed behind the controls, so the snippets and run files are what ran: the samples
-    are the last ``strobe_samples`` drive periods before ``t_end``, so ``t_end`` sets
-    how long a start has to settle; one that has not (or is chaotic) is labelled -1,
-    drawn black and counted on the status line (`sweep.explore.model.label_summary`).
-    `SystemExplorer.validate` refuses a ``t_end`` that reaches fewer samples (every
-    start would be unresolved), and `sweep.run` a ``dt`` that does not divide the drive
-    period, with a ``dt`` that does. No ``stop_early`` and no pilot catalogue: a
-    system's run takes neither with ``strobe``.
+    ``t_transient`` (the run controls), and ``strobe_samples`` as given to the explorer
+    (default 16, `sweep.run`'s: two repeats of the longest period `sweep.maps.basins`
+    looks for, 8): the samples are the last ``strobe_samples`` drive periods before
+    ``t_end``, so ``t_end`` sets how long a start has to settle; one that has not (or is
+    chaotic) is labelled -1, drawn black and counted on the status line
+    (`sweep.explore.model.label_summary`). `SystemExplorer.validate` refuses a ``t_end``
+    that reaches fewer samples (every start would be unresolved), and `sweep.run` a
+    ``dt`` that does not divide the drive period, with a ``dt`` that does.
+
+    ``basins`` over two initial-state axes takes the catalogue route by default
+    (``pilot``: `SystemExplorer.catalogue`, `SystemExplorer.map_kwargs`): the same run
+    observing ``("strobe", "attractor")`` with a pilot's attractor catalogue and
+    ``stop_early``, then `sweep.maps.basins`; ``period`` is always the full run.
     """
     return {q.name: q for q in (
         Quantity("basins", "attractor basins (driven)", ("strobe",), False, _always,
-                 maps.basins, True, expression="maps.basins(ds)"),
+                 maps.basins, True, pilot=True, expression="maps.basins(ds)"),
         Quantity("period", "period map (driven): drive periods", ("strobe",), False,
                  _always, maps.period, True, expression="maps.period(ds)"),
     )}
@@ -266,6 +271,20 @@ def _system_toml(system: System) -> list[str]:
 
     return out + system_effects_lines(system.effects, _toml_value)
 
+
+#: Points per initial-state axis of a driven system's pilot (`sweep.maps.pilot_catalogue`
+#: over the home window): 21 x 21 starts found every attractor that the 200 x 200
+#: double Kapitza map's starts stop on, in 0.24 s of its 9.9 s
+#: (`benchmarks/system_basins.py`, 2-core AMD EPYC Zen 5).
+SYSTEM_PILOT_POINTS = 21
+
+#: The routes of a driven system's basins map (`State.catalogue`): stop each start on a
+#: pilot's attractor catalogue, or run every start to ``t_end`` (the full strobe run).
+SYSTEM_ROUTES = ("catalogue", "exact")
+
+#: What a start of the catalogue route observes: the strobe samples that label the
+#: starts the catalogue does not match, and the catalogue's match.
+CATALOGUE_OBSERVE = ("strobe", "attractor")
 
 #: Pixels per axis of a system's maps by default: the double pendulum's flip map of
 #: examples/double_pendulum.toml takes 3.9 s at 400 x 400 and 1.3 s at 200 x 200
@@ -453,7 +472,16 @@ class SystemExplorer(Explorer):
                     help="fixed-step explicit integrator (what a system takes)", group="run"),
             Control("resolution", "resolution [pixels per axis]", "int", int(s.resolution),
                     minimum=low, help=f"an integer from {low} to {high}", group="run"),
-        ]
+        ] + ([Control("route", "driven basins route", "choice",
+                      SYSTEM_ROUTES[0] if s.catalogue else SYSTEM_ROUTES[1],
+                      choices=SYSTEM_ROUTES,
+                      help=f"catalogue: a {self.pilot_points} x {self.pilot_points} pilot "
+                      "over the home window catalogues the attractors, then each start "
+                      "stops once its strobe points follow a catalogued orbit 3 periods "
+                      "running (over two initial-state axes, on the CPU); exact: every "
+                      "start runs to t_end and maps.basins labels its last samples",
+                      group="run")]
+             if "basins" in self._registry else [])
 
     @staticmethod
     def _with_parameters(system: System, values: dict[str, float]) -> System:
@@ -535,12 +563,107 @@ class SystemExplorer(Explorer):
                 f"{needed:.6g} s, and more to let the starts settle")
 
     def update(self, **changes) -> State:
-        """`Explorer.update` (``model`` is the single pendulum's and is refused)."""
+        """`Explorer.update` (``model`` is the single pendulum's and is refused); a
+        driven system's ``route`` is one of `SYSTEM_ROUTES` (`State.catalogue`)."""
         if "model" in changes:
             raise InvalidInput("model", f"model: {type(self.state.scene).__name__} has no "
                                "model choice; accepted: its parameters, "
                                f"{', '.join(c.name for c in self.parameter_controls())}")
-        return super().update(**changes)
+        route = changes.pop("route", None)
+        if route is not None:
+            if "basins" not in self._registry:
+                raise InvalidInput("route", f"route: {type(self.state.scene).__name__} has "
+                                   "no basins map to route (it has no periodic drive); "
+                                   "accepted: no route")
+            if route not in SYSTEM_ROUTES:
+                raise InvalidInput("route", f"route must be one of "
+                                   f"{', '.join(SYSTEM_ROUTES)}, got {route!r}")
+        state = super().update(**changes) if changes else self.state
+        if route is not None:
+            self.state = dataclasses.replace(state, catalogue=route == SYSTEM_ROUTES[0])
+        return self.state
+
+    # -- the catalogue route of a driven system's basins ------------------------------
+    #: Points per initial-state axis of the pilot (`SYSTEM_PILOT_POINTS`).
+    pilot_points = SYSTEM_PILOT_POINTS
+
+    def uses_pilot(self, state: State | None = None) -> bool:
+        """Whether ``state``'s map takes the catalogue route: a driven system's basins
+        (`driven_quantities`) over two of its initial-state axes (a catalogue holds one
+        system's attractors: `sweep.system_attractors.initial_axes`), on the CPU (the
+        systems' CUDA kernel takes no catalogue), with ``state.catalogue`` on."""
+        state = state or self.state
+        q = self._registry.get(state.quantity)
+        return bool(q is not None and q.pilot and state.catalogue and state.device == "cpu"
+                    and {state.view.x, state.view.y} <= set(initial_axes(state.scene)))
+
+    def pilot_state(self, state: State | None = None) -> State:
+        """The state whose grid is the pilot: ``state`` with the home window (with the
+        map's axes if they are not the home's: their `reset` window) at
+        `pilot_points` pixels per axis, so that every zoom, pan and resolution of a
+        window reuses one catalogue (`Explorer.catalogue` keys it on this state's
+        system, run settings and start)."""
+        state = state or self.state
+        v = state.view
+        if (v.x, v.y) == (self.home.x, self.home.y):
+            view = self.home
+        else:
+            view = View(v.x, v.y, self._axis_range(state, v.x), self._axis_range(state, v.y))
+        return dataclasses.replace(state, view=view, resolution=self.pilot_points)
+
+    def uses_known(self, state: State | None = None) -> bool:
+        """Never: known cells are the single pendulum's (`sweep.maps.known`)."""
+        return False
+
+    def map_kwargs(self, state: State, catalogue: dict | None) -> dict:
+        """`sweep.run` keyword arguments of the map run: `run_kwargs`, and on the
+        catalogue route (``catalogue`` given) ``observe=CATALOGUE_OBSERVE``,
+        ``attractors=catalogue`` and ``stop_early=True``: a start stops once its
+        strobe points follow a catalogued orbit `sweep.observables.ATTRACTOR_MATCHES`
+        periods running, and `sweep.maps.basins` lets it stand for that orbit's ring;
+        a start never matched runs to ``t_end`` with the very samples of the exact
+        route, so it is labelled as there (an attractor the pilot missed included)."""
+        kwargs = self.run_kwargs(state)
+        if catalogue is not None:
+            kwargs.update(observe=CATALOGUE_OBSERVE, attractors=catalogue, stop_early=True)
+        return kwargs
+
+    def _route(self, state: State, ds, catalogue, known) -> str:
+        """Which route made a driven system's basins map, in words, with how many
+        starts the catalogue stopped (the page's status line); "" for other maps."""
+        if state.quantity != "basins" or "basins" not in self._registry:
+            return ""
+        v = state.view
+        n = int(np.prod([ds.sizes[d] for d in ds.dims if d in (v.x, v.y)]))
+        if catalogue is not None:
+            stopped = int(np.sum(np.asarray(ds["attractor"].values) >= 0))
+            p = self.pilot_points
+            return (f"catalogue route ({p} x {p} pilot, {len(catalogue['period'])} "
+                    f"attractors): {stopped} of {n} starts stopped on the catalogue")
+        why = ""
+        if state.catalogue:
+            varied = [a for a in (v.x, v.y) if a not in initial_axes(state.scene)]
+            why = (f" (the map varies {', '.join(varied)}: a catalogue holds one "
+                   "system's attractors)") if varied else \
+                " (the GPU's kernel takes no catalogue)" if state.device != "cpu" else ""
+        return f"exact route{why}: {n} starts run to t_end"
+
+    def toml_text(self, state: State | None = None) -> str:
+        """`Explorer.toml_text`; on the catalogue route the exact route's run file with a
+        note that says so: a run file gives no pilot catalogue to a system yet (the
+        Python snippet is the catalogue route)."""
+        state = state or self.state
+        if not self.uses_pilot(state):
+            return super().toml_text(state)
+        first, rest = super().toml_text(dataclasses.replace(state, catalogue=False)) \
+            .split("\n", 1)
+        p = self.pilot_points
+        note = (f"# the explorer drew this map by the catalogue route (a {p} x {p} pilot "
+                "over the home window, then each start stopped on a\n# catalogued "
+                "attractor: the Python snippet); a run file takes no pilot for a system "
+                "yet, so this file runs the exact\n# route: the same labels but where the "
+                "catalogue labelled a start that had not settled by t_end")
+        return f"{first}\n{note}\n{rest}"
 
     # -- one trajectory -----------------------------------------------------------------
     def trajectory(self, x: float, y: float, result: MapResult | None = None,
@@ -597,15 +720,22 @@ class SystemExplorer(Explorer):
     @staticmethod
     def _python(state: State, grid: Grid, kwargs: dict, quantity: Quantity | None, *,
                 pilot: Grid | None = None, trajectory: bool = False) -> str:
-        from .model import _grid_text
-
+        """The snippet; with ``pilot`` (the catalogue route) the pilot's catalogue over
+        that grid first, then the map's run by it (`SystemExplorer.map_kwargs`)."""
         lines = ["import numpy as np", "import sweep"]
         if quantity is not None and "maps." in quantity.expression:
             lines.append("from sweep import maps")
         lines += ["", *_system_python(state.scene),
                  f"grid = {_grid_text(grid)}",
-                 f"kwargs = dict({', '.join(f'{k}={v!r}' for k, v in kwargs.items())})",
-                 "ds = sweep.run(system, grid, **kwargs)"]
+                 f"kwargs = dict({', '.join(f'{k}={v!r}' for k, v in kwargs.items())})"]
+        if pilot is not None:
+            p = SYSTEM_PILOT_POINTS
+            lines += [f"home = {_grid_text(pilot)}  # the pilot: {p} x {p} starts over the "
+                      "home window",
+                      f"catalogue = maps.pilot_catalogue(system, home, {p}, **kwargs)",
+                      f"kwargs.update(observe={CATALOGUE_OBSERVE!r}, attractors=catalogue, "
+                      "stop_early=True)"]
+        lines.append("ds = sweep.run(system, grid, **kwargs)")
         if trajectory:
             lines.append("# every coordinate and velocity over ds.time (save_every)")
         elif quantity is not None:
