@@ -196,3 +196,26 @@ def test_a_pilot_a_driven_system_cannot_use_is_one_line_before_any_compute(
     assert err.startswith("sweep: error: ") and err.count("\n") == 1, err
     assert re.search(match, err), err
     assert not output.exists()
+
+
+def test_a_sample_of_a_driven_system_takes_a_pilot_and_gives_fractions(tmp_path):
+    """The driven example with ``[sample]`` in place of ``[grid]`` (basin stability): the
+    pilot is a 12 x 12 grid of the sample's box (`sweep.maps.pilot_grid` of points), the
+    sample's starts are labelled as the Python route labels them, and `sweep fractions
+    --label attractor` gives each basin's share with its standard error."""
+    text = BASINS.read_text()
+    start, stop = text.index("[grid]"), text.index("[run]")
+    sample = ("[sample]\nn = 300\nseed = 1\ntheta1_0 = [-3.0, 3.0]\n"
+              "theta2_0 = [-3.0, 3.0]\n\n")
+    run_file = write(tmp_path, text[:start] + sample + text[stop:])
+    output = tmp_path / "sample.nc"
+    code, out, err = call("run", run_file, "-o", output, "--no-progress")
+    assert (code, err) == (0, ""), err
+    system, points, kwargs = load_run(run_file)
+    expected = sweep.run(system, points, progress=False, **kwargs,
+                         attractors=sweep.maps.pilot_catalogue(system, points, 12, **kwargs))
+    ds = sweep.load(output)
+    assert ds["attractor"].values.tobytes() == expected["attractor"].values.tobytes()
+    code, out, err = call("fractions", output, "--label", "attractor")
+    assert (code, err) == (0, ""), err
+    assert "300 trajectories, attractor" in out and "standard_error" in out
