@@ -109,7 +109,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="forced maps: first run N x N starts of the grid with early stop "
                      "to find the attractors, then stop each trajectory of the map once it "
                      "follows one (sweep.maps.pilot_catalogue; the grid may vary only "
-                     "theta0 and omega0); overrides [run] pilot")
+                     "theta0 and omega0; a driven [system]'s map observes 'attractor' and "
+                     "varies only the initial state); overrides [run] pilot")
     run.add_argument("--dtype", choices=DTYPES,
                      help="working precision of the state and the step (float32: "
                      "float32 rounding, and 1.28-1.33x float64's trajectories per second "
@@ -421,8 +422,14 @@ def _command_run(args: argparse.Namespace) -> int:
         return _command_refine(args, scene, grid, kwargs, options, output, folder, pilot)
     if pilot is not None:
         from .maps.pilot import pilot_catalogue, pilot_grid
+        from .physics.system import System
 
-        pilot_grid(grid, pilot)  # refuse a bad pilot before any compute
+        if isinstance(scene, System):  # a driven system's: as [run] pilot (--pilot N)
+            from .toml_pilot import check_system_pilot
+
+            check_system_pilot(scene, grid, pilot, kwargs)
+        else:
+            pilot_grid(grid, pilot)  # refuse a bad pilot before any compute
     elif not args.no_space_check:  # with a pilot, after it: its catalogue adds variables
         check_space(output, scene, grid, **kwargs)
     client = _client(args, options)

@@ -7,6 +7,9 @@ The table gives the declaration in text, in the user's own names::
     kind = "DeclaredSystem"
     name = "pendulum_on_cart"           # the system's name (dataset title)
     lagrangian = "(M + m)*v**2/2 + m*l*v*omega*cos(theta) + m*l**2*omega**2/2 ..."
+    drive_frequency_axis = "nu"         # optional: the parameter that is the angular
+                                        # frequency [rad/s] of a periodic drive in t
+                                        # (strobe, attractor catalogues)
 
     [[system.coordinates]]              # one table per coordinate, in order
     name = "x"                          # grid axis x_0, output x_final
@@ -54,7 +57,7 @@ __all__ = ["COORDINATE_KEYS", "PARAMETER_KEYS", "SYSTEM_KEYS", "declaration_from
 
 #: Keys of ``[system]`` for a declared system.
 SYSTEM_KEYS = ("kind", "name", "lagrangian", "potential", "coordinates", "parameters",
-               "damping", "torque", "forcing", "drag")
+               "drive_frequency_axis", "damping", "torque", "forcing", "drag")
 #: Keys of one ``[[system.coordinates]]`` table.
 COORDINATE_KEYS = ("name", "velocity", "units", "velocity_units", "angular", "long_name",
                    "force", "acceleration")
@@ -101,8 +104,14 @@ def declared_system(table: dict[str, Any]):
     kinds = {cls.declaration.name: cls for cls in acting_effects()}
     effects = system_effects({k: v for k, v in table.items() if k in kinds}, kinds)
     names = _names(declaration)
+    drive = table.get("drive_frequency_axis")
+    if drive is not None and not isinstance(drive, str):
+        raise TypeError(f"drive_frequency_axis = {drive!r}; accepted: the name of the "
+                        "parameter that is the drive's angular frequency [rad/s], as in "
+                        "[system.parameters]")
     try:
-        return DeclaredSystem(declaration, effects=effects, **values)
+        return DeclaredSystem(declaration, effects=effects, drive_frequency_axis=drive,
+                              **values)
     except ValueError as error:
         raise ValueError(_as_written(str(error), names)) from None
 
@@ -189,6 +198,9 @@ def system_lines(system, value_text) -> list[str]:
         out.append(f"lagrangian = {value_text(_renamed(declaration.lagrangian, names))}")
     if declaration.potential is not None:
         out.append(f"potential = {value_text(_renamed(declaration.potential, names))}")
+    drive = system.to_dict().get("drive_frequency_axis")
+    if drive is not None:
+        out.append(f"drive_frequency_axis = {value_text(drive)}")
     for k, c in enumerate(declaration.coordinates):
         out += ["", "[[system.coordinates]]", f"name = {value_text(c.name)}",
                 f"velocity = {value_text(c.velocity)}", f"units = {value_text(c.units)}",

@@ -76,6 +76,10 @@ of ``[scene]``: ``kind`` names it, the other keys are its constructor's argument
     theta1_0 = {start = -3, stop = 3, num = 201}
     theta2_0 = {start = -3, stop = 3, num = 201}
 
+A driven system's basins by an attractor catalogue take ``pilot = N`` with ``observe =
+["attractor"]`` and ``stop_early = true`` (`sweep.toml_pilot`; ``sweep run`` runs
+`sweep.maps.pilot_catalogue` of the system first).
+
 ``kind = "DeclaredSystem"`` declares a system in the file itself: its coordinates, its
 parameters with their values and its Lagrangian as text (`sweep.toml_declared`); its
 axes are ``<coordinate>_0``, ``<velocity>_0`` and the parameters' names.
@@ -264,13 +268,14 @@ def parse_run(spec: dict[str, Any], source: str = "run file", options: dict | No
     found = {key: kwargs.pop(key) for key in OPTION_KEYS if key in kwargs}
     if "system" in spec:
         with _context(source, "run"):
-            for key in ("pilot", "refine", "known_cells"):
+            for key in ("refine", "known_cells"):
                 if key in found:
                     raise ValueError(f"{key} is for the single pendulum's forced maps "
                                      "([scene]); accepted: [run] without it for a [system]")
-            from .engine import prepare
+            from .toml_pilot import check_system_pilot
 
-            prepare(scene, grid, **kwargs)  # the system's observables and options
+            # the system's observables and options; a pilot's catalogue for 'attractor'
+            check_system_pilot(scene, grid, found.get("pilot"), kwargs)
     if options is not None:
         options.update(found)
     return scene, grid, kwargs

@@ -8,12 +8,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_cli import call, write
+from test_cli import assert_png, call, write
 
 import sweep
 from sweep.toml_spec import load_run, parse_run
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "double_pendulum.toml"
+BASINS = EXAMPLE.with_name("driven_double_pendulum_basins.toml")
 
 RUN_FILE = """\
 [system]
@@ -88,7 +89,10 @@ def test_a_swing_network_from_a_run_file():
     ({"grid": {"theta0": [0.1]}}, r"unknown key 'theta0' in \[grid\]; accepted: theta1_0"),
     ({"run": {"t_end": 1.0, "dt": 0.1, "observe": ["amplitude"]}},
      r"\[run\] unknown observable 'amplitude' for a system"),
-    ({"run": {"t_end": 1.0, "dt": 0.1, "pilot": 11}}, r"\[run\] pilot is for the single "),
+    ({"run": {"t_end": 1.0, "dt": 0.1, "pilot": 11}},
+     r"\[run\] pilot = 11 catalogues the attractors of a driven system .* this "
+     r"DoublePendulum has no periodic drive"),
+    ({"run": {"t_end": 1.0, "dt": 0.1, "refine": True}}, r"\[run\] refine is for the single "),
     ({"system": {"kind": "SwingNetwork", "power": [1, -1]}}, r"needs edges"),
 ])
 def test_bad_system_run_files_are_refused_naming_the_table(change, match):
@@ -97,3 +101,121 @@ def test_bad_system_run_files_are_refused_naming_the_table(change, match):
     spec.update(change)
     with pytest.raises((ValueError, TypeError), match=match):
         parse_run(spec, source="run.toml")
+
+
+def test_the_driven_example_writes_its_basins_by_a_pilot_catalogue(tmp_path):
+    """``examples/driven_double_pendulum_basins.toml`` (``[run] pilot = 12``, observe
+    ``attractor``, ``stop_early``): `sweep run` writes the dataset that the Python route
+    gives (`sweep.maps.pilot_catalogue` of the system, then `sweep.run` with it), bit for
+    bit, the catalogue in its attributes, and `sweep plot --var attractor` draws the map.
+    Its system, pilot and settings are tests/test_system_attractors.py's (the same
+    kernels): the pilot finds that test's five attractors, and every start follows one."""
+    output = tmp_path / "basins.nc"
+    code, out, err = call("run", BASINS, "-o", output, "--no-progress")
+    assert (code, err) == (0, ""), err
+    assert "1600 trajectories (theta1_0 40 x theta2_0 40)" in out
+    ds = sweep.load(output)
+    assert set(ds.data_vars) == {"attractor", "status"}
+    options = {}
+    system, grid, kwargs = load_run(BASINS, options)
+    assert system == sweep.DoublePendulum(pivot_amplitude=0.1, pivot_frequency=60.0,
+                                          effects=(sweep.Damping(0.5),))
+    assert options == {"pilot": 12} and kwargs["stop_early"] is True
+    catalogue = sweep.maps.pilot_catalogue(system, grid, 12, **kwargs)
+    expected = sweep.run(system, grid, attractors=catalogue, progress=False, **kwargs)
+    assert ds["attractor"].values.tobytes() == expected["attractor"].values.tobytes()
+    np.testing.assert_array_equal(ds.attrs["attractors_theta"],
+                                  expected.attrs["attractors_theta"])
+    assert sorted(ds.attrs["attractors_period"].tolist()) == [1, 1, 1, 1, 4]
+    assert (ds["attractor"].values >= 0).all()
+    image = tmp_path / "basins.png"
+    code, _, err = call("plot", output, "--var", "attractor", "-o", image)
+    assert (code, err) == (0, "")
+    assert_png(image)
+
+
+DRIVEN = """\
+[system]
+kind = "DoublePendulum"
+pivot_amplitude = 0.1
+pivot_frequency = 60.0
+[system.damping]
+coefficient = 0.5
+
+[grid]
+theta1_0 = [0.5, 1.0]
+theta2_0 = [0.5, 1.0]
+
+[run]
+t_end = 1.0471975511965976
+dt = 0.002617993877991494
+observe = ["attractor"]
+stop_early = true
+pilot = 2
+"""
+
+
+@pytest.mark.parametrize("old, new, argv, match", [
+    ("pivot_amplitude = 0.1\npivot_frequency = 60.0\n", "", [],
+     r"\[run\] pilot = 2 catalogues the attractors of a driven system \(its orbits sampled "
+     r"once per drive period\), and this DoublePendulum has no periodic drive; accepted: a "
+     r"driven \[system\]"),
+    ('observe = ["attractor"]', 'observe = ["final"]', [],
+     r"\[run\] pilot = 2 makes an attractor catalogue that labels each start in observe "
+     r"'attractor', and observe is \['final'\]; accepted: observe = \[\"attractor\"\]"),
+    ("pilot = 2\n", "", [], r"\[run\] observe 'attractor' labels each start by an attractor "
+                           r"catalogue, which a run file makes by a pilot; accepted: pilot = N"),
+    ("theta2_0 = [0.5, 1.0]", "pivot_amplitude = [0.1, 0.2]", [],
+     r"the grid varies pivot_amplitude; accepted: a grid that varies only the initial state"),
+    ("pilot = 2\n", "pilot = 1\n", [], r"\[run\] pilot must be an int >= 2"),
+    ('observe = ["attractor"]', 'observe = ["final", "attractor"]', [],
+     r"stop_early stops a system's trajectory at its first flip"),
+    ("", "", ["--pilot", "1"], r"pilot must be an int >= 2"),
+    ('observe = ["attractor"]\nstop_early = true\npilot = 2\n', "", ["--pilot", "5"],
+     r"^sweep: error: pilot = 5 makes an attractor catalogue .* and observe is "
+     r"\['final', 'winding'\]"),
+])
+def test_a_pilot_a_driven_system_cannot_use_is_one_line_before_any_compute(
+        tmp_path, monkeypatch, old, new, argv, match):
+    """A ``[system]`` run file's pilot (or ``--pilot N``) that cannot catalogue the map's
+    attractors, and ``observe = ["attractor"]`` without one: one line, exit status 2, no
+    output file, and nothing run (the systems' runner is replaced by one that fails)."""
+    import re
+
+    import sweep.engine_systems
+
+    def computed(*args, **kwargs):
+        raise AssertionError("a system run started")
+
+    monkeypatch.setattr(sweep.engine_systems, "run_system", computed)
+    output = tmp_path / "out.nc"
+    assert old in DRIVEN
+    code, out, err = call("run", write(tmp_path, DRIVEN.replace(old, new, 1)), "-o", output,
+                          "--no-progress", *argv)
+    assert code == 2 and out == ""
+    assert err.startswith("sweep: error: ") and err.count("\n") == 1, err
+    assert re.search(match, err), err
+    assert not output.exists()
+
+
+def test_a_sample_of_a_driven_system_takes_a_pilot_and_gives_fractions(tmp_path):
+    """The driven example with ``[sample]`` in place of ``[grid]`` (basin stability): the
+    pilot is a 12 x 12 grid of the sample's box (`sweep.maps.pilot_grid` of points), the
+    sample's starts are labelled as the Python route labels them, and `sweep fractions
+    --label attractor` gives each basin's share with its standard error."""
+    text = BASINS.read_text()
+    start, stop = text.index("[grid]"), text.index("[run]")
+    sample = ("[sample]\nn = 300\nseed = 1\ntheta1_0 = [-3.0, 3.0]\n"
+              "theta2_0 = [-3.0, 3.0]\n\n")
+    run_file = write(tmp_path, text[:start] + sample + text[stop:])
+    output = tmp_path / "sample.nc"
+    code, out, err = call("run", run_file, "-o", output, "--no-progress")
+    assert (code, err) == (0, ""), err
+    system, points, kwargs = load_run(run_file)
+    expected = sweep.run(system, points, progress=False, **kwargs,
+                         attractors=sweep.maps.pilot_catalogue(system, points, 12, **kwargs))
+    ds = sweep.load(output)
+    assert ds["attractor"].values.tobytes() == expected["attractor"].values.tobytes()
+    code, out, err = call("fractions", output, "--label", "attractor")
+    assert (code, err) == (0, ""), err
+    assert "300 trajectories, attractor" in out and "standard_error" in out

@@ -132,6 +132,29 @@ def test_systems_on_the_cluster_are_identical(client):
                           observe=("final", "synchrony"), save_every=50, chunk_size=40)
     _same(local, remote)
 
+def test_basins_by_a_catalogue_on_the_cluster_are_identical(client):
+    """A driven double pendulum's basins by an attractor catalogue, stopped early, chunked
+    over the two worker processes (the catalogue travels with each chunk as kernel data;
+    a stopped lane takes the next start of its own chunk), give the local run's bits:
+    the labels, the stop status and the catalogue kept in the attributes. The system,
+    grid, run and pilot are tests/test_system_attractors.py's, so both kernels (the
+    pilot's strobe run and the route's) are the ones it compiles."""
+    from test_system_attractors import GRID, RUN, SYSTEM
+
+    run = {k: v for k, v in RUN.items() if k != "progress"}
+    catalogue = sweep.maps.pilot_catalogue(SYSTEM, GRID, 12, **run)
+    kw = dict(RUN, observe=("attractor",), attractors=catalogue, stop_early=True,
+              chunk_size=40, t_transient=0.0)
+    local = sweep.run(SYSTEM, GRID, **kw)
+    with distributed.get_task_stream(client) as stream:
+        remote = sweep.run(SYSTEM, GRID, client=client, **kw)
+    _same(local, remote)
+    # the 144 starts ran as 4 chunks of at most 40 on the workers, not locally
+    assert sum("sweep-chunk" in str(r["key"]) for r in stream.data) == 4
+    assert (local["attractor"].values >= 0).all()  # every start stopped on a label
+    assert local.attrs["stop_early"] == "once settled on a catalogued attractor"
+
+
 def test_kernel_is_not_recompiled_per_task(client):
     # a spec no other test uses; the local run puts its machine code in numba's disk cache
     scene = sweep.Scene(model="linear", effects=(sweep.Damping(0.2),))

@@ -140,6 +140,26 @@ def test_a_declared_system_refuses_a_drive_axis_it_lacks():
         sweep.DeclaredSystem(declaration, drive_frequency_axis="omega")
 
 
+def test_a_declared_systems_drive_survives_an_effect_the_grid_switches_on():
+    """A grid axis of an effect on one coordinate (``damping_p1``) adds that effect to
+    the system it runs (`System.switched_on`); a DeclaredSystem keeps its
+    ``drive_frequency_axis`` then (it lost it, and its strobe run was refused as
+    undriven). Validation only: nothing is compiled."""
+    from sweep.engine import prepare
+    from sweep.physics import Coordinate, Parameter, SystemDeclaration
+
+    declared = sweep.DeclaredSystem(_two_forced_pendula(Coordinate, Parameter,
+                                                        SystemDeclaration),
+                                    drive_frequency_axis="frequency", frequency=0.75)
+    switched = declared.switched_on(("damping_p1",))
+    assert switched.effects == (sweep.Damping(0.0, on="p1"),)
+    assert switched.drive_frequency_parameter.axis == "frequency"
+    period = 2 * np.pi / 0.75
+    spec = prepare(declared, sweep.Grid(p1_0=[0.1, 0.2], damping_p1=[0.0, 0.1]),
+                   t_end=20 * period, dt=period / 100, observe=("strobe",))[1]
+    assert spec.strobe_frequency == declared.drive_frequency_parameter.symbol
+
+
 def test_cuda_kernel_samples_as_the_cpu_kernel():
     """device="cuda" (numba's CUDA simulator on CI): the same sampling lines; CUDA's
     sine is not sweep's polynomial, so the samples agree to rounding (1e-10 rad, as in

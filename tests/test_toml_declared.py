@@ -197,3 +197,69 @@ def test_a_bad_declaration_is_one_line_from_the_cli_before_any_compute(tmp_path)
     assert len(lines) == 1 and lines[0].startswith("sweep: error: "), result.stderr
     assert "names 'kk'" in lines[0] and "Traceback" not in result.stderr
     assert not output.exists()
+
+
+#: Two uncoupled forced pendula declared in a run file by their accelerations (as
+#: tests/test_system_strobe.py's in Python), driven at W = 0.75 rad/s.
+DRIVEN = """\
+[system]
+kind = "DeclaredSystem"
+name = "test_two_forced_pendula_run_file"
+drive_frequency_axis = "W"
+[[system.coordinates]]
+name = "p1"
+velocity = "v1"
+acceleration = "-sin(p1) - c*v1 + A*cos(W*t)"
+[[system.coordinates]]
+name = "p2"
+velocity = "v2"
+acceleration = "-sin(p2) - c*v2 + A*cos(W*t)"
+[system.parameters]
+c = {value = 0.15, units = "s-1"}
+A = {value = 0.3, units = "s-2"}
+W = {value = 0.75, units = "rad s-1"}
+
+[grid]
+p1_0 = [-1.0, 1.0]
+p2_0 = [-1.0, 1.0]
+damping_p1 = 0.1
+
+[run]
+t_end = 502.6548245743669
+dt = 0.08377580409572781
+observe = ["attractor"]
+stop_early = true
+pilot = 2
+"""
+
+
+def test_a_declared_system_names_its_drive_for_a_pilot_catalogue():
+    """``drive_frequency_axis = "W"`` in ``[system]``: the declared system is driven at
+    its parameter W (the strobe's and the catalogue's period 2 pi / W), so ``[run]
+    pilot`` is accepted, also with an effect the grid switches on (``damping_p1``);
+    the explorer's run file of it (`sweep.toml_declared.system_lines`) reads back the
+    same system. Without it the pilot is refused as for an undriven system; a name that
+    is no parameter, or not a string, is refused naming the key. Nothing is compiled."""
+    from sweep.explore.systems import _system_toml
+
+    options = {}
+    system, grid, kwargs = parse_run(tomllib.loads(DRIVEN), "run.toml", options)
+    assert system.drive_frequency_parameter.axis == "W"
+    assert options == {"pilot": 2} and kwargs["observe"] == ("attractor",)
+    assert grid.axes["damping_p1"].tolist() == [0.1]  # an effect the grid switches on
+    text = "\n".join(_system_toml(system))
+    assert 'drive_frequency_axis = "W"' in text
+    back = parse_run(tomllib.loads(text + "\n\n[grid]\np1_0 = [0.1]\n\n[run]\nt_end = 1.0"
+                                   "\ndt = 0.01\n"), "back.toml")[0]
+    assert back == system
+    for old, new, match in [
+            ('drive_frequency_axis = "W"\n', "", r"^run.toml: \[run\] pilot = 2 catalogues "
+             r"the attractors of a driven system .* this test_two_forced_pendula_run_file has "
+             r"no periodic drive"),
+            ('drive_frequency_axis = "W"', 'drive_frequency_axis = "Q"',
+             r"\[system\] .*drive_frequency_axis = 'Q' names no parameter; accepted: None or "
+             r"one of 'c', 'A', 'W'"),
+            ('drive_frequency_axis = "W"', "drive_frequency_axis = 1",
+             r"\[system\] drive_frequency_axis = 1; accepted: the name of the parameter")]:
+        with pytest.raises((ValueError, TypeError), match=match):
+            parse_run(tomllib.loads(DRIVEN.replace(old, new)), "run.toml")

@@ -187,9 +187,10 @@ class DeclaredSystem(System):
         return None
 
     def _with_effects(self, effects: tuple) -> DeclaredSystem:
-        """This system with ``effects`` instead of its own."""
+        """This system with ``effects`` instead of its own (its drive kept)."""
         return _rebuild(self._declaration, tuple(effects),
-                        {p.axis: getattr(self, p.axis) for p in self._declaration.parameters})
+                        {p.axis: getattr(self, p.axis) for p in self._declaration.parameters},
+                        self._drive)
 
     def to_dict(self) -> dict:
         """A JSON-able description (dataset attribute ``system``), with the declaration."""
