@@ -349,6 +349,26 @@ def test_every_kind_of_drive_offers_basins():
     assert e.run_kwargs()["observe"] == ("strobe",)
 
 
+
+def test_a_run_file_of_a_driven_systems_basins_opens_on_its_basins():
+    """`sweep explore examples/driven_double_pendulum_basins.toml` (observe attractor,
+    a pilot) opens on the basins map, not on the flip time; an undriven system, or a
+    driven one whose run observes neither attractor nor strobe, opens on the flip time
+    (no compute: the explorer's first state)."""
+    from pathlib import Path
+
+    from sweep.explore.networks import explorer_for
+    from sweep.toml_spec import load_run
+
+    example = Path(__file__).resolve().parents[1] / "examples" / \
+        "driven_double_pendulum_basins.toml"
+    system, grid, kwargs = load_run(str(example), {})
+    assert kwargs["observe"] == ("attractor",)
+    assert explorer_for(system, grid, **kwargs).state.quantity == "basins"
+    plain = {k: v for k, v in kwargs.items() if k not in ("observe", "stop_early")}
+    assert explorer_for(system, grid, **plain).state.quantity == "log10:flip_time"
+    assert double(observe=("strobe",)).state.quantity == "log10:flip_time"
+
 @pytest.mark.parametrize("make, control, words", [
     # no drive: the map is refused, naming it, what would drive the system, what is offered
     (lambda: double().update(quantity="basins"), "quantity",

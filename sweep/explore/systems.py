@@ -303,8 +303,10 @@ class SystemExplorer(Explorer):
         first two angles' initial values); every axis must be one of the system's
         (`axes`). One-value axes set the start or a parameter.
     quantity : str, optional
-        A key of `system_quantities` (default: ``log10:flip_time``); a driven system's
-        ``basins`` and ``period`` run as `driven_quantities` says.
+        A key of `system_quantities` (default: ``basins`` for a driven system whose
+        ``observe`` asks for ``attractor`` or ``strobe``, as a run file of its basins
+        does, else ``log10:flip_time``); a driven system's ``basins`` and ``period`` run
+        as `driven_quantities` says.
     resolution : int, default `SYSTEM_RESOLUTION` (200)
         Pixels per axis: a quarter of the pendulum's 400 x 400, since a system's step
         costs several of the pendulum's.
@@ -345,7 +347,13 @@ class SystemExplorer(Explorer):
                 system = self._with_parameters(system, fixed)
         except (ValueError, TypeError) as exc:
             raise InvalidInput("grid", " ".join(str(exc).split())) from None
-        chosen = quantity if quantity is not None else default_system_quantity(self._registry)
+        chosen = quantity
+        if chosen is None:  # a run of a driven system's basins opens on its basins
+            observed = run_kwargs.get("observe") or ()
+            observed = (observed,) if isinstance(observed, str) else tuple(observed)
+            chosen = "basins" if "basins" in self._registry and \
+                {"attractor", "strobe"} & set(observed) else \
+                default_system_quantity(self._registry)
         extra = tuple((k, run_kwargs[k]) for k in PASSTHROUGH if k in run_kwargs)
         state = State(scene=system, view=View(x, y, ranges[x], ranges[y]), quantity=chosen,
                       t_end=run_kwargs["t_end"], dt=run_kwargs["dt"],
