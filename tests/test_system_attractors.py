@@ -226,3 +226,19 @@ def test_warm_up_compiles_the_kernel_a_run_with_a_catalogue_uses(full):
     ds = sweep.run(network, grid, t_end=0.1, dt=0.01, progress=False)
     assert cache._build.cache_info().misses == built
     assert (ds["status"].values == 0).all()
+
+
+def test_without_lane_refill_blocks_of_copies_label_every_start(full, monkeypatch):
+    """The block kernel without lane refill (``_config.REFILL = False``) in chunks of 3
+    starts, so that each block of SIMD lanes holds many copies of its chunk's last start
+    (the padding lanes), which stop together: every start gets the basins' label, as
+    with refill. (The step loop stored the last stopped lane's ``done`` into every
+    other lane, which then stepped no more and ended unlabelled, -1.)"""
+    _, labels, catalogue = full
+    monkeypatch.setattr(_config, "REFILL", False)
+    kwargs = dict(RUN, t_transient=0.0, observe=("attractor",), attractors=catalogue,
+                  stop_early=True)
+    spec = sweep.engine.prepare(SYSTEM, GRID, chunk_size=3, **kwargs)[1]
+    assert not spec.refill and spec.block > 3  # padding lanes in every chunk
+    blocks = sweep.run(SYSTEM, GRID, chunk_size=3, **kwargs)
+    np.testing.assert_array_equal(blocks["attractor"].values, labels.values)
