@@ -684,19 +684,28 @@ def warm_up(scene: Scene, grid: Grid, **kwargs) -> KernelSpec:
     Parameters
     ----------
     scene, grid, **kwargs
-        As for `run` (validated the same way, before anything is compiled).
+        As for `run` (validated the same way, before anything is compiled); a system
+        with several coordinates or a swing network too.
 
     Returns
     -------
     sweep.kernels.KernelSpec
-        What was compiled.
+        What was compiled (a system's `sweep.kernels.system.SystemSpec`, a network's
+        `sweep.kernels.network.NetworkSpec`).
     """
     settings, spec, _ = prepare(scene, grid, **kwargs)
-    catalogue = _catalogue(spec, kwargs.get("attractors"))
+    if isinstance(scene, System):  # a system's or network's arguments after saved
+        from .engine_systems import kernel_arguments
+
+        extra = kernel_arguments(scene, grid, spec, kwargs.get("attractors"))[1]
+        scene = scene.switched_on(tuple(grid.axes))  # as run_system: the table's columns
+    else:
+        catalogue = _catalogue(spec, kwargs.get("attractors"))
+        extra = (() if catalogue is None else (catalogue,)) \
+            + (no_known_arguments() if spec.known_cells else ())
     _integrate(build(spec), grid.table(scene, 0, 0), settings,
                _allocate(spec, settings, 0),  # no trajectories: compiles, runs nothing
-               (() if catalogue is None else (catalogue,))
-               + (no_known_arguments() if spec.known_cells else ()))
+               extra)
     io.warm_up()
     return spec
 

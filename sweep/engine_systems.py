@@ -29,8 +29,8 @@ from .settings import CUDA_CHUNK, _block, _check_device, default_chunk_size, val
 from .system_attractors import catalogue_arguments, catalogue_attributes, check_catalogue
 from .system_observables import SYSTEM_OBSERVABLES, resolve_system_observe, variables
 
-__all__ = ["allocate_system", "prepare_system", "run_system", "system_dataset",
-           "to_network_dataset", "to_system_dataset"]
+__all__ = ["allocate_system", "kernel_arguments", "prepare_system", "run_system",
+           "system_dataset", "to_network_dataset", "to_system_dataset"]
 
 #: `sweep.run`'s arguments that a system run does not take yet, with the value that
 #: means "not used"; any other value is refused before any compute.
@@ -225,11 +225,7 @@ def run_system(system: System, grid: ParameterRows, *, progress=None, client=Non
     keep = kwargs.pop("keep_checkpoint", False)
     check_flag("keep_checkpoint", keep)
     settings, spec, chunk_size = prepare_system(system, grid, **kwargs)
-    catalogue = check_catalogue(system, kwargs.get("attractors"), spec.observe, grid) \
-        if not isinstance(spec, NetworkSpec) else None
-    # the kernel's arguments after saved: the catalogue's arrays, or a network's
-    extra = catalogue_arguments(system, catalogue) if catalogue is not None else \
-        network_arguments(spec) if isinstance(spec, NetworkSpec) else ()
+    catalogue, extra = kernel_arguments(system, grid, spec, kwargs.get("attractors"))
     system = system.switched_on(tuple(grid.axes))  # as prepare_system: the table's columns
     if client is not None:
         from .execution.dask import check_client
@@ -247,6 +243,18 @@ def run_system(system: System, grid: ParameterRows, *, progress=None, client=Non
     ds = system_dataset(system, grid, settings, spec, arrays)
     ds.attrs.update(catalogue_attributes(catalogue))
     return ds
+
+
+def kernel_arguments(system: System, grid: ParameterRows, spec,
+                     attractors) -> tuple[dict | None, tuple]:
+    """The checked catalogue (`sweep.system_attractors.check_catalogue`, None without
+    one) and the kernel's arguments after ``saved`` of a checked run (``spec`` from
+    `prepare_system`): the catalogue's arrays, a network's arrays, or ``()``; for
+    `run_system` and `sweep.engine.warm_up`."""
+    if isinstance(spec, NetworkSpec):
+        return None, network_arguments(spec)
+    catalogue = check_catalogue(system, attractors, spec.observe, grid)
+    return catalogue, (() if catalogue is None else catalogue_arguments(system, catalogue))
 
 
 def allocate_system(spec, settings, n: int) -> dict[str, np.ndarray]:

@@ -201,3 +201,44 @@ def test_a_pilot_catalogue_of_a_system(full):
     with pytest.raises(ValueError, match="the grid varies pivot_amplitude; accepted: a grid "
                                          r"that varies only the initial state \(theta1_0"):
         maps.pilot_grid(sweep.Grid(theta1_0=[0.1], pivot_amplitude=[0.1, 0.2]), 5, SYSTEM)
+
+
+def test_warm_up_compiles_the_kernel_a_run_with_a_catalogue_uses(full):
+    """`sweep.engine.warm_up` of a system run with a catalogue passes the kernel its
+    catalogue's arrays (it read the system's catalogue as the single pendulum's and
+    refused it, and the system's spec as the pendulum's), and a network's run its
+    arrays: the runs after it build no kernel."""
+    from sweep.kernels import cache
+
+    _, labels, catalogue = full
+    kwargs = dict(RUN, t_transient=0.0, observe=("attractor",), attractors=catalogue,
+                  stop_early=True)
+    spec = sweep.engine.warm_up(SYSTEM, GRID, **kwargs)
+    assert spec.observe == ("attractor",)
+    built = cache._build.cache_info().misses
+    route = sweep.run(SYSTEM, GRID, **kwargs)
+    assert cache._build.cache_info().misses == built
+    np.testing.assert_array_equal(route["attractor"].values, labels.values)
+    network = sweep.SwingNetwork([(0, 1), (1, 2), (2, 0)], power=[1.0, -0.5, -0.5])
+    grid = sweep.Grid(perturbed_node=[0, 2], delta_theta=np.linspace(-2, 2, 5))
+    sweep.engine.warm_up(network, grid, t_end=0.1, dt=0.01)
+    built = cache._build.cache_info().misses
+    ds = sweep.run(network, grid, t_end=0.1, dt=0.01, progress=False)
+    assert cache._build.cache_info().misses == built
+    assert (ds["status"].values == 0).all()
+
+
+def test_without_lane_refill_blocks_of_copies_label_every_start(full, monkeypatch):
+    """The block kernel without lane refill (``_config.REFILL = False``) in chunks of 3
+    starts, so that each block of SIMD lanes holds many copies of its chunk's last start
+    (the padding lanes), which stop together: every start gets the basins' label, as
+    with refill. (The step loop stored the last stopped lane's ``done`` into every
+    other lane, which then stepped no more and ended unlabelled, -1.)"""
+    _, labels, catalogue = full
+    monkeypatch.setattr(_config, "REFILL", False)
+    kwargs = dict(RUN, t_transient=0.0, observe=("attractor",), attractors=catalogue,
+                  stop_early=True)
+    spec = sweep.engine.prepare(SYSTEM, GRID, chunk_size=3, **kwargs)[1]
+    assert not spec.refill and spec.block > 3  # padding lanes in every chunk
+    blocks = sweep.run(SYSTEM, GRID, chunk_size=3, **kwargs)
+    np.testing.assert_array_equal(blocks["attractor"].values, labels.values)

@@ -165,6 +165,10 @@ def test_maps_not_yet_taking_a_systems_samples_say_so():
         maps.continuation(ds, "point")
     undriven = sweep.run(sweep.DoublePendulum(), sweep.Points(theta1_0=[0.1]), t_end=4.0,
                          dt=0.01, observe=("final",), progress=False)
-    with pytest.raises(ValueError, match="basins of a system need its stroboscopic "
-                                         "samples; accepted"):
-        maps.basins(undriven)
+    # each map of the samples says what it needs of a system, not the pendulum's
+    # strobe_theta and strobe_omega
+    for name in ("basins", "period", "attractor_catalogue"):
+        with pytest.raises(ValueError, match=rf"sweep\.maps\.{name} needs a system's "
+                                             "stroboscopic samples, and this run of "
+                                             "double_pendulum has none; accepted"):
+            getattr(maps, name)(undriven)

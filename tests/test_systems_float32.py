@@ -168,6 +168,29 @@ def test_math_pi_is_float64_in_the_flip_lines():
     assert "* dt_clock" in text  # the flip time on the float64 clock
 
 
+def test_a_float32_catalogue_samples_the_strobe_steps():
+    """In float32 the ``attractor`` observable's drive period in steps (``ca_S``) comes
+    from the float64 step, as ``strobe``'s (``sb_S``) does: from the float32 step (which
+    differs from dt by up to 6e-8 of it) a period of 2 pi / (nu dt) ~ 1e7 steps could
+    round to another count, and the catalogue would match states at other times than
+    the samples the docs say it reads."""
+    from sweep.engine_systems import prepare_system
+    from sweep.kernels.source import system_module
+
+    period = 2 * np.pi / 60.0
+    catalogue = {"theta": np.zeros((1, 2, 16)), "omega": np.zeros((1, 2, 16)),
+                 "period": np.array([1])}
+    spec = prepare_system(sweep.DoublePendulum(pivot_amplitude=0.1, pivot_frequency=60.0),
+                          sweep.Grid(theta1_0=np.linspace(-1, 1, 16)), t_end=20 * period,
+                          dt=period / 40, observe=("strobe", "attractor"),
+                          attractors=catalogue, dtype="float32")[1]
+    text = system_module(spec)
+    periods = [line.strip() for line in text.splitlines()
+               if line.strip().startswith(("sb_S = round(", "ca_S = round("))]
+    assert {line[:4] for line in periods} == {"sb_S", "ca_S"}
+    assert all(line.endswith("* dt_clock))") for line in periods), periods
+
+
 # --- dynamics that read the time: the drives' phases in float64 (sweep.kernels.phases) ---
 
 PIVOT = {"m1": 1.2, "m2": 0.8, "l1": 0.9, "l2": 0.7, "c1": 0.3, "c2": 0.2, "a": 0.05,

@@ -226,7 +226,9 @@ def system_module(spec: SystemSpec) -> str:
 
 
 _HOISTED = re.compile(r"(hoisted_values = np\.empty\(\(\d+, BLOCK\))\)")
-_STROBE_PERIOD = re.compile(r"(sb_S = round\(TWO_PI / \(\w+) \* dt\)\)")
+#: a drive period's steps, of ``strobe`` (``sb_S``) and ``attractor`` (``ca_S``): both
+#: from the float64 step, so that they sample the same steps
+_STROBE_PERIOD = re.compile(r"((?:sb|ca)_S = round\(TWO_PI / \(\w+) \* dt\)\)")
 #: the tangent vector's first value and the exponent's sum: float64 lanes (`_system_single`)
 _TANGENT_START = re.compile(r"^(\s*(?:ly_\w+|acc_ly) = )F\(([^()]*)\)$", re.MULTILINE)
 _FLIP_TIME = re.compile(r"^(\s*at_\w+ = t0 \+ \(.*\)) \* dt$", re.MULTILINE)

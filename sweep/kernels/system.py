@@ -491,9 +491,12 @@ def _parts(spec: SystemSpec) -> _Parts:
     body = list(step)
     if flip:
         body = [f"prev_{q} = {q}" for q in angles] + body + _flip_lines(spec)
+    # the stop's variables only where the step stops (at a flip): a catalogue stops at
+    # its samples (`_attractor_lines`), and the step, which neither reads nor assigns
+    # them then, would store another lane's stale ``done`` into every lane
     stores = [x for x in state] + (["flip_t"] if flip else []) + \
         ([f"ly_{x}" for x in state] if "lyapunov" in spec.observe else []) + \
-        (["done"] + [f"stop_{x}" for x in state] if spec.stop_early else [])
+        (["done"] + [f"stop_{x}" for x in state] if spec.stop_early and flip else [])
     strobe_first, strobe_sample = [], []
     if "strobe" in spec.observe:
         first += _strobe_counters(spec)

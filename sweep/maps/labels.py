@@ -254,11 +254,7 @@ def basins(ds: xr.Dataset, *, rest_position: bool = False, max_period: int = 8,
     tol = check_tolerance(tol)
     if "strobe_positions" in ds.attrs:
         return _system_basins(ds, max_period=max_period, tol=tol)
-    if "system_name" in ds.attrs:
-        raise ValueError("basins of a system need its stroboscopic samples; accepted: a "
-                         "dataset from sweep.run(driven_system, ..., observe=(..., "
-                         "'strobe')), e.g. sweep.DoublePendulum(..., pivot_amplitude=a, "
-                         "pivot_frequency=nu)")
+    refuse_system_without_strobe(ds, "basins")
     if "strobe_theta" in ds:
         return _forced_basins(ds, max_period=max_period, tol=tol)
     if "forcing" in str(ds.attrs.get("effects", "")).split():
@@ -280,6 +276,19 @@ def basins(ds: xr.Dataset, *, rest_position: bool = False, max_period: int = 8,
         "unresolved": UNRESOLVED,
     }
     return out
+
+
+def refuse_system_without_strobe(ds: xr.Dataset, what: str) -> None:
+    """Refuse a system's run (``system_name``) without stroboscopic samples for
+    ``sweep.maps.<what>`` (``"basins"``, ...), naming a run that has them, rather than
+    the single pendulum's variables."""
+    if isinstance(ds, xr.Dataset) and "system_name" in ds.attrs \
+            and "strobe_positions" not in ds.attrs:
+        raise ValueError(f"sweep.maps.{what} needs a system's stroboscopic samples, and "
+                         f"this run of {ds.attrs['system_name']} has none; accepted: a "
+                         "dataset from sweep.run(driven_system, ..., observe=(..., "
+                         "'strobe')), e.g. sweep.DoublePendulum(..., pivot_amplitude=a, "
+                         "pivot_frequency=nu)")
 
 
 def system_strobe_table(ds: xr.Dataset):
@@ -570,6 +579,7 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
     tol = check_tolerance(tol)
     if isinstance(ds, xr.Dataset) and "strobe_positions" in ds.attrs:
         return _system_catalogue(ds, labels, max_period=max_period, tol=tol)
+    refuse_system_without_strobe(ds, "attractor_catalogue")
     flat_theta, flat_omega, dims = strobe_table(ds)
     if labels is None:
         labels = basins(ds, max_period=max_period, tol=tol)

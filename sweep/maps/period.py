@@ -8,7 +8,14 @@ import xarray as xr
 
 from .._validate import check_count
 from . import _strobe
-from .labels import check_tolerance, map_coords, strobe_axes, strobe_table, system_strobe_table
+from .labels import (
+    check_tolerance,
+    map_coords,
+    refuse_system_without_strobe,
+    strobe_axes,
+    strobe_table,
+    system_strobe_table,
+)
 
 __all__ = ["NO_PERIOD", "period"]
 
@@ -51,6 +58,7 @@ def period(ds: xr.Dataset, *, max_period: int | None = None, tol: float = 1e-3
         Without stroboscopic samples, or for ``max_period``/``tol`` out of range.
     """
     tol = check_tolerance(tol)
+    refuse_system_without_strobe(ds, "period")
     system = isinstance(ds, xr.Dataset) and "strobe_positions" in ds.attrs
     if not system:
         strobe_axes(ds, "stroboscopic analysis")  # before reading the number of samples
