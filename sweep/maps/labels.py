@@ -585,18 +585,26 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
         labels = basins(ds, max_period=max_period, tol=tol)
     flat = labels.transpose(*dims).values.ravel()
     period = _resolved_periods(labels)
-    index = _catalogued(ds, dims)
+    index, rings = _catalogued(ds, dims), None
     if index is not None and (index >= 0).any():  # matched rows: their catalogued ring
         rings = _catalogue_rings(ds.attrs, flat_theta.shape[1])
-    theta = np.empty((period.size, flat_theta.shape[1]))
+    theta, omega = _rings_by_label(period.size, flat, index, rings, flat_theta, flat_omega)
+    return {"theta": theta, "omega": omega, "period": period}
+
+
+def _rings_by_label(n: int, flat, index, rings, theta_rows, omega_rows):
+    """Per label 0 .. n-1, the ring of its first start (rows of ``theta_rows``,
+    ``omega_rows``), or, where that start matched a catalogued attractor (``index`` >=
+    0), the catalogue's own ring of it (``rings``)."""
+    theta = np.empty((n,) + theta_rows.shape[1:])
     omega = np.empty_like(theta)
-    for label in range(period.size):
+    for label in range(n):
         row = int(np.flatnonzero(flat == label)[0])
         if index is not None and index[row] >= 0:
             theta[label], omega[label] = rings[0][index[row]], rings[1][index[row]]
         else:
-            theta[label], omega[label] = flat_theta[row], flat_omega[row]
-    return {"theta": theta, "omega": omega, "period": period}
+            theta[label], omega[label] = theta_rows[row], omega_rows[row]
+    return theta, omega
 
 
 def _resolved_periods(labels: xr.DataArray) -> np.ndarray:
@@ -617,19 +625,12 @@ def _system_catalogue(ds: xr.Dataset, labels, *, max_period: int, tol: float) ->
         labels = basins(ds, max_period=max_period, tol=tol)
     flat = labels.transpose(*dims).values.ravel()
     period = _resolved_periods(labels)
-    index = None
+    index = rings = None
     if "attractor" in ds and "attractors_theta" in ds.attrs:
         index = ds["attractor"].transpose(*dims).values.ravel()
         index = np.where(np.isfinite(index), index, -1).astype(np.int64)
         rings = _system_rings(ds, position.shape[2])
-    theta = np.empty((period.size,) + position.shape[1:])
-    omega = np.empty_like(theta)
-    for label in range(period.size):
-        row = int(np.flatnonzero(flat == label)[0])
-        if index is not None and index[row] >= 0:
-            theta[label], omega[label] = rings[0][index[row]], rings[1][index[row]]
-        else:
-            theta[label], omega[label] = position[row], velocity[row]
+    theta, omega = _rings_by_label(period.size, flat, index, rings, position, velocity)
     return {"theta": theta, "omega": omega, "period": period,
             "coordinates": tuple(positions)}
 
