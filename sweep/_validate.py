@@ -158,6 +158,17 @@ def check_flag(name: str, value: Any, *, allow_none: bool = False) -> bool | Non
     return bool(value)
 
 
+def check_keys(table: Any, accepted: Sequence[str], where: str = "",
+               label: str = "accepted") -> None:
+    """Refuse a run-file table with a key not in ``accepted``: ``unknown key 'k'<where>;
+    <label>: a, b, ...`` (``where`` e.g. `` in coordinates[0]``; ``label`` e.g.
+    ``accepted for DeclaredSystem``)."""
+    unknown = [key for key in table if key not in accepted]
+    if unknown:
+        raise ValueError(f"unknown key {unknown[0]!r}{where}; {label}: "
+                         f"{', '.join(accepted)}")
+
+
 def check_choice(name: str, value: Any, choices: Sequence[str]) -> str:
     """Return ``value`` if it is one of ``choices``; otherwise raise ValueError."""
     if not isinstance(value, str) or value not in choices:

@@ -48,6 +48,7 @@ import math
 import re
 from typing import Any
 
+from ._validate import check_keys
 from .physics.derive import FUNCTIONS
 from .physics.effect import Parameter
 from .physics.system import Coordinate, SystemDeclaration
@@ -119,10 +120,7 @@ def declared_system(table: dict[str, Any]):
 def declaration_from_table(table: dict[str, Any]) -> tuple[SystemDeclaration, dict]:
     """The `SystemDeclaration` a ``[system]`` table declares and its parameters' values
     (by name); the names' checks here, the expressions' in `sweep.physics.derive`."""
-    unknown = [key for key in table if key not in SYSTEM_KEYS]
-    if unknown:
-        raise ValueError(f"unknown key {unknown[0]!r}; accepted for DeclaredSystem: "
-                         f"{', '.join(SYSTEM_KEYS)}")
+    check_keys(table, SYSTEM_KEYS, label="accepted for DeclaredSystem")
     for key in ("name", "coordinates"):
         if key not in table:
             raise ValueError(f"DeclaredSystem needs {key}; accepted: name = \"...\", "
@@ -253,10 +251,7 @@ def _coordinates(value: Any) -> tuple[tuple[Coordinate, ...], list[str | None],
     coordinates, forces, accelerations = [], [], []
     for index, entry in enumerate(value):
         where = f"coordinates[{index}]"
-        unknown = [key for key in entry if key not in COORDINATE_KEYS]
-        if unknown:
-            raise ValueError(f"unknown key {unknown[0]!r} in {where}; accepted: "
-                             f"{', '.join(COORDINATE_KEYS)}")
+        check_keys(entry, COORDINATE_KEYS, f" in {where}")
         for key in ("name", "velocity"):
             if key not in entry:
                 raise ValueError(f"{where} needs {key}; accepted: {accepted}")
@@ -296,10 +291,7 @@ def _parameters(value: Any) -> tuple[tuple[Parameter, ...], dict[str, float]]:
     for name, entry in value.items():
         _identifier(f"parameters {name!r}", name)
         entry = {"value": entry} if not isinstance(entry, dict) else entry
-        unknown = [key for key in entry if key not in PARAMETER_KEYS]
-        if unknown:
-            raise ValueError(f"unknown key {unknown[0]!r} in parameters.{name}; accepted: "
-                             f"{', '.join(PARAMETER_KEYS)}")
+        check_keys(entry, PARAMETER_KEYS, f" in parameters.{name}")
         if "value" not in entry:
             raise ValueError(f"parameters.{name} needs value; accepted: {accepted}")
         number = entry["value"]

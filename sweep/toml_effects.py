@@ -4,6 +4,8 @@ and `sweep.toml_declared`, read (`system_effects`) and written back
 
 from __future__ import annotations
 
+from ._validate import check_keys
+
 __all__ = ["system_effects", "system_effects_lines"]
 
 
@@ -24,10 +26,7 @@ def system_effects(arguments: dict, effects: dict) -> tuple:
         for entry in value if isinstance(value, list) else [value]:
             if not isinstance(entry, dict):
                 raise TypeError(f"{name} must be {accepted}, got {entry!r}")
-            unknown = [key for key in entry if key not in keys]
-            if unknown:
-                raise ValueError(f"unknown key {unknown[0]!r} in [system.{name}]; accepted: "
-                                 f"{', '.join(keys)}")
+            check_keys(entry, keys, f" in [system.{name}]")
             found.append(cls(**entry))
     return tuple(found)
 

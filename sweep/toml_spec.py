@@ -101,7 +101,7 @@ from typing import Any
 
 import numpy as np
 
-from ._validate import check_flag, check_positive_int
+from ._validate import check_flag, check_keys, check_positive_int
 from .engine import check_strobe_samples, validate_settings
 from .grid import Grid, Points, from_degrees
 from .kernels.spec import check_device, check_dtype
@@ -313,10 +313,10 @@ def _context(source: str, table: str) -> Iterator[None]:
 
 
 def _check_keys(source: str, where: str, table: dict, accepted) -> None:
-    unknown = [key for key in table if key not in accepted]
-    if unknown:
-        raise ValueError(f"{source}: unknown key {unknown[0]!r} in {where}; "
-                         f"accepted: {', '.join(accepted)}")
+    try:
+        check_keys(table, accepted, f" in {where}")
+    except ValueError as exc:
+        raise ValueError(f"{source}: {exc}") from None
 
 
 def _table(source: str, name: str, value: Any) -> dict:
@@ -356,10 +356,7 @@ def _system(source: str, table: dict):
             fields = ["edges"] + fields
         effects = {cls.declaration.name: cls for cls in acting_effects()}
         accepted = ["kind"] + fields + (list(effects) if kind != "SwingNetwork" else [])
-        unknown = [key for key in table if key not in accepted]
-        if unknown:
-            raise ValueError(f"unknown key {unknown[0]!r}; accepted for {kind}: "
-                             f"{', '.join(accepted)}")
+        check_keys(table, accepted, label=f"accepted for {kind}")
         arguments = {key: value for key, value in table.items() if key != "kind"}
         if kind == "SwingNetwork":
             if ("edges" in arguments) == ("adjacency" in arguments):
