@@ -17,6 +17,7 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import simpson, solve_ivp
+from test_systems import textbook as free_textbook
 
 import sweep
 
@@ -26,16 +27,13 @@ M1, M2, L1, L2 = 1.2, 0.8, 1.0, 0.7
 
 def textbook(t, y, q_force):
     """The double pendulum (absolute angles) in the textbook closed form
-    (myphysicslab's "Double Pendulum"), plus the generalized forces ``q_force(t, y)``
+    (`test_systems.textbook`, myphysicslab's "Double Pendulum"), plus the generalized
+    forces ``q_force(t, y)``
     through the mass matrix of ``T = (m1 + m2) l1^2 w1^2 / 2 + m2 l2^2 w2^2 / 2 +
     m2 l1 l2 w1 w2 cos(th1 - th2)``."""
     th1, th2, w1, w2 = y
     d = th1 - th2
-    den = 2 * M1 + M2 - M2 * np.cos(2 * d)
-    a1 = (-G * (2 * M1 + M2) * np.sin(th1) - M2 * G * np.sin(th1 - 2 * th2)
-          - 2 * np.sin(d) * M2 * (w2 ** 2 * L2 + w1 ** 2 * L1 * np.cos(d))) / (L1 * den)
-    a2 = (2 * np.sin(d) * (w1 ** 2 * L1 * (M1 + M2) + G * (M1 + M2) * np.cos(th1)
-                           + w2 ** 2 * L2 * M2 * np.cos(d))) / (L2 * den)
+    _, _, a1, a2 = free_textbook(t, y, M1, M2, L1, L2, G)
     mass = np.array([[(M1 + M2) * L1 ** 2, M2 * L1 * L2 * np.cos(d)],
                      [M2 * L1 * L2 * np.cos(d), M2 * L2 ** 2]])
     extra = np.linalg.solve(mass, q_force(t, y))
