@@ -28,9 +28,8 @@ M1, M2, L1, L2 = 1.2, 0.8, 1.0, 0.7
 def textbook(t, y, q_force):
     """The double pendulum (absolute angles) in the textbook closed form
     (`test_systems.textbook`, myphysicslab's "Double Pendulum"), plus the generalized
-    forces ``q_force(t, y)``
-    through the mass matrix of ``T = (m1 + m2) l1^2 w1^2 / 2 + m2 l2^2 w2^2 / 2 +
-    m2 l1 l2 w1 w2 cos(th1 - th2)``."""
+    forces ``q_force(t, y)`` through the mass matrix of ``T = (m1 + m2) l1^2 w1^2 / 2 +
+    m2 l2^2 w2^2 / 2 + m2 l1 l2 w1 w2 cos(th1 - th2)``."""
     th1, th2, w1, w2 = y
     d = th1 - th2
     _, _, a1, a2 = free_textbook(t, y, M1, M2, L1, L2, G)
