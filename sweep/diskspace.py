@@ -48,15 +48,12 @@ def _layout(scene, grid, settings, spec, attractors) -> xr.Dataset:
     from .execution.local import allocate
     from .kernels import KernelSpec
 
-    system = not isinstance(spec, KernelSpec)  # sweep.engine_systems
-    if system:
-        from .engine_systems import allocate_system, system_dataset
-
-        allocate = allocate_system
     rows = allocate(spec, settings, 0)  # the kernel's arrays, 0 trajectories long
     full = {name: np.broadcast_to(np.zeros((), array.dtype), (grid.size,) + array.shape[1:])
             for name, array in rows.items()}
-    if system:
+    if not isinstance(spec, KernelSpec):  # a system's: sweep.engine_systems
+        from .engine_systems import system_dataset
+
         return system_dataset(scene, grid, settings, spec, full)
     ds = to_dataset(scene=scene, grid=grid, settings=settings, spec=spec, out=full["out"],
                     status=full["status"], saved=full.get("saved"))

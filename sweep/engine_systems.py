@@ -29,8 +29,8 @@ from .settings import CUDA_CHUNK, _block, _check_device, default_chunk_size, val
 from .system_attractors import catalogue_arguments, catalogue_attributes, check_catalogue
 from .system_observables import SYSTEM_OBSERVABLES, resolve_system_observe, variables
 
-__all__ = ["allocate_system", "kernel_arguments", "prepare_system", "run_system",
-           "system_dataset", "to_network_dataset", "to_system_dataset"]
+__all__ = ["kernel_arguments", "prepare_system", "run_system", "system_dataset",
+           "to_network_dataset", "to_system_dataset"]
 
 #: `sweep.run`'s arguments that a system run does not take yet, with the value that
 #: means "not used"; any other value is refused before any compute.
@@ -232,7 +232,7 @@ def run_system(system: System, grid: ParameterRows, *, progress=None, client=Non
 
         check_client(client)
     n = grid.size
-    arrays = allocate_system(spec, settings, n)
+    arrays = allocate(spec, settings, n)
     todo = list(grid.chunks(chunk_size))
     with progress_bar(progress, n) as bar:
         execute(RunContext(system, grid, spec, settings, extra), todo, arrays,
@@ -257,15 +257,9 @@ def kernel_arguments(system: System, grid: ParameterRows, spec,
     return catalogue, (() if catalogue is None else catalogue_arguments(system, catalogue))
 
 
-def allocate_system(spec, settings, n: int) -> dict[str, np.ndarray]:
-    """The arrays a system's or network's kernel writes for ``n`` trajectories
-    (`sweep.execution.local.allocate`, which a Dask worker calls too)."""
-    return allocate(spec, settings, n)
-
-
 def system_dataset(system, grid, settings, spec, arrays: dict) -> xr.Dataset:
     """The dataset of a system run from the arrays its kernel wrote
-    (`allocate_system`)."""
+    (`sweep.execution.local.allocate`)."""
     build = to_network_dataset if isinstance(spec, NetworkSpec) else to_system_dataset
     return build(system=system, grid=grid, settings=settings, spec=spec, out=arrays["out"],
                  status=arrays["status"], saved=arrays.get("saved"))
