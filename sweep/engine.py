@@ -55,7 +55,7 @@ from .settings import (  # re-exported: sweep.engine.RunSettings, validate_setti
     validate_method,  # noqa: F401
     validate_settings,
 )
-from .system_attractors import catalogue_parts
+from .system_attractors import catalogue_parts, check_rings
 
 __all__ = ["run", "prepare", "warm_up", "estimate_error", "default_chunk_size", "RunSettings",
            "METHODS"]
@@ -338,12 +338,7 @@ def attractor_orbits(attractors) -> tuple:
                 "with 'theta', 'omega' (m x P stroboscopic rings, finite) and 'period' "
                 "(m ints, 1 <= period <= P / 2: a ring shows its orbit twice)")
     theta, omega, period = catalogue_parts(attractors, accepted)
-    if theta.ndim != 2 or theta.shape != omega.shape or period.shape != theta.shape[:1] \
-            or theta.shape[0] == 0 or not np.all(np.isfinite(theta)) \
-            or not np.all(np.isfinite(omega)) or not np.issubdtype(period.dtype, np.integer) \
-            or np.any(period < 1) or np.any(2 * period > theta.shape[1]):
-        raise ValueError(f"attractors: rings of shape {theta.shape} and {omega.shape}, "
-                         f"periods {period.tolist()!r}; {accepted}")
+    check_rings(theta, omega, period, accepted, ndim=2)
     return tuple(tuple((float(np.mod(t, 2 * np.pi)), float(w))
                        for t, w in zip(theta[a, -p:], omega[a, -p:]))
                  for a, p in enumerate(int(q) for q in period))

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["catalogue_arguments", "catalogue_attributes", "catalogue_parts", "check_catalogue",
-           "initial_axes"]
+           "check_rings", "initial_axes"]
 
 
 def catalogue_parts(attractors, accepted: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -29,6 +29,20 @@ def catalogue_parts(attractors, accepted: str) -> tuple[np.ndarray, np.ndarray, 
         raise ValueError(f"attractors must be an attractor catalogue, got {attractors!r}; "
                          f"{accepted}") from None
     return theta, omega, period
+
+
+def check_rings(theta: np.ndarray, omega: np.ndarray, period: np.ndarray, accepted: str,
+                ndim: int | None = None) -> None:
+    """Refuse rings that cannot be a catalogue's: ``theta`` and ``omega`` of one shape
+    (``ndim`` dimensions where given), samples last, at least one attractor, finite, and
+    ``period`` one int per attractor with ``1 <= period <= samples / 2``."""
+    if (ndim is not None and theta.ndim != ndim) or theta.shape != omega.shape \
+            or period.shape != theta.shape[:1] or theta.shape[0] == 0 \
+            or not np.all(np.isfinite(theta)) or not np.all(np.isfinite(omega)) \
+            or not np.issubdtype(period.dtype, np.integer) or np.any(period < 1) \
+            or np.any(2 * period > theta.shape[-1]):
+        raise ValueError(f"attractors: rings of shape {theta.shape} and {omega.shape}, "
+                         f"periods {period.tolist()!r}; {accepted}")
 
 
 def initial_axes(system) -> tuple[str, ...]:
@@ -100,12 +114,7 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
     if given is not None and tuple(str(name) for name in given) != expected:
         raise ValueError(f"attractors: a catalogue of coordinates {tuple(given)!r}, but "
                          f"{system.title} has {expected!r}; {accepted}")
-    if theta.shape != omega.shape or period.shape != theta.shape[:1] \
-            or theta.shape[0] == 0 or not np.all(np.isfinite(theta)) \
-            or not np.all(np.isfinite(omega)) or not np.issubdtype(period.dtype, np.integer) \
-            or np.any(period < 1) or np.any(2 * period > theta.shape[2]):
-        raise ValueError(f"attractors: rings of shape {theta.shape} and {omega.shape}, "
-                         f"periods {period.tolist()!r}; {accepted}")
+    check_rings(theta, omega, period, accepted)
     varied = [name for name in grid.axes
               if name not in initial_axes(system) and grid.varies(name)]
     if varied:
