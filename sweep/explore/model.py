@@ -963,8 +963,8 @@ class Explorer:
         `sweep.maps.pilot_catalogue` over the home window's grid (`pilot_state`), thinned
         to `pilot_points` per axis; cached per scene, settings and start.
 
-        One catalogue for every zoom: the catalogue is compiled into the kernel, so a new
-        one costs a compilation (seconds), while the labels do not depend on it (a
+        One catalogue for every zoom: a new one costs its pilot run (the catalogue is
+        the kernel's data, so no compilation), while the labels do not depend on it (a
         catalogue only decides when a trajectory may stop; attractors it lacks are still
         found by the strobe test; `sweep.maps.basins` orders them as a full run does).
         """
