@@ -65,12 +65,13 @@ def as_prange(text: str) -> str:
     generated it before `sweep.kernels.threads`."""
     text = text.replace("from numba import get_num_threads, njit\n",
                         "from numba import get_num_threads, njit, prange\n", 1)
-    # fixed-step, adaptive: kernel -> run_blocks(blocks, ...) -> blocks(..., b_first, b_stop)
-    text, fixed = re.subn(
-        r"def kernel\([^)]*\):\n    run_blocks\(blocks,.*?\)\n"
-        r"@njit\(nogil=True, \*\*JIT\)\ndef blocks\((?P<args>[^)]*),\s*b_first, b_stop\):\n",
-        lambda m: f"@njit(parallel=True, **JIT)\ndef kernel({m.group('args')}):\n", text,
-        flags=re.DOTALL)
+    # fixed-step, adaptive: kernel -> run_blocks(blocks, n_blocks, ...) -> blocks(...,
+    # BLOCK, b_first, b_stop) becomes kernel -> blocks(..., BLOCK), one parallel loop
+    text, fixed = re.subn(r"run_blocks\(blocks, \(params\.shape\[0\] \+ BLOCK - 1\) // BLOCK,"
+                          r"\s*([^)]*)\)", lambda m: "blocks(" + " ".join(m.group(1).split())
+                          + ")", text)
+    text = re.sub(r"@njit\(nogil=True, \*\*JIT\)\ndef blocks\(([^)]*), b_first, b_stop\):",
+                  r"@njit(parallel=True, **JIT)\ndef blocks(\1):", text)
     text = text.replace("for b in range(b_first, b_stop):",
                         "for b in prange((n + BLOCK - 1) // BLOCK):")
     # refill: run_blocks(grouped, n_groups, ..., n_groups) -> grouped(..., n_groups)

@@ -244,3 +244,45 @@ def test_every_observable_declares_the_state_it_keeps():
 def test_block_must_be_a_multiple_of_eight():
     with pytest.raises(ValueError, match=r"block must be 1 or a positive multiple of 8, got 12"):
         KernelSpec("linear", (), ("final",), block=12)
+
+
+def test_one_compiled_kernel_serves_every_block_size_but_one_lane():
+    """The lanes per block are an argument of the compiled function
+    (`sweep.kernels.lanes.BIND`), not a constant of its text: every kind of CPU module
+    reads the same for 8 and 64 lanes (so a new block size compiles nothing), and one
+    lane has its own, scalar text (`sweep.kernels.lanes.scalar_lanes`)."""
+    import dataclasses
+    import sys
+
+    from sweep.engine_systems import prepare_system
+    from sweep.kernels.network import NetworkSpec
+
+    source = sys.modules["sweep.kernels.source"].source
+    period = 2 * np.pi / 0.7
+    forced = sweep.Scene(effects=(sweep.Damping(0.2), sweep.Forcing(1.2, 0.7)))
+    grid = sweep.Grid(theta0=np.linspace(-3, 3, 40), omega0=[0.0, 1.0])
+    pendulum = {  # the run's specs: no kernel is compiled here
+        "fixed": dict(observe=ALL_OBSERVE, save_every=7),
+        "refill": dict(observe=("strobe",), stop_early=True, t_transient=2 * period),
+        "adaptive": dict(observe=("final",), method="dopri5")}
+    specs = {name: sweep.engine.prepare(forced, grid, t_end=4 * period, dt=period / 100,
+                                        **kw)[1] for name, kw in pendulum.items()}
+    double = sweep.Grid(theta1_0=np.linspace(-3, 3, 40), theta2_0=[0.0, 1.0])
+    for name, kw in {"system": dict(observe=("final",)),
+                     "system refill": dict(observe=("flip",), stop_early=True)}.items():
+        specs[name] = prepare_system(sweep.DoublePendulum(), double, t_end=1.0, dt=0.01,
+                                     **kw)[1]
+    specs["network"] = NetworkSpec(((0, 1, 1.0),), (-1.0, 1.0), (0.0, 0.5), ("final",),
+                                   block=8)
+    assert specs["refill"].refill and specs["system refill"].refill
+    for name, spec in specs.items():
+        texts = {block: source(dataclasses.replace(spec, block=block)) for block in (1, 8, 64)}
+        assert texts[8] == texts[64], name
+        if name in ("fixed", "system"):
+            assert texts[1] != texts[8], name  # scalar lanes
+    small = KernelSpec("nonlinear", ("damping", "forcing"), ALL_OBSERVE, save=True, block=8)
+    large = dataclasses.replace(small, block=64)  # test_forced_run_...'s kernels
+    assert _kernels.compiled(_kernels.build(small)) is _kernels.compiled(_kernels.build(large))
+    params = _table(77)
+    _assert_same(_call(small, params, save_every=7), _call(large, params, save_every=7))
+    assert len(_kernels.compiled(_kernels.build(small)).signatures) == 1

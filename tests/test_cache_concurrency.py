@@ -40,7 +40,7 @@ SCRIPT = textwrap.dedent("""
 
         def load_overload(self, sig, target_context):
             data = load(self, sig, target_context)
-            generated = "BLOCK" in getattr(self._py_func, "__globals__", {})
+            generated = "bind" in getattr(self._py_func, "__globals__", {})
             if data is None and generated and not os.path.exists(mine):
                 open(mine, "w").close()
                 end = time.monotonic() + 120

@@ -91,8 +91,8 @@ def test_refill_does_not_depend_on_the_number_of_groups(groups):
     grouped = kernels.compiled(kernels.build(spec))  # the compiled kernel itself
     out = np.full((params.shape[0], kernels.n_columns(spec)), -7.0)
     status = np.full(params.shape[0], 99, dtype=np.int8)
-    grouped(params, 0.0, DT, N_STEPS, 150 * 20, 1, out, status, np.empty((0, 2, 0)), groups,
-            0, groups)  # every group, in this thread
+    grouped(params, 0.0, DT, N_STEPS, 150 * 20, 1, out, status, np.empty((0, 2, 0)),
+            spec.block, groups, 0, groups)  # every group of 64 lanes, in this thread
     np.testing.assert_array_equal(status, waiting[1])
     assert out.tobytes() == waiting[0].tobytes()
 

@@ -160,8 +160,16 @@ def build(spec: KernelSpec):
 def _build(spec: KernelSpec, *settings):
     """`build` for one set of the `sweep._config` settings written into the source
     (`sweep.kernels.vectors`), which are so part of the memo key."""
+    module = _module(source(spec))
+    bind = getattr(module, "bind", None)  # a CPU kernel, for blocks of spec.block lanes
+    return module.kernel if bind is None else bind(spec.block)
+
+
+@functools.cache
+def _module(text: str):
+    """The kernel module of ``text``, written once and imported once per process: the
+    specs that differ only by their block share it (`sweep.kernels.lanes.BIND`)."""
     _serialise_numba_index()
-    text = source(spec)
     digest = hashlib.sha1(text.encode()).hexdigest()[:16]
     name = f"sweep_kernel_{digest}"
     path = _module_dir() / f"{name}.py"
@@ -170,7 +178,7 @@ def _build(spec: KernelSpec, *settings):
     module = importlib.util.module_from_spec(module_spec)
     sys.modules[name] = module
     module_spec.loader.exec_module(module)
-    return module.kernel
+    return module
 
 
 def compiled(kernel):
@@ -181,5 +189,12 @@ def compiled(kernel):
     return names["grouped"] if "grouped" in names else names["blocks"]
 
 
+def _cache_clear() -> None:
+    """Forget every built kernel and imported module (a new `build` imports the module
+    again, and numba loads it from its disk cache)."""
+    _build.cache_clear()
+    _module.cache_clear()
+
+
 build.cache_info = _build.cache_info  # the memo's statistics and reset, as on a
-build.cache_clear = _build.cache_clear  # functools.cache'd build (tests, benchmarks)
+build.cache_clear = _cache_clear  # functools.cache'd build (tests, benchmarks)

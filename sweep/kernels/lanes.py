@@ -7,7 +7,7 @@ from __future__ import annotations
 import re
 import textwrap
 
-__all__ = ["ASSIGNED", "IDENTIFIER", "KNOWN_ARGUMENTS", "allocate", "blocks_head", "indent",
+__all__ = ["ASSIGNED", "BIND", "IDENTIFIER", "KNOWN_ARGUMENTS", "allocate", "blocks_head", "indent",
            "lane_loop", "lane_snippet", "scalar_lanes", "skip_unless"]
 
 IDENTIFIER = re.compile(r"\b[A-Za-z_]\w*\b")
@@ -35,25 +35,38 @@ def lane_loop(body: str, lane: dict[str, str], *, level: int, head: str = "",
                   level)
 
 
-def blocks_head(block: int, extra: str = "") -> str:
-    """The head of a fixed-step kernel module's body: ``BLOCK``, the Python ``kernel``
-    (the contract of `sweep.kernels.source`) that spreads the blocks over threads
-    (`sweep.kernels.threads.run_blocks`), and the signature of the compiled ``blocks``
-    over a range of blocks, whose body follows (``extra``: the arguments after
-    ``saved``, as source, `sweep.kernels.snippets.kernel_arguments`; a system's
-    attractor catalogue, `CATALOGUE_ARGUMENTS`; a swing network's arrays)."""
+#: The head of ``bind(BLOCK)``, which every CPU kernel module defines in place of a
+#: ``kernel`` (`sweep.kernels.cache.build` calls it with the spec's block): the lanes
+#: per block are an argument of the compiled function, so that its text does not depend
+#: on them and one compilation serves every block size (but one lane, `scalar_lanes`).
+#: Measured side by side against the same module with the constant (AMD EPYC Zen 5, 2
+#: threads): the same bits and the same speed, on the pendulum's fixed-step, refill,
+#: float32 and dopri5 kernels and the double pendulum's (`benchmarks/run_all.py` and
+#: `benchmarks/double_pendulum.py` give the numbers of the README).
+BIND = '''def bind(BLOCK):
+    """The kernel for blocks of ``BLOCK`` SIMD lanes."""'''
+
+
+def blocks_head(extra: str = "") -> str:
+    """The head of a fixed-step kernel module's body: ``bind`` (`BIND`), which makes the
+    Python ``kernel`` (the contract of `sweep.kernels.source`) that spreads the blocks
+    over threads (`sweep.kernels.threads.run_blocks`), and the signature of the
+    compiled ``blocks`` over a range of blocks, whose body follows (``extra``: the
+    arguments after ``saved``, as source, `sweep.kernels.snippets.kernel_arguments`; a
+    system's attractor catalogue, `CATALOGUE_ARGUMENTS`; a swing network's arrays)."""
     return f'''
-BLOCK = {block}
+{BIND}
 
-
-def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra}):
-    run_blocks(blocks, (params.shape[0] + BLOCK - 1) // BLOCK,
-               params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra})
+    def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra}):
+        run_blocks(blocks, (params.shape[0] + BLOCK - 1) // BLOCK,
+                   params, t0, dt, n_steps, n_transient, save_every, out, status,
+                   saved{extra}, BLOCK)
+    return kernel
 
 
 @njit(nogil=True, **JIT)
 def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra},
-           b_first, b_stop):
+           BLOCK, b_first, b_stop):
 '''
 
 

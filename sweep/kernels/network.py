@@ -39,7 +39,7 @@ import numpy as np
 
 from .. import methods as _methods
 from .lanes import blocks_head, indent
-from .spec import Status, check_block
+from .spec import Status, check_block, describe_block
 from .steppers import fused
 
 __all__ = ["NETWORK_ARGUMENTS", "NETWORK_OBSERVABLES", "NetworkSpec", "network_arguments",
@@ -108,7 +108,7 @@ class NetworkSpec:
                 if self.device != "cpu" else "")
         return (f"swing network{size}, "
                 f"observe={self.observe!r}, save={self.save!r}, method={self.method!r}, "
-                f"block={self.block!r}"
+                f"{describe_block(self.block)}"
                 + (f", device={self.device!r}" if self.device != "cpu" else ""))
 
 
@@ -224,20 +224,20 @@ def network_source(spec: NetworkSpec, header: str) -> str:
 def accel(x, v, kx, kv, alpha, coupling, src, dst, weight, power):
     """kx = v; kv = P - alpha v + K sum_edges A sin(x_other - x_self), edge by edge."""
     for q in range(power.shape[0]):
-        for j in range(BLOCK):
+        for j in range(alpha.shape[0]):  # the block's lanes
             kx[q, j] = v[q, j]
             kv[q, j] = vfma(-alpha[j], v[q, j], power[q])
     for e in range(src.shape[0]):
         a = src[e]
         c = dst[e]
         w = weight[e]
-        for j in range(BLOCK):
+        for j in range(alpha.shape[0]):
             f = w * coupling[j] * vsin(x[c, j] - x[a, j])
             kv[a, j] += f
             kv[c, j] -= f
 
 
-{blocks_head(spec.block, NETWORK_ARGUMENTS)}    n = params.shape[0]
+{blocks_head(NETWORK_ARGUMENTS)}    n = params.shape[0]
     N = power.shape[0]
 {indent(NL.join(constants.values()), 1)}
     th = np.empty((N, BLOCK))

@@ -22,6 +22,7 @@ import re
 from ..observables import OBSERVABLES
 from .fixed import NL, _drives, _finish, _first_lines, _lane_dtypes, _load, _parameters
 from .lanes import (
+    BIND,
     IDENTIFIER,
     allocate,
     indent,
@@ -64,30 +65,31 @@ def _sine_table(spec: KernelSpec, drives, shared: list[str]) -> tuple[str, list[
     return table, lines
 
 
-def groups_head(block: int, extra: str = "") -> str:
-    """The head of a refill kernel module's body: ``BLOCK``, the Python ``kernel`` (the
-    contract of `sweep.kernels.source`) that runs one group of lanes per thread
-    (`sweep.kernels.threads.run_blocks`), and the signature of the compiled
-    ``grouped``, whose body follows (``extra``: arguments after ``saved``); shared by
-    the single pendulum's and the systems' refill kernels."""
+def groups_head(extra: str = "") -> str:
+    """The head of a refill kernel module's body: ``bind`` (`sweep.kernels.lanes.BIND`),
+    which makes the Python ``kernel`` (the contract of `sweep.kernels.source`) that runs
+    one group of ``BLOCK`` lanes per thread (`sweep.kernels.threads.run_blocks`), and
+    the signature of the compiled ``grouped``, whose body follows (``extra``: arguments
+    after ``saved``); shared by the single pendulum's and the systems' refill kernels."""
     return f'''
-BLOCK = {block}
+{BIND}
 
-
-def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra}):
-    """One group of lanes per thread, but no more groups than n // BLOCK (one group
-    when n < BLOCK), each group on a thread of its own (`sweep.kernels.threads`)."""
-    if n_steps < 1:  # every lane steps before its first stop test
-        raise ValueError(f"n_steps must be >= 1 for a refill kernel, got {{n_steps!r}}")
-    n = params.shape[0]
-    n_groups = min(max(n // BLOCK, 1), n, get_num_threads())
-    run_blocks(grouped, n_groups, params, t0, dt, n_steps, n_transient, save_every, out,
-               status, saved{extra}, n_groups)
+    def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra}):
+        """One group of lanes per thread, but no more groups than n // BLOCK (one
+        group when n < BLOCK), each group on a thread of its own
+        (`sweep.kernels.threads`)."""
+        if n_steps < 1:  # every lane steps before its first stop test
+            raise ValueError(f"n_steps must be >= 1 for a refill kernel, got {{n_steps!r}}")
+        n = params.shape[0]
+        n_groups = min(max(n // BLOCK, 1), n, get_num_threads())
+        run_blocks(grouped, n_groups, params, t0, dt, n_steps, n_transient, save_every,
+                   out, status, saved{extra}, BLOCK, n_groups)
+    return kernel
 
 
 @njit(nogil=True, **JIT)
 def grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra},
-            n_groups, g_first, g_stop):
+            BLOCK, n_groups, g_first, g_stop):
 '''
 
 
@@ -204,7 +206,7 @@ finished = False"""
         observe_loop = indent(_DUE, 3) + NL + indent(observe_loop, 1)
     refill_loop = lane_loop(refill, lane, level=4,
                             head=skip_unless("finished"))
-    return groups_head(spec.block, kernel_arguments(spec)) + f'''\
+    return groups_head(kernel_arguments(spec)) + f'''\
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(parts["preamble"]), 1)}

@@ -16,7 +16,8 @@ __all__ = ["DEVICES", "DTYPES", "KernelSpec", "Status", "check_block", "check_de
            "check_dtype",
            "check_method_fits",
            "check_observables_fit",
-           "check_tangent_fits", "declarations", "failure_summary", "method_of", "n_columns",
+           "check_tangent_fits", "declarations", "describe_block", "failure_summary",
+           "method_of", "n_columns",
            "status_counts", "tangent"]
 
 
@@ -238,11 +239,17 @@ class KernelSpec:
         """A one-line description for the generated module's docstring."""
         return (f"model={self.model!r}, effects={self.names!r}, observe={self.observe!r}, "
                 f"save={self.save!r}, method={self.method!r}, stop_early={self.stop_early!r}, "
-                f"shared_forcing={self.shared_forcing!r}, block={self.block!r}, "
+                f"shared_forcing={self.shared_forcing!r}, {describe_block(self.block)}, "
                 f"refill={self.refill!r}, device={self.device!r}, "
                 f"strobe_samples={self.strobe_samples!r}"
                 + (f", dtype={self.dtype!r}" if self.dtype != "float64" else "")
                 + (", known_cells=True" if self.known_cells else ""))
+
+
+def describe_block(block: int) -> str:
+    """The block in a generated module's docstring: a CPU module's text is the same for
+    every block size but one lane (`sweep.kernels.lanes.BIND`), so it names no other."""
+    return "block=1" if block == 1 else "block=BLOCK (bind)"
 
 
 def check_block(block) -> int:

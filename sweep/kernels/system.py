@@ -54,7 +54,7 @@ from .phases import Phases
 from .phases import bodies as phase_bodies
 from .phases import find as find_phases
 from .rewrite import Rewritten, rewrite
-from .spec import Status, check_block
+from .spec import Status, check_block, describe_block
 from .steppers import fused
 
 __all__ = ["CATALOGUE_ARGUMENTS", "SystemSpec", "drive_phases", "n_outputs", "system_source"]
@@ -153,7 +153,7 @@ class SystemSpec:
         return (f"system={self.system.name!r}, coordinates="
                 f"{tuple(c.name for c in self.system.coordinates)!r}, damping={self.damping!r}, "
                 f"observe={self.observe!r}, save={self.save!r}, method={self.method!r}, "
-                f"stop_early={self.stop_early!r}, block={self.block!r}"
+                f"stop_early={self.stop_early!r}, {describe_block(self.block)}"
                 + (", refill=True" if self.refill else "")
                 + (f", strobe_samples={self.strobe_samples!r}" if "strobe" in self.observe
                    else "")
@@ -649,7 +649,7 @@ def system_kernel(spec: SystemSpec) -> str:
                        count="n_real")
     dues = (["sb_due = 0"] if parts.strobe_sample else []) + \
         (["ca_due = 0"] if parts.attractor_sample else [])
-    kernel = blocks_head(spec.block, _more(spec)) + f'''\
+    kernel = blocks_head(_more(spec)) + f'''\
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(constants.values()), 1)}
