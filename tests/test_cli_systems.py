@@ -171,6 +171,10 @@ pilot = 2
     ('observe = ["attractor"]', 'observe = ["final", "attractor"]', [],
      r"stop_early stops a system's trajectory at its first flip"),
     ("", "", ["--pilot", "1"], r"pilot must be an int >= 2"),
+    # the drive off (pivot_frequency = 0): the message says what would be accepted
+    ("pivot_frequency = 60.0", "pivot_frequency = 0.0", [],
+     r"\[run\] observable 'attractor' samples once per drive period 2 pi / pivot_frequency "
+     r"and needs pivot_frequency > 0, got 0\.0; accepted: pivot_frequency > 0 rad/s"),
     ('observe = ["attractor"]\nstop_early = true\npilot = 2\n', "", ["--pilot", "5"],
      r"^sweep: error: pilot = 5 makes an attractor catalogue .* and observe is "
      r"\['final', 'winding'\]"),
