@@ -57,9 +57,12 @@ def check_sampling_period(name: str, frequencies, dt: float, *,
         Naming the first bad frequency and what would be accepted.
     """
     for frequency in np.unique(frequencies):
-        if frequency <= 0:
-            raise ValueError(f"observable {name!r} needs {axis} > 0, got "
-                             f"{float(frequency)!r}")
+        if frequency <= 0:  # W = 0: no drive, so no period to sample once per
+            raise ValueError(f"observable {name!r} samples once per {period} period 2 pi / "
+                             f"{axis} and needs {axis} > 0, got {float(frequency)!r}; "
+                             f"accepted: {axis} > 0 rad/s (every value, a {period} period "
+                             f"that is a whole number of steps dt = {dt!r}), or observe "
+                             f"without {name!r}")
         steps = 2 * np.pi / (frequency * dt)
         if abs(steps - round(steps)) > WHOLE_STEPS_RTOL * max(1.0, steps) * 1e3:
             raise ValueError(

@@ -880,6 +880,18 @@ def parse_ladder(items: list[str]) -> dict:
     return ladder
 
 
+def _pendulum_only(command: str, run_file: str, scene) -> None:
+    """Refuse a ``[system]`` run file in ``sweep COMMAND``, made for the single
+    pendulum only (before anything runs)."""
+    from .physics import Scene
+
+    if not isinstance(scene, Scene):
+        raise ValueError(f"sweep {command} supports single-pendulum run files only; "
+                         f"{run_file!r} has a [system] table ({type(scene).__name__}); "
+                         "accepted: a run file with a [scene] table, or with neither (the "
+                         "default pendulum)")
+
+
 def _command_map_accuracy(args: argparse.Namespace) -> int:
     """``sweep map-accuracy``: `sweep.map_accuracy` of a run file's starts under the
     ``--ladder`` settings; print the table, optionally write the netCDF and the figure
@@ -906,6 +918,7 @@ def _command_map_accuracy(args: argparse.Namespace) -> int:
                              f"accepted: {', '.join(sorted(supported))}")
     options = {}
     scene, starts, kwargs = load_run(args.run_file, options)
+    _pendulum_only("map-accuracy", args.run_file, scene)
     if options.get("scheduler") is not None:
         raise ValueError("sweep map-accuracy runs locally; [run] scheduler is not used "
                          "here; accepted: a run file without scheduler")
@@ -961,6 +974,7 @@ def _command_boundary(args: argparse.Namespace) -> int:
                          f"{args.sampled}")
     options = {}
     scene, grid, kwargs = load_run(args.run_file, options)
+    _pendulum_only("boundary", args.run_file, scene)
     varying = [d for d, values in getattr(grid, "axes", {}).items() if len(values) > 1]
     if not isinstance(grid, Grid) or sorted(varying) != ["omega0", "theta0"]:
         has = ("a [grid] varying " + ", ".join(varying)) if isinstance(grid, Grid) \

@@ -22,7 +22,7 @@ from .io import device_attributes, origin_attributes, run_attributes, status_var
 from .kernels import failure_summary, status_counts
 from .kernels.network import NETWORK_OBSERVABLES, NetworkSpec, network_arguments
 from .kernels.system import STOPPING, SystemSpec
-from .observables import STROBE_SAMPLES
+from .observables import STROBE_SAMPLES, variable_attributes
 from .physics.network import NETWORK_PARAMETERS, SwingNetwork
 from .physics.system import System, system_parameters
 from .settings import CUDA_CHUNK, _block, _check_device, default_chunk_size, validate_settings
@@ -290,7 +290,7 @@ def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
     for name in spec.observe:
         width = spec.strobe_samples if SYSTEM_OBSERVABLES[name].sampled else 1
         for variable, units, long_name in variables(name, coordinates, system.energy_units):
-            attrs = {"units": units, "long_name": long_name}
+            attrs = variable_attributes(variable, units, long_name)
             if width == 1:
                 data_vars[variable] = xr.Variable(dims, grid.unflatten(out[:, col]), attrs)
             else:  # as the single pendulum's strobe_theta (sweep.io)

@@ -19,7 +19,7 @@ from . import _config
 from ._version import __version__
 from .grid import Grid, Points
 from .kernels import Status, vectors
-from .observables import OBSERVABLES
+from .observables import OBSERVABLES, variable_attributes
 from .physics import EFFECTS, Scene, parameter_info
 
 __all__ = ["device_attributes", "origin_attributes", "run_attributes", "to_dataset",
@@ -87,7 +87,7 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     for observable in (OBSERVABLES[name] for name in spec.observe):
         width = observable.n_samples(spec)
         for name, units, long_name in observable.variables:
-            attrs = {"units": units, "long_name": long_name}
+            attrs = variable_attributes(name, units, long_name)
             if observable.sample_dim is None:
                 data_vars[name] = xr.Variable(dims, grid.unflatten(out[:, col]), attrs)
             else:

@@ -34,7 +34,7 @@ import numpy as np
 import xarray as xr
 
 from . import engine
-from ._validate import check_count, check_real
+from ._validate import check_count, check_pendulum_scene, check_real
 from .grid import Grid, Points
 from .kernels.spec import DTYPES
 from .maps.fractions import _table, _unresolved_code
@@ -354,8 +354,7 @@ def map_accuracy(scene: Scene, starts, label=basins, ladder=None, *, repeats: in
     ...                          t_end=40.0, observe=("capture",))
     >>> acc.table()  # doctest: +SKIP
     """
-    if not isinstance(scene, Scene):
-        raise ValueError(f"scene must be a sweep.Scene, got {type(scene).__name__}")
+    check_pendulum_scene("map_accuracy", scene)
     if not isinstance(starts, (Grid, Points)):
         raise ValueError(f"starts must be sweep.Points (e.g. sweep.sample(...)) or a "
                          f"sweep.Grid, got {type(starts).__name__}")

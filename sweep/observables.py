@@ -31,7 +31,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-__all__ = ["Observable", "OBSERVABLES", "DEFAULT_OBSERVE", "resolve"]
+__all__ = ["COMMENTS", "Observable", "OBSERVABLES", "DEFAULT_OBSERVE", "resolve",
+           "variable_attributes"]
 
 
 @dataclass(frozen=True)
@@ -361,11 +362,7 @@ OBSERVABLES: dict[str, Observable] = {
         Observable(
             name="attractor",
             variables=(
-                ("attractor", "1",
-                 "index (in the run's attractor catalogue, attributes attractors_*) of "
-                 "the attractor the trajectory settled on: its stroboscopic point within "
-                 "ATTRACTOR_TOL of the successive points of that attractor's orbit for "
-                 "ATTRACTOR_MATCHES forcing periods running; -1 if it never was"),
+                ("attractor", "1", "index of the attractor settled on (-1: none)"),
             ),
             # the catalogue is the kernel's argument ``catalogue`` (after ``saved``, or
             # ``stats``; `sweep.kernels.snippets.catalogue_argument`): per point of the
@@ -523,6 +520,25 @@ OBSERVABLES: dict[str, Observable] = {
         ),
     )
 }
+
+#: CF ``comment`` attributes of the variables whose meaning takes more than their
+#: ``long_name``, which plots and the explorer show as a label and so is kept short.
+COMMENTS = {
+    "attractor": "its index in the run's attractor catalogue (attributes attractors_*); "
+                 "settled on: the trajectory's stroboscopic point within ATTRACTOR_TOL of "
+                 "the successive points of that attractor's orbit for ATTRACTOR_MATCHES "
+                 "forcing periods running; -1: it never was",
+}
+
+
+def variable_attributes(name: str, units: str, long_name: str) -> dict[str, str]:
+    """The netCDF attributes of an observable's variable ``name``: ``units``,
+    ``long_name`` (a short label) and, for the variables in `COMMENTS`, ``comment``."""
+    attrs = {"units": units, "long_name": long_name}
+    if name in COMMENTS:
+        attrs["comment"] = COMMENTS[name]
+    return attrs
+
 
 #: What `sweep.run` observes when ``observe`` is not given.
 DEFAULT_OBSERVE = ("final", "winding")

@@ -332,8 +332,12 @@ def _trajectories(ds, sel):
         )
     missing = [v for v in ("theta", "omega") if v not in ds.data_vars]
     if missing:
-        raise ValueError(f"trajectory needs the variables theta and omega; missing: "
-                         f"{', '.join(missing)}")
+        system = ds.attrs.get("system_name")
+        of = f" (this is a run of the system {system})" if system is not None else ""
+        raise ValueError(f"trajectory needs the single pendulum's variables theta and "
+                         f"omega; missing: {', '.join(missing)}{of}; accepted: the output "
+                         "of a single-pendulum run (a [scene] run file, or sweep.Scene) "
+                         "with save_every set")
     if "time" in sel:
         raise ValueError("cannot select 'time' for a trajectory; accepted: grid dimensions "
                          + ", ".join(d for d in ds.dims if d != "time"))

@@ -66,6 +66,9 @@ def test_labels_are_the_full_runs_on_every_start(catalogue, full_labels):
         np.testing.assert_array_equal(labels.attrs[key], full_labels.attrs[key])
     assert (ds.attractor >= 0).mean() > 0.99
     assert "attractor" in ds.attrs["observe"].split()
+    # a short label (what plots show) and the full meaning in the CF comment
+    assert ds.attractor.attrs["long_name"] == "index of the attractor settled on (-1: none)"
+    assert "ATTRACTOR_MATCHES" in ds.attractor.attrs["comment"]
 
 
 def test_the_period_map_of_a_catalogue_run_is_the_full_runs(catalogue, full_run):

@@ -4,6 +4,7 @@ map right?" measures on a 2-D map, each number equal to its own function's."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -136,3 +137,16 @@ def test_the_commands_errors_are_one_line_before_any_compute(tmp_path, no_comput
     code, out, err = call("boundary", write(tmp_path, UNFORCED.format(extra=extra)), *argv)
     assert code == 2 and out == ""
     assert err.startswith("sweep: error:") and words in err and err.count("\n") == 1
+
+
+def test_a_system_run_file_is_refused_in_one_line(no_compute):
+    """A shipped ``[system]`` run file: one line that says ``sweep boundary`` takes
+    single-pendulum run files only (it said the grid should vary theta0 and omega0, as
+    if renaming the system's axes would do), before anything is compiled or run."""
+    run_file = str(Path(__file__).resolve().parents[1] / "examples" /
+                   "driven_double_pendulum_basins.toml")
+    code, out, err = call("boundary", run_file)
+    assert code == 2 and out == ""
+    assert err == (f"sweep: error: sweep boundary supports single-pendulum run files only; "
+                   f"{run_file!r} has a [system] table (DoublePendulum); accepted: a run "
+                   "file with a [scene] table, or with neither (the default pendulum)\n")

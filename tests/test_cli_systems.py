@@ -103,15 +103,23 @@ def test_bad_system_run_files_are_refused_naming_the_table(change, match):
         parse_run(spec, source="run.toml")
 
 
-def test_the_driven_example_writes_its_basins_by_a_pilot_catalogue(tmp_path):
+@pytest.fixture(scope="module")
+def basins_file(tmp_path_factory):
+    """``sweep run examples/driven_double_pendulum_basins.toml``: (exit status, stdout,
+    stderr, the output file)."""
+    output = tmp_path_factory.mktemp("basins") / "basins.nc"
+    code, out, err = call("run", BASINS, "-o", output, "--no-progress")
+    return code, out, err, output
+
+
+def test_the_driven_example_writes_its_basins_by_a_pilot_catalogue(tmp_path, basins_file):
     """``examples/driven_double_pendulum_basins.toml`` (``[run] pilot = 12``, observe
     ``attractor``, ``stop_early``): `sweep run` writes the dataset that the Python route
     gives (`sweep.maps.pilot_catalogue` of the system, then `sweep.run` with it), bit for
     bit, the catalogue in its attributes, and `sweep plot --var attractor` draws the map.
     Its system, pilot and settings are tests/test_system_attractors.py's (the same
     kernels): the pilot finds that test's five attractors, and every start follows one."""
-    output = tmp_path / "basins.nc"
-    code, out, err = call("run", BASINS, "-o", output, "--no-progress")
+    code, out, err, output = basins_file
     assert (code, err) == (0, ""), err
     assert "1600 trajectories (theta1_0 40 x theta2_0 40)" in out
     ds = sweep.load(output)
@@ -132,6 +140,31 @@ def test_the_driven_example_writes_its_basins_by_a_pilot_catalogue(tmp_path):
     code, _, err = call("plot", output, "--var", "attractor", "-o", image)
     assert (code, err) == (0, "")
     assert_png(image)
+
+
+def test_the_attractor_maps_colour_bar_has_a_short_label_and_the_file_the_detail(
+        basins_file):
+    """The ``attractor`` variable's ``long_name`` is a short label, which the colour bar
+    of its map shows (it was a 270-character paragraph, wrapped over many lines); what
+    the index means in full is the variable's CF ``comment``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot
+
+    code, _, err, output = basins_file
+    assert (code, err) == (0, ""), err
+    ds = sweep.load(output)
+    attrs = ds["attractor"].attrs
+    assert attrs["long_name"] == "index of the attractor settled on (-1: none)"
+    assert "attractors_*" in attrs["comment"] and "ATTRACTOR_MATCHES" in attrs["comment"]
+    fig = sweep.plot.map(ds["attractor"])
+    try:
+        bar = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"]
+        assert len(bar) == 1
+        assert bar[0].get_ylabel() == "index of the attractor settled on (-1: none)"
+    finally:
+        pyplot.close(fig)
 
 
 DRIVEN = """\
@@ -171,6 +204,10 @@ pilot = 2
     ('observe = ["attractor"]', 'observe = ["final", "attractor"]', [],
      r"stop_early stops a system's trajectory at its first flip"),
     ("", "", ["--pilot", "1"], r"pilot must be an int >= 2"),
+    # the drive off (pivot_frequency = 0): the message says what would be accepted
+    ("pivot_frequency = 60.0", "pivot_frequency = 0.0", [],
+     r"\[run\] observable 'attractor' samples once per drive period 2 pi / pivot_frequency "
+     r"and needs pivot_frequency > 0, got 0\.0; accepted: pivot_frequency > 0 rad/s"),
     ('observe = ["attractor"]\nstop_early = true\npilot = 2\n', "", ["--pilot", "5"],
      r"^sweep: error: pilot = 5 makes an attractor catalogue .* and observe is "
      r"\['final', 'winding'\]"),

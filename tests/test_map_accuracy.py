@@ -217,6 +217,10 @@ GOOD = dict(t_end=8.0, observe=("winding",))
      "turns"),
     ((FREE, [0.1, 0.2], maps.motion, {"dt": [0.2, 0.1]}), GOOD, "starts must be"),
     ((object(), POINTS, maps.motion, {"dt": [0.2, 0.1]}), GOOD, "scene must be"),
+    # a system: refused by name, saying what is accepted
+    ((sweep.DoublePendulum(), POINTS, maps.motion, {"dt": [0.2, 0.1]}), GOOD,
+     "scene must be a sweep.Scene (the single pendulum), got DoublePendulum; accepted: a "
+     "sweep.Scene (map_accuracy supports the single pendulum only"),
     ((FREE, POINTS, maps.motion, {"dt": [0.2, 0.1]}), {"observe": ("winding",)},
      "needs t_end"),
     ((FREE, POINTS, maps.motion, {"dt": [0.2, 0.1]}), dict(GOOD, checkpoint="x"),
@@ -343,6 +347,24 @@ def test_cli_errors_are_one_line_and_write_nothing(tmp_path, extra, words):
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("sweep: error:") and words in lines[0]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.toml"]
+
+
+@pytest.mark.parametrize("example, kind", [
+    ("driven_double_pendulum_basins.toml", "DoublePendulum"),
+    ("pendulum_on_cart.toml", "DeclaredSystem"),
+])
+def test_cli_refuses_a_system_run_file_in_one_line(tmp_path, no_compute, example, kind):
+    """A shipped ``[system]`` run file: one line that says map-accuracy takes
+    single-pendulum run files only and what is accepted (it said only "scene must be a
+    sweep.Scene, got DoublePendulum"), before anything is compiled or run."""
+    run_file = os.path.join(os.path.dirname(__file__), "..", "examples", example)
+    code, out, err = call("map-accuracy", run_file, "--ladder", "dt=0.01,0.005",
+                          "-o", tmp_path / "acc.nc")
+    assert code == cli.EXIT_ERROR and out == ""
+    assert err == (f"sweep: error: sweep map-accuracy supports single-pendulum run files "
+                   f"only; {run_file!r} has a [system] table ({kind}); accepted: a run file "
+                   "with a [scene] table, or with neither (the default pendulum)\n")
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_cli_a_failed_write_is_one_line_and_leaves_no_file(tmp_path, monkeypatch):

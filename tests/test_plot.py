@@ -185,6 +185,13 @@ def test_trajectory_errors(sampled, maps):
         plot.trajectory(sampled.expand_dims(length=[1.0, 2.0, 3.0, 4.0]), omega0=0.0)
     with pytest.raises(ValueError, match="cannot select 'time'"):
         plot.trajectory(sampled, time=1.0)
+    # a system's saved states (theta1, omega1, ...): what is accepted, and what it is
+    system = sampled.rename(theta="theta1", omega="omega1").assign_attrs(
+        system_name="double_pendulum")
+    with pytest.raises(ValueError, match=r"variables theta and omega; missing: theta, omega "
+                       r"\(this is a run of the system double_pendulum\); accepted: the "
+                       r"output of a single-pendulum run .* with save_every set$"):
+        plot.trajectory(system, theta0=1.0, omega0=0.0)
 
 
 def test_save_figure_writes_a_png_and_closes_the_figure(maps, tmp_path):

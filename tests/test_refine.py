@@ -407,6 +407,9 @@ def test_points_and_other_objects_are_refused(no_compute):
         maps.refine(DAMPED, points, maps.well, **DAMPED_RUN)
     with pytest.raises(ValueError, match=r"scene must be a sweep\.Scene"):
         maps.refine("scene", DAMPED_GRID, maps.well, **DAMPED_RUN)
+    with pytest.raises(ValueError, match=r"got DoublePendulum; accepted: a sweep\.Scene "
+                       r"\(sweep\.maps\.refine supports the single pendulum only"):
+        maps.refine(sweep.DoublePendulum(), DAMPED_GRID, maps.well, **DAMPED_RUN)
 
 
 def test_run_errors_come_from_the_probe_before_the_lattice(monkeypatch):

@@ -11,7 +11,7 @@ from test_system_strobe import _two_forced_pendula
 
 import sweep
 from sweep import _config, maps
-from sweep.observables import OBSERVABLES
+from sweep.observables import OBSERVABLES, variable_attributes
 from sweep.physics import Coordinate, Parameter, SystemDeclaration
 
 #: The damped double pendulum on a fast-driven pivot (the docs' example, as in
@@ -61,8 +61,7 @@ def test_the_catalogues_labels_are_the_basins_of_the_full_strobe_run(full):
                       stop_early=True, **dict(RUN, t_transient=0.0))
     np.testing.assert_array_equal(route["attractor"].values, labels.values)
     assert (route["attractor"].values >= 0).all()
-    _, units, long_name = OBSERVABLES["attractor"].variables[0]
-    assert route["attractor"].attrs == {"units": units, "long_name": long_name}
+    assert route["attractor"].attrs == variable_attributes(*OBSERVABLES["attractor"].variables[0])
     assert route.attrs["stop_early"] == "once settled on a catalogued attractor"
     np.testing.assert_array_equal(sweep.io.run_arguments(route)["attractors"]["theta"],
                                   catalogue["theta"])

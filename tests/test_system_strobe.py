@@ -120,7 +120,10 @@ def _two_forced_pendula(Coordinate, Parameter, SystemDeclaration):
 
 @pytest.mark.parametrize("system, kwargs, match", [
     (sweep.DoublePendulum(), {}, "has no periodic drive; accepted: a driven system"),
-    (sweep.DoublePendulum(pivot_amplitude=0.1), {}, "needs pivot_frequency > 0, got 0.0"),
+    (sweep.DoublePendulum(pivot_amplitude=0.1), {},
+     r"needs pivot_frequency > 0, got 0\.0; accepted: pivot_frequency > 0 rad/s \(every "
+     r"value, a drive period that is a whole number of steps dt = .*\), or observe "
+     r"without 'strobe'"),
     (SYSTEM, {"dt": 0.003}, "the drive period 2 pi / 6.28318"),
     (SYSTEM, {"observe": ("final",), "strobe_samples": 8}, "read only by the 'strobe'"),
     (SYSTEM, {"strobe_samples": 1}, "strobe_samples must be an int from 2 to 4096"),

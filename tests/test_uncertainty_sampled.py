@@ -290,6 +290,12 @@ def test_scene_labels_bad_scene(scene, no_compute):
         maps.scene_labels(scene, **WELLS_RUN)
 
 
+def test_scene_labels_refuses_a_system_saying_what_is_accepted(no_compute):
+    with pytest.raises(ValueError, match=r"got DoublePendulum; accepted: a sweep\.Scene "
+                       r"\(sweep\.maps\.scene_labels supports the single pendulum only"):
+        maps.scene_labels(sweep.DoublePendulum(), **WELLS_RUN)
+
+
 @pytest.mark.parametrize("run, match", [
     (dict(WELLS_RUN, dt=-1.0), "dt"),
     (dict(WELLS_RUN, observe=("nonsense",)), "nonsense"),

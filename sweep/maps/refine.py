@@ -20,7 +20,7 @@ import numpy as np
 import xarray as xr
 
 from .. import engine
-from .._validate import check_count
+from .._validate import check_count, check_pendulum_scene
 from ..engine import INITIAL_AXES
 from ..grid import Grid, Points
 from ..observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
@@ -255,8 +255,7 @@ def check_label_options(label, func, options: dict) -> None:
 def _check(scene, grid, label, step, pilot, run_kwargs):
     """Every argument refine can check before computing anything; returns them checked,
     with the grid's two varying axes."""
-    if not isinstance(scene, Scene):
-        raise ValueError(f"scene must be a sweep.Scene, got {type(scene).__name__}")
+    check_pendulum_scene("sweep.maps.refine", scene)
     varying = [d for d in grid.dims if grid.varies(d)] if isinstance(grid, Grid) else []
     if len(varying) != 2:
         got = (f"a grid of shape {dict(zip(grid.dims, grid.shape))}"

@@ -365,12 +365,12 @@ def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega
     separate calls agree (what `sweep.maps.wada` needs).
     """
     from .. import engine
+    from .._validate import check_pendulum_scene
     from ..grid import Points
-    from ..physics import Scene, parameter_names
+    from ..physics import parameter_names
     from .labels import basins
 
-    if not isinstance(scene, Scene):
-        raise ValueError(f"scene must be a sweep.Scene (a pendulum scene), got {scene!r}")
+    check_pendulum_scene("sweep.maps.scene_labels", scene)
     if label is None:
         label = basins
     if not callable(label):
