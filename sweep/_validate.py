@@ -305,22 +305,3 @@ def check_axis(name: str, values: Any) -> np.ndarray:
             "non-unique; accepted: distinct values (e.g. np.unique(values))"
         )
     return np.ascontiguousarray(array)
-
-
-def check_pendulum_scene(function: str, scene: Any) -> None:
-    """Refuse a ``scene`` that is not a `sweep.Scene`, for a ``function`` made for the
-    single pendulum only (a system such as `sweep.DoublePendulum` is refused by name).
-
-    Raises
-    ------
-    ValueError
-        ``"scene must be a sweep.Scene (the single pendulum), got {type}; accepted:
-        ..."``, naming ``function``.
-    """
-    from .physics import Scene
-
-    if not isinstance(scene, Scene):
-        raise ValueError(f"scene must be a sweep.Scene (the single pendulum), got "
-                         f"{type(scene).__name__}; accepted: a sweep.Scene ({function} "
-                         "supports the single pendulum only, not a system such as "
-                         "sweep.DoublePendulum or sweep.DeclaredSystem)")

@@ -34,7 +34,7 @@ import numpy as np
 import xarray as xr
 
 from . import engine
-from ._validate import check_count, check_pendulum_scene, check_real
+from ._validate import check_count, check_real
 from .grid import Grid, Points
 from .kernels.spec import DTYPES
 from .maps.fractions import _table, _unresolved_code
@@ -48,6 +48,7 @@ from .maps.refine import (
     check_levels_arguments,
 )
 from .physics import Scene
+from .physics.scene import check_pendulum_scene
 from .settings import validate_method
 
 __all__ = ["LADDER_KEYS", "MapAccuracy", "map_accuracy"]

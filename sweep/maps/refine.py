@@ -20,11 +20,12 @@ import numpy as np
 import xarray as xr
 
 from .. import engine
-from .._validate import check_count, check_pendulum_scene
+from .._validate import check_count
 from ..engine import INITIAL_AXES
 from ..grid import Grid, Points
 from ..observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
 from ..physics import Scene
+from ..physics.scene import check_pendulum_scene
 from ._quadtree import check_step, refine_field
 from .known import BACKGROUND_FACTORS, background, seed_attractors, settled, upsample
 from .known import known_map as _known_map

@@ -365,9 +365,9 @@ def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega
     separate calls agree (what `sweep.maps.wada` needs).
     """
     from .. import engine
-    from .._validate import check_pendulum_scene
     from ..grid import Points
     from ..physics import parameter_names
+    from ..physics.scene import check_pendulum_scene
     from .labels import basins
 
     check_pendulum_scene("sweep.maps.scene_labels", scene)

@@ -23,7 +23,8 @@ from .._validate import check_choice, check_real
 from .effect import EFFECTS, Effect, Parameter
 from .effects import Damping, Forcing
 
-__all__ = ["BASE_PARAMETERS", "Damping", "Forcing", "MODELS", "Scene", "parameter_info",
+__all__ = ["BASE_PARAMETERS", "Damping", "Forcing", "MODELS", "Scene", "check_pendulum_scene",
+           "parameter_info",
            "parameter_names", "parameter_table", "parameters"]
 
 #: Valid values of ``Scene.model``.
@@ -242,3 +243,20 @@ def _table(name: str, value: Any, accepted: tuple[str, ...]) -> dict[str, Any]:
         raise ValueError(f"{name}: unknown key(s) {', '.join(map(repr, unknown))}; "
                          f"accepted: {', '.join(accepted)}")
     return value
+
+
+def check_pendulum_scene(function: str, scene: Any) -> None:
+    """Refuse a ``scene`` that is not a `sweep.Scene`, for a ``function`` made for the
+    single pendulum only (a system such as `sweep.DoublePendulum` is refused by name).
+
+    Raises
+    ------
+    ValueError
+        ``"scene must be a sweep.Scene (the single pendulum), got {type}; accepted:
+        ..."``, naming ``function``.
+    """
+    if not isinstance(scene, Scene):
+        raise ValueError(f"scene must be a sweep.Scene (the single pendulum), got "
+                         f"{type(scene).__name__}; accepted: a sweep.Scene ({function} "
+                         "supports the single pendulum only, not a system such as "
+                         "sweep.DoublePendulum or sweep.DeclaredSystem)")
