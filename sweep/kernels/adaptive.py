@@ -36,8 +36,8 @@ from ..observables import OBSERVABLES
 from .lanes import (
     BIND,
     IDENTIFIER,
-    MULTIPLE_OF_8,
     allocate,
+    block_multiple,
     indent,
     lane_loop,
     lane_snippet,
@@ -181,7 +181,7 @@ from sweep.kernels.vecmath import inverse_fifth_root as vroot5
 @njit(nogil=True, **JIT)
 def blocks(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats{extra},
            BLOCK, b_first, b_stop):
-{MULTIPLE_OF_8 if spec.block > 1 else ""}    TWO_PI = 2.0 * math.pi
+{block_multiple(spec.block, spec.dtype)}    TWO_PI = 2.0 * math.pi
     t_obs = t0 + t_transient
     h_min = 16.0 * 2.220446049250313e-16 * max(abs(t0), abs(t_end))
     n = params.shape[0]

@@ -225,7 +225,7 @@ def fixed_kernel(spec: KernelSpec, method) -> str:
     renormalise_blocks = NL.join(head + NL + lane_loop(code, lane, level=1)
                                  for head, code in renormalise)
     finish_loop = lane_loop(finish, lane, level=2, stores=[], count="n_real")
-    kernel = blocks_head(spec.block, kernel_arguments(spec)) + f'''\
+    kernel = blocks_head(spec.block, kernel_arguments(spec), spec.dtype) + f'''\
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(parts["preamble"]), 1)}

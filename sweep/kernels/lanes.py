@@ -7,7 +7,7 @@ from __future__ import annotations
 import re
 import textwrap
 
-__all__ = ["ASSIGNED", "BIND", "IDENTIFIER", "KNOWN_ARGUMENTS", "MULTIPLE_OF_8", "allocate",
+__all__ = ["ASSIGNED", "BIND", "IDENTIFIER", "KNOWN_ARGUMENTS", "allocate", "block_multiple",
            "blocks_head", "indent",
            "lane_loop", "lane_snippet", "scalar_lanes", "skip_unless"]
 
@@ -43,24 +43,33 @@ def lane_loop(body: str, lane: dict[str, str], *, level: int, head: str = "",
 BIND = '''def bind(BLOCK):
     """The kernel for blocks of ``BLOCK`` SIMD lanes."""'''
 
-#: The first line of a compiled function over blocks of more than one lane: ``BLOCK``
-#: is a multiple of 8 (`sweep.kernels.spec.check_block`), and said so LLVM knows each
-#: lane loop's trip count is too and drops the checks of a remainder. Measured side by
-#: side on the forced pendulum's rk4 kernel (blocks of 128, 131,072 starts, AMD EPYC
-#: Zen 5, 2 threads, the same bits): 921-927 M trajectory-steps/s with ``BLOCK`` a bare
-#: argument, 943-949 with this line, 933-949 with the constant ``BLOCK = 128`` of the
-#: module's text before.
-MULTIPLE_OF_8 = "    BLOCK = (BLOCK >> 3) << 3  # a multiple of 8: lane loops without remainder\n"
+def block_multiple(block: int, dtype: str = "float64") -> str:
+    """The first line of a compiled function over blocks of ``block`` lanes: ``BLOCK``
+    (an argument, `BIND`) is a multiple of 8 (`sweep.kernels.spec.check_block`), of 16
+    for a float32 kernel whose block is (its vectors hold 16 lanes), and said so, LLVM
+    knows each lane loop's trip count is too and drops the checks of a remainder; none
+    for one lane.
+
+    Measured side by side on the forced pendulum's rk4 kernel (blocks of 128, 131,072
+    starts, AMD EPYC Zen 5, 2 threads, the same bits), against the constant ``BLOCK =
+    128`` of the module's text before: float64 921-927 M trajectory-steps/s with a bare
+    argument, 943-949 with this line, 933-949 with the constant; float32 1003-1010 with
+    a multiple of 8, 1026-1029 with a multiple of 16, 1021-1034 with the constant.
+    """
+    if block == 1:
+        return ""
+    shift = 4 if dtype == "float32" and block % 16 == 0 else 3
+    return f"    BLOCK = (BLOCK >> {shift}) << {shift}  # a multiple of {1 << shift}\n"
 
 
-def blocks_head(block: int, extra: str = "") -> str:
+def blocks_head(block: int, extra: str = "", dtype: str = "float64") -> str:
     """The head of a fixed-step kernel module's body: ``bind`` (`BIND`), which makes the
     Python ``kernel`` (the contract of `sweep.kernels.source`) that spreads the blocks
     over threads (`sweep.kernels.threads.run_blocks`), and the signature of the
     compiled ``blocks`` over a range of blocks, whose body follows (``extra``: the
     arguments after ``saved``, as source, `sweep.kernels.snippets.kernel_arguments`; a
     system's attractor catalogue, `CATALOGUE_ARGUMENTS`; a swing network's arrays).
-    Only whether ``block`` is 1 changes the text (`MULTIPLE_OF_8`)."""
+    ``block`` and ``dtype`` change only its first line (`block_multiple`)."""
     return f'''
 {BIND}
 
@@ -74,7 +83,7 @@ def blocks_head(block: int, extra: str = "") -> str:
 @njit(nogil=True, **JIT)
 def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra},
            BLOCK, b_first, b_stop):
-''' + (MULTIPLE_OF_8 if block > 1 else "")
+''' + block_multiple(block, dtype)
 
 
 #: The kernel arguments of `sweep.kernels.KernelSpec.known_cells`, after ``saved``.

@@ -24,8 +24,8 @@ from .fixed import NL, _drives, _finish, _first_lines, _lane_dtypes, _load, _par
 from .lanes import (
     BIND,
     IDENTIFIER,
-    MULTIPLE_OF_8,
     allocate,
+    block_multiple,
     indent,
     lane_loop,
     lane_snippet,
@@ -66,13 +66,14 @@ def _sine_table(spec: KernelSpec, drives, shared: list[str]) -> tuple[str, list[
     return table, lines
 
 
-def groups_head(block: int, extra: str = "") -> str:
+def groups_head(block: int, extra: str = "", dtype: str = "float64") -> str:
     """The head of a refill kernel module's body: ``bind`` (`sweep.kernels.lanes.BIND`),
     which makes the Python ``kernel`` (the contract of `sweep.kernels.source`) that runs
     one group of ``BLOCK`` lanes per thread (`sweep.kernels.threads.run_blocks`), and
     the signature of the compiled ``grouped``, whose body follows (``extra``: arguments
     after ``saved``); shared by the single pendulum's and the systems' refill kernels.
-    Only whether ``block`` is 1 changes the text (`sweep.kernels.lanes.MULTIPLE_OF_8`)."""
+    ``block`` and ``dtype`` change only its first line
+    (`sweep.kernels.lanes.block_multiple`)."""
     return f'''
 {BIND}
 
@@ -92,7 +93,7 @@ def groups_head(block: int, extra: str = "") -> str:
 @njit(nogil=True, **JIT)
 def grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra},
             BLOCK, n_groups, g_first, g_stop):
-''' + (MULTIPLE_OF_8 if block > 1 else "")
+''' + block_multiple(block, dtype)
 
 
 #: A known-cells kernel whose observables act at stroboscopic steps only (`_sampled`):
@@ -208,7 +209,7 @@ finished = False"""
         observe_loop = indent(_DUE, 3) + NL + indent(observe_loop, 1)
     refill_loop = lane_loop(refill, lane, level=4,
                             head=skip_unless("finished"))
-    return groups_head(spec.block, kernel_arguments(spec)) + f'''\
+    return groups_head(spec.block, kernel_arguments(spec), spec.dtype) + f'''\
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(parts["preamble"]), 1)}

@@ -649,7 +649,7 @@ def system_kernel(spec: SystemSpec) -> str:
                        count="n_real")
     dues = (["sb_due = 0"] if parts.strobe_sample else []) + \
         (["ca_due = 0"] if parts.attractor_sample else [])
-    kernel = blocks_head(spec.block, _more(spec)) + f'''\
+    kernel = blocks_head(spec.block, _more(spec), spec.dtype) + f'''\
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(constants.values()), 1)}

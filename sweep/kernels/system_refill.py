@@ -84,7 +84,7 @@ def system_refill_kernel(spec, parts, finish: str) -> str:
         observe_loop = _due(parts, lane, observe)
     refill_loop = lane_loop(NL.join(refill), lane, level=4, head=skip_unless("finished"))
     more = CATALOGUE_ARGUMENTS if "attractor" in spec.observe else ""
-    return groups_head(spec.block, more) + f'''\
+    return groups_head(spec.block, more, spec.dtype) + f'''\
     TWO_PI = 2.0 * math.pi
     n = params.shape[0]
 {indent(NL.join(parts.constants.values()), 1)}
