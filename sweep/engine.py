@@ -55,6 +55,8 @@ from .settings import (  # re-exported: sweep.engine.RunSettings, validate_setti
     validate_method,  # noqa: F401
     validate_settings,
 )
+from .strobe_phase import attributes as drive_attributes
+from .strobe_phase import check_phase
 from .system_attractors import catalogue_parts, check_rings
 
 __all__ = ["run", "prepare", "warm_up", "estimate_error", "default_chunk_size", "RunSettings",
@@ -241,6 +243,11 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     check_tangent_fits(integrator, effects, names)
     check_observables_fit(integrator, names)
     _check_stroboscopic(names, scene, grid, settings)
+    if orbits and scene.forcing is not None:  # rings of another drive phase: -1 everywhere
+        frequency = np.unique(grid.axes.get("forcing_frequency",
+                                            np.array([scene.forcing.frequency])))[0]
+        check_phase(attractors, len(orbits), float(frequency), settings,
+                    "forcing_frequency")
     _check_stop_early(names, scene, grid, stop_early, save_every)
     if known_cells is not None:
         check_known_cells(known_cells, attractors=len(orbits), stop_early=stop_early,
@@ -352,7 +359,8 @@ def _catalogue_attrs(attractors) -> dict:
     return {"attractors_theta": theta.ravel(),
             "attractors_omega": np.asarray(attractors["omega"], dtype=np.float64).ravel(),
             "attractors_period": np.asarray(attractors["period"], dtype=np.int64),
-            "attractors_samples": int(theta.shape[1])}
+            "attractors_samples": int(theta.shape[1]),
+            **drive_attributes(attractors, theta.shape[0])}
 
 
 def run(
@@ -516,7 +524,11 @@ def run(
         before the ``strobe`` test's 1e-8 periodicity could; `sweep.maps.basins` labels
         such a trajectory by the catalogued attractor. Attractors not in the catalogue
         are still found by the ``strobe`` test. The catalogue is stored in the
-        dataset's attributes (``attractors_*``).
+        dataset's attributes (``attractors_*``). Its rings must have been sampled at
+        this run's drive phase (``strobe_phase`` and ``drive_frequency``, which
+        `sweep.maps.attractor_catalogue` records: the pilot's ``t0 + t_transient`` and
+        this run's a whole number of forcing periods apart, the same frequency), else
+        the run is refused; a catalogue without them is not checked.
     known_cells : xarray.DataArray, optional
         With ``attractors`` and ``stop_early`` (fixed-step methods on the CPU, float64):
         a map over ``theta0`` and ``omega0`` (each evenly spaced) of the catalogued

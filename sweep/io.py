@@ -21,6 +21,7 @@ from .grid import Grid, Points
 from .kernels import Status, vectors
 from .observables import OBSERVABLES, variable_attributes
 from .physics import EFFECTS, Scene, parameter_info
+from .strobe_phase import from_attributes
 
 __all__ = ["device_attributes", "origin_attributes", "run_attributes", "to_dataset",
            "status_variable", "save", "load", "scene_from", "grid_from",
@@ -257,6 +258,7 @@ def run_arguments(ds: xr.Dataset) -> dict:
             .reshape(shape) for name in ("theta", "omega")}
         kwargs["attractors"]["period"] = np.atleast_1d(
             np.asarray(a["attractors_period"], dtype=np.int64))
+        kwargs["attractors"].update(from_attributes(a))  # its drive phase, if any
     return kwargs
 
 

@@ -50,6 +50,7 @@ from .maps.refine import (
 from .physics import Scene
 from .physics.scene import check_pendulum_scene
 from .settings import validate_method
+from .strobe_phase import phase_mismatch
 
 __all__ = ["LADDER_KEYS", "MapAccuracy", "map_accuracy"]
 
@@ -322,7 +323,9 @@ def map_accuracy(scene: Scene, starts, label=basins, ladder=None, *, repeats: in
     pilot : int or None, default 41
         Forced `basins` with ``stop_early=True`` and no ``attractors``: the attractors
         are first catalogued by a ``pilot`` x ``pilot`` pilot at the reference settings
-        (`sweep.maps.pilot_catalogue`), and every level stops on that one catalogue (a
+        (`sweep.maps.pilot_catalogue`), and every level stops on that one catalogue
+        (but a level whose first stroboscopic sample, ``t0 + t_transient`` on a step,
+        falls at another drive phase, `sweep.strobe_phase`, runs without it; a
         level whose attractors lie further than `sweep.observables.ATTRACTOR_TOL` from
         it stops by the ``strobe`` test instead: the same labels, later). None: no pilot.
     **run_kwargs
@@ -387,8 +390,14 @@ def map_accuracy(scene: Scene, starts, label=basins, ladder=None, *, repeats: in
             and not any(starts.varies(a) for a in starts.axes
                         if a not in engine.INITIAL_AXES):
         catalogue = pilot_catalogue(scene, starts, pilot, **reference_kwargs)
-        for _, _, kwargs, _ in levels:
-            kwargs["attractors"] = catalogue
+        frequency = float(np.unique(starts.axes.get(
+            "forcing_frequency", np.array([scene.forcing.frequency])))[0])
+        for (_, _, kwargs, _), plan in zip(levels, plans):
+            # a level of another t_transient or dt may sample another drive phase, where
+            # no start could match the catalogue (sweep.run refuses it): no catalogue
+            if phase_mismatch(catalogue, len(catalogue["period"]), frequency, plan[0],
+                              "forcing_frequency") is None:
+                kwargs["attractors"] = catalogue
     labeller = _Labeller(label, func, options, forced,
                          levels[-1][3].get("tol", options.get("tol", 1e-3)))
 

@@ -13,6 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .strobe_phase import FIELDS
+from .strobe_phase import attributes as drive_attributes
+
 __all__ = ["catalogue_arguments", "catalogue_attributes", "catalogue_parts", "check_catalogue",
            "check_rings", "initial_axes"]
 
@@ -63,7 +66,9 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
     attractors : mapping or None
         ``theta``, ``omega``: (k, m, P) rings of the m coordinates and their velocities
         [their units; angles unwrapped], ``period``: (k,) ints (1 <= period <= P / 2);
-        optionally ``coordinates``: the m coordinates' names, which must be the system's.
+        optionally ``coordinates``: the m coordinates' names, which must be the system's,
+        and ``strobe_phase`` [rad] and ``drive_frequency`` [rad/s] (k values each: the
+        drive phase and frequency the rings were sampled at, `sweep.strobe_phase`).
     names : tuple of str
         The run's observables.
     grid : Grid or Points
@@ -71,7 +76,8 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
     Returns
     -------
     dict or None
-        ``theta``, ``omega`` (k, m, P) float64, ``period`` (k,) int64.
+        ``theta``, ``omega`` (k, m, P) float64, ``period`` (k,) int64, and the
+        catalogue's ``strobe_phase`` and ``drive_frequency`` where it has them.
 
     Raises
     ------
@@ -121,7 +127,8 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
         raise ValueError(f"an attractor catalogue holds the attractors of one system, but "
                          f"the grid varies {', '.join(varied)}; accepted: a grid that varies "
                          f"only the initial state ({', '.join(initial_axes(system))})")
-    return {"theta": theta, "omega": omega, "period": period.astype(np.int64)}
+    return {"theta": theta, "omega": omega, "period": period.astype(np.int64),
+            **{name: attractors[name] for name in FIELDS if name in attractors}}
 
 
 def catalogue_arguments(system, catalogue: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -145,11 +152,13 @@ def catalogue_arguments(system, catalogue: dict) -> tuple[np.ndarray, np.ndarray
 def catalogue_attributes(catalogue: dict | None) -> dict:
     """The catalogue as dataset attributes (flat, netCDF-friendly): ``attractors_theta``
     and ``attractors_omega`` (k m P values, C order), ``attractors_period``,
-    ``attractors_samples`` (P) and ``attractors_coordinates`` (m)."""
+    ``attractors_samples`` (P) and ``attractors_coordinates`` (m), and its drive
+    (``attractors_strobe_phase``, ``attractors_drive_frequency``) where it has one."""
     if catalogue is None:
         return {}
-    _, m, samples = catalogue["theta"].shape
+    k, m, samples = catalogue["theta"].shape
     return {"attractors_theta": catalogue["theta"].ravel(),
             "attractors_omega": catalogue["omega"].ravel(),
             "attractors_period": catalogue["period"],
-            "attractors_samples": int(samples), "attractors_coordinates": int(m)}
+            "attractors_samples": int(samples), "attractors_coordinates": int(m),
+            **drive_attributes(catalogue, k)}

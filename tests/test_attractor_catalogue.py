@@ -391,3 +391,64 @@ def test_the_strobe_table_of_some_rows_is_those_rows_of_the_whole_table():
     assert some_dims == dims and some_theta.flags.c_contiguous
     np.testing.assert_array_equal(some_theta, theta[rows])
     np.testing.assert_array_equal(some_omega, omega[rows])
+
+
+def test_the_catalogue_records_its_drive_phase_and_a_whole_period_later_labels_alike(
+        catalogue):
+    """The pilot (t0 = 0, t_transient = 20 periods) sampled its rings at drive phase 0
+    of W = 1 rad/s, and the catalogue says so, one value per attractor (so that
+    selecting attractors keeps them). A map whose transient is one period longer
+    samples the same Poincare section: every start matches, the same attractor as with
+    the pilot's own settings (a settled trajectory is on its attractor at every
+    period), and the dataset keeps the drive for a rerun (`sweep.io.run_arguments`)."""
+    # 1e-9 rad: 2000 steps of dt = 2 pi / 100 summed in float64 round to ~1e-13 rad
+    np.testing.assert_allclose(np.cos(catalogue["strobe_phase"]), 1.0, atol=1e-9)
+    assert catalogue["strobe_phase"].shape == catalogue["period"].shape
+    np.testing.assert_array_equal(catalogue["drive_frequency"], [1.0, 1.0, 1.0])
+    grid = _grid(9)
+    same = sweep.run(SCENE, grid, **EARLY, attractors=catalogue)
+    later = sweep.run(SCENE, grid, **dict(EARLY, t_transient=21 * PERIOD),
+                      attractors=catalogue)
+    assert (later.attractor >= 0).all()
+    np.testing.assert_array_equal(later.attractor.values, same.attractor.values)
+    np.testing.assert_array_equal(maps.basins(later).values, maps.basins(same).values)
+    again = sweep.io.run_arguments(later)["attractors"]
+    for key in ("strobe_phase", "drive_frequency"):
+        np.testing.assert_array_equal(again[key], catalogue[key], err_msg=key)
+
+
+@pytest.mark.parametrize("scene, run, words", [
+    (SCENE, dict(t_transient=20.5 * PERIOD),
+     r"t0 \+ t_transient = 0\.0 \+ 128\.80\d* s puts this run's first stroboscopic "
+     r"sample at t = 128\.80\d* s, drive phase 3\.14159 rad \(forcing_frequency = 1\.0 "
+     r"rad/s, period 6\.283185307 s\), but the catalogue's attractor 0 was sampled at "
+     r"drive phase .* rad, so no start could match it; accepted: t0 \+ t_transient = "
+     r".* \+ k \* 6\.283185307 s"),
+    (SCENE, dict(t0=PERIOD / 4, t_end=320.25 * PERIOD),
+     r"t0 \+ t_transient = 1\.5707\d* \+ 125\.66\d* s .* drive phase 1\.5708 rad"),
+    (sweep.Scene(gravity=1.0, length=1.0, effects=(
+        sweep.Damping(0.2), sweep.Forcing(1.66, 2.0, np.pi / 2))), {},
+     r"attractor 0 was sampled at drive frequency 1\.0 rad/s, but this run's "
+     r"forcing_frequency = 2\.0 rad/s .*; accepted: forcing_frequency = 1\.0"),
+])
+def test_a_catalogue_of_another_drive_phase_is_refused_before_compute(
+        catalogue, no_compute, scene, run, words):
+    """A map whose first stroboscopic sample falls at another phase of the drive (a
+    transient half a period longer, a start a quarter period later) or of another
+    drive frequency could match no start (every label -1): refused, naming the
+    setting, its phase and what would be accepted."""
+    with pytest.raises(ValueError, match=words):
+        sweep.run(scene, _grid(9), **dict(EARLY, **run), attractors=catalogue)
+
+
+def test_a_catalogue_without_its_drive_is_not_checked_and_half_of_one_is_refused(
+        catalogue, no_compute):
+    """Rings built by hand (no drive recorded) are taken as given; a catalogue with
+    one of the two drive fields only is refused."""
+    rings = {key: catalogue[key] for key in ("theta", "omega", "period")}
+    sweep.engine.prepare(SCENE, _grid(9), **dict(EARLY, t_transient=20.5 * PERIOD),
+                         attractors=rings)
+    with pytest.raises(ValueError, match="a catalogue without 'drive_frequency'; accepted: "
+                                         "both 'strobe_phase'"):
+        sweep.run(SCENE, _grid(9), **EARLY,
+                  attractors=dict(rings, strobe_phase=catalogue["strobe_phase"]))

@@ -55,8 +55,11 @@ def test_a_map_that_knows_nothing_changes_no_bit_whatever_the_transient(
     number of periods, and a run that ends between two stroboscopic steps."""
     period = 2 * np.pi
     run = dict(WADA_PILOT, t_transient=transient * period, t_end=end * period)
-    plain = sweep.run(WADA_SCENE, GRID, attractors=wada_catalogue, **run)
-    nothing = sweep.run(WADA_SCENE, GRID, attractors=wada_catalogue, **run,
+    # the rings alone: a catalogue that records its drive phase (the pilot's, 0) is
+    # refused at 3.37 periods, where no start could match it; the kernel is the same
+    rings = {key: wada_catalogue[key] for key in ("theta", "omega", "period")}
+    plain = sweep.run(WADA_SCENE, GRID, attractors=rings, **run)
+    nothing = sweep.run(WADA_SCENE, GRID, attractors=rings, **run,
                         known_cells=_known(np.full((SIZE, SIZE), -1)))
     assert np.isfinite(plain["strobe_theta"].values).all(axis=-1).any()  # rings filled
     for name in ("strobe_theta", "strobe_omega", "attractor", "status"):

@@ -189,6 +189,31 @@ def test_forced_basins_stop_on_one_pilot_catalogue_and_keep_basins_numbering():
                                rtol=1e-12)  # rounding only: every start has one label
 
 
+def test_a_level_at_another_drive_phase_runs_without_the_pilot_catalogue():
+    """A ladder of t_transient whose first level is half a drive period off the
+    reference's: the reference's pilot catalogue was sampled at another phase, where
+    `sweep.run` refuses it (no start could match), so that level runs without it and
+    gets the labels of a plain run; the reference keeps its catalogue."""
+    points = sweep.sample(64, seed=7, theta0=(-np.pi, np.pi), omega0=(-4.0, 4.0))
+    kwargs = dict(t_end=200 * PERIOD, dt=PERIOD / 50, observe=("strobe",),
+                  stop_early=True)
+    acc = sweep.map_accuracy(WADA, points, maps.basins,
+                             {"t_transient": [19.5 * PERIOD, 20 * PERIOD]}, pilot=9,
+                             **kwargs)
+    plain = sweep.run(WADA, points, t_transient=19.5 * PERIOD, progress=False, **kwargs)
+    shared = _Labeller(maps.basins, maps.basins, {}, forced=True, match_tol=1e-3)
+    reference = sweep.run(WADA, points, t_transient=20 * PERIOD, progress=False,
+                          attractors=maps.pilot_catalogue(WADA, points, 9,
+                                                           t_transient=20 * PERIOD,
+                                                           **kwargs), **kwargs)
+    ds = acc.dataset
+    np.testing.assert_array_equal(ds.labels.values[-1], maps.basins(reference).values)
+    assert (ds.labels.values[0] >= 0).all()
+    first = shared(reference, ("point",), {})
+    np.testing.assert_array_equal(first, ds.labels.values[-1])
+    np.testing.assert_array_equal(shared(plain, ("point",), {}), ds.labels.values[0])
+
+
 # ------------------------------------------------------------------------ bad inputs
 POINTS = sweep.sample(8, seed=1, theta0=(-1.0, 1.0), omega0=(-1.0, 1.0))
 GOOD = dict(t_end=8.0, observe=("winding",))

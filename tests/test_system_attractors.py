@@ -65,6 +65,16 @@ def test_the_catalogues_labels_are_the_basins_of_the_full_strobe_run(full):
     assert route.attrs["stop_early"] == "once settled on a catalogued attractor"
     np.testing.assert_array_equal(sweep.io.run_arguments(route)["attractors"]["theta"],
                                   catalogue["theta"])
+    # the pilot's rings were sampled at drive phase 0 of nu = 60 rad/s (784 periods of
+    # 40 steps: float64 rounds the phase to ~1e-11 rad, far below 1e-9), as the route's
+    # t0 + t_transient = 0, a whole number of periods before: the catalogue records
+    # it, and the route's dataset keeps it for a rerun
+    np.testing.assert_allclose(np.cos(catalogue["strobe_phase"]), 1.0, atol=1e-9)
+    np.testing.assert_array_equal(catalogue["drive_frequency"],
+                                  np.full(catalogue["period"].shape, 60.0))
+    np.testing.assert_array_equal(
+        sweep.io.run_arguments(route)["attractors"]["strobe_phase"],
+        catalogue["strobe_phase"])
 
 
 
@@ -241,3 +251,30 @@ def test_without_lane_refill_blocks_of_copies_label_every_start(full, monkeypatc
     assert not spec.refill and spec.block > 3  # padding lanes in every chunk
     blocks = sweep.run(SYSTEM, GRID, chunk_size=3, **kwargs)
     np.testing.assert_array_equal(blocks["attractor"].values, labels.values)
+
+
+@pytest.mark.parametrize("run, words", [
+    (dict(t_transient=0.5 * PERIOD),
+     r"t0 \+ t_transient = 0\.0 \+ 0\.0523\d* s .* drive phase 3\.14159 rad "
+     r"\(pivot_frequency = 60\.0 rad/s, period 0\.1047197551 s\), but the catalogue's "
+     r"attractor 0 was sampled at drive phase .* rad, so no start could match it; "
+     r"accepted: t0 \+ t_transient = .* \+ k \* 0\.1047197551 s"),
+    (dict(t0=0.25 * PERIOD, t_end=800.25 * PERIOD, t_transient=0.0),
+     r"t0 \+ t_transient = 0\.0261\d* \+ 0\.0 s .* drive phase 1\.5708 rad"),
+])
+def test_a_catalogue_of_another_drive_phase_is_refused_before_compute(full, no_compute,
+                                                                       run, words):
+    """The full run's catalogue (sampled at drive phase 0) on a map whose first
+    stroboscopic sample falls half or a quarter of a drive period off: no start could
+    match (every label -1), so the run is refused before any kernel is built, naming
+    the setting, its phase and what is accepted."""
+    _, _, catalogue = full
+    with pytest.raises(ValueError, match=words):
+        sweep.run(SYSTEM, GRID, observe=("attractor",), attractors=catalogue,
+                  stop_early=True, **dict(RUN, **run))
+    other = sweep.DoublePendulum(pivot_amplitude=0.1, pivot_frequency=30.0,
+                                 effects=(sweep.Damping(0.5),))
+    with pytest.raises(ValueError, match=r"drive frequency 60\.0 rad/s, but this run's "
+                                         r"pivot_frequency = 30\.0 rad/s"):
+        sweep.run(other, GRID, observe=("attractor",), attractors=catalogue,
+                  stop_early=True, **RUN)
