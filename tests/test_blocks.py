@@ -241,9 +241,13 @@ def test_every_observable_declares_the_state_it_keeps():
             assert dtype in ("float64", "int64", "bool_"), name
 
 
-def test_block_must_be_a_multiple_of_eight():
-    with pytest.raises(ValueError, match=r"block must be 1 or a positive multiple of 8, got 12"):
-        KernelSpec("linear", (), ("final",), block=12)
+@pytest.mark.parametrize("block", [12, True, 8.0])
+def test_block_must_be_a_multiple_of_eight(block):
+    """Refused before any compute; True too, which equals 1 (so its spec would share
+    the memo of block 1's) but would reach the compiled kernel as a boolean ``BLOCK``."""
+    with pytest.raises(ValueError, match=r"block must be 1 or a positive multiple of 8, "
+                                         rf"got {block!r}$"):
+        KernelSpec("linear", (), ("final",), block=block)
 
 
 def test_one_compiled_kernel_serves_every_block_size_but_one_lane():

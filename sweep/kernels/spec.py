@@ -261,7 +261,10 @@ def check_block(block) -> int:
         Unless it is 1 or a positive multiple of 8.
     """
     block = _config.BLOCK if block is None else block
-    if not isinstance(block, int) or not (block == 1 or (block >= 8 and block % 8 == 0)):
+    # not a bool: True == 1, but it would reach the compiled kernel as a boolean BLOCK
+    # (`sweep.kernels.lanes.BIND`), which numba cannot type
+    if isinstance(block, bool) or not isinstance(block, int) or \
+            not (block == 1 or (block >= 8 and block % 8 == 0)):
         raise ValueError(f"block must be 1 or a positive multiple of 8, got {block!r}")
     return block
 
