@@ -26,8 +26,12 @@ step() { echo "wheel check: $*"; }
 
 # what the archives must hold: the package's tracked files (every file of sweep/
 # outside a git checkout)
+# and, in a git checkout, every file it tracks (the sdist may hold no other: no build
+# output, test database or cache a working tree gathers)
+: >"$work/tracked"
 if git -C "$root" rev-parse --is-inside-work-tree >/dev/null 2>&1; then
   git -C "$root" ls-files -- sweep >"$work/expected"
+  git -C "$root" ls-files >"$work/tracked"
 else
   (cd "$root" && find sweep -type f ! -path '*/__pycache__/*' ! -name '*.py[co]') >"$work/expected"
 fi
@@ -45,11 +49,13 @@ wheel=("$work"/dist/*.whl)
 step "built $(basename "${sdist[0]}") and $(basename "${wheel[0]}") (the wheel from the sdist)"
 
 # 2. the archives' contents
-"$python" - "${sdist[0]}" "${wheel[0]}" "$work/expected" <<'EOF' || fail "an archive lacks files (above)"
+"$python" - "${sdist[0]}" "${wheel[0]}" "$work/expected" "$work/tracked" <<'EOF' \
+  || fail "an archive lacks files or holds untracked ones (above)"
 import sys, tarfile, zipfile
 
-sdist, wheel, expected = sys.argv[1:]
+sdist, wheel, expected, tracked = sys.argv[1:]
 package = [line.strip() for line in open(expected) if line.strip()]
+tracked = {line.strip() for line in open(tracked) if line.strip()}
 with tarfile.open(sdist) as archive:  # sweep_pendulum-X.Y.Z/<path>
     in_sdist = {name.split("/", 1)[1] for name in archive.getnames() if "/" in name}
 with zipfile.ZipFile(wheel) as archive:
@@ -64,7 +70,16 @@ if not any(n.endswith(".dist-info/licenses/LICENSE") or n.endswith(".dist-info/L
     missing["wheel"].append("the LICENSE file in its .dist-info")
 if "sweep = sweep.cli:main" not in entry_points:
     missing["wheel"].append("the console script sweep = sweep.cli:main")
+# hatchling's sdist takes what the root .gitignore does not exclude, so an output a
+# nested .gitignore or a tool's own marker hides from git (docs/_build, .hypothesis)
+# would be shipped: the sdist may hold only tracked files and its PKG-INFO
+untracked = sorted(in_sdist - tracked - {"PKG-INFO", ""}) if tracked else []
 bad = False
+if untracked:
+    bad = True
+    print(f"wheel check: the sdist holds {len(untracked)} files git does not track: "
+          f"{', '.join(untracked[:8])}{', ...' if len(untracked) > 8 else ''}",
+          file=sys.stderr)
 for kind, names in missing.items():
     if names:
         bad = True
