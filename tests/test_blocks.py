@@ -292,3 +292,31 @@ def test_one_compiled_kernel_serves_every_block_size_but_one_lane():
     params = _table(77)
     _assert_same(_call(small, params, save_every=7), _call(large, params, save_every=7))
     assert len(_kernels.compiled(_kernels.build(small)).signatures) == 1
+
+
+def test_one_head_writer_serves_every_kind_of_kernel():
+    """Every CPU module's head (``bind`` and the compiled function's signature) comes
+    from `sweep.kernels.lanes.blocks_head`: a swing network's with its block a constant
+    of the text in place of the line that says the argument is a multiple of 8 (16 for a
+    float32 block of 16), none for one lane; an adaptive kernel's with its own
+    arguments."""
+    import sys
+
+    from sweep.kernels.lanes import ADAPTIVE_ARGUMENTS, blocks_head
+    from sweep.kernels.network import NETWORK_ARGUMENTS, NetworkSpec
+
+    def tidy(text):  # a module's text, as sweep.kernels.source writes it
+        return "\n".join(line for line in text.splitlines() if line.strip())
+
+    source = sys.modules["sweep.kernels.source"].source
+    ends = {blocks_head(16, ", src", constant_block=True): "    BLOCK = 16  # a constant",
+            blocks_head(16, ", src"): "    BLOCK = (BLOCK >> 3) << 3  # a multiple of 8",
+            blocks_head(16, dtype="float32"): "    BLOCK = (BLOCK >> 4) << 4  # a multiple of 16",
+            blocks_head(1): "           BLOCK, b_first, b_stop):"}
+    for head, end in ends.items():
+        assert head.splitlines()[-1].startswith(end), head
+    network = NetworkSpec(((0, 1, 1.0),), (-1.0, 1.0), (0.0, 0.5), ("final",), block=16)
+    assert tidy(blocks_head(16, NETWORK_ARGUMENTS, constant_block=True)) in source(network)
+    adaptive = KernelSpec("nonlinear", ("damping",), ("final",), method="dopri5", block=16)
+    head = blocks_head(16, arguments=ADAPTIVE_ARGUMENTS)
+    assert "rtol, atol, out, status, stats," in head and tidy(head) in source(adaptive)

@@ -34,10 +34,10 @@ from __future__ import annotations
 from .. import _config
 from ..observables import OBSERVABLES
 from .lanes import (
-    BIND,
+    ADAPTIVE_ARGUMENTS,
     IDENTIFIER,
     allocate,
-    block_multiple,
+    blocks_head,
     indent,
     lane_loop,
     lane_snippet,
@@ -166,22 +166,10 @@ else:
     else:
         control_loop = lane_loop(control, lane, level=3, head=skip_unless("active"))
     extra = kernel_arguments(spec)  # the attractor observable's catalogue
-    return f'''
+    return """
 from sweep.kernels.vecmath import inverse_fifth_root as vroot5
-
-{BIND}
-
-    def kernel(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats{extra}):
-        run_blocks(blocks, (params.shape[0] + BLOCK - 1) // BLOCK,
-                   params, t0, t_end, dt, t_transient, rtol, atol, out, status,
-                   stats{extra}, BLOCK)
-    return kernel
-
-
-@njit(nogil=True, **JIT)
-def blocks(params, t0, t_end, dt, t_transient, rtol, atol, out, status, stats{extra},
-           BLOCK, b_first, b_stop):
-{block_multiple(spec.block, spec.dtype)}    TWO_PI = 2.0 * math.pi
+""" + blocks_head(spec.block, extra, spec.dtype, arguments=ADAPTIVE_ARGUMENTS) + f'''\
+    TWO_PI = 2.0 * math.pi
     t_obs = t0 + t_transient
     h_min = 16.0 * 2.220446049250313e-16 * max(abs(t0), abs(t_end))
     n = params.shape[0]

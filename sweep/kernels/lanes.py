@@ -7,8 +7,8 @@ from __future__ import annotations
 import re
 import textwrap
 
-__all__ = ["ASSIGNED", "BIND", "IDENTIFIER", "KNOWN_ARGUMENTS", "allocate", "block_multiple",
-           "blocks_head", "indent",
+__all__ = ["ADAPTIVE_ARGUMENTS", "ASSIGNED", "BIND", "FIXED_ARGUMENTS", "IDENTIFIER",
+           "KNOWN_ARGUMENTS", "allocate", "block_multiple", "blocks_head", "indent",
            "lane_loop", "lane_snippet", "scalar_lanes", "skip_unless"]
 
 IDENTIFIER = re.compile(r"\b[A-Za-z_]\w*\b")
@@ -62,28 +62,82 @@ def block_multiple(block: int, dtype: str = "float64") -> str:
     return f"    BLOCK = (BLOCK >> {shift}) << {shift}  # a multiple of {1 << shift}\n"
 
 
-def blocks_head(block: int, extra: str = "", dtype: str = "float64") -> str:
-    """The head of a fixed-step kernel module's body: ``bind`` (`BIND`), which makes the
-    Python ``kernel`` (the contract of `sweep.kernels.source`) that spreads the blocks
-    over threads (`sweep.kernels.threads.run_blocks`), and the signature of the
-    compiled ``blocks`` over a range of blocks, whose body follows (``extra``: the
-    arguments after ``saved``, as source, `sweep.kernels.snippets.kernel_arguments`; a
-    system's attractor catalogue, `CATALOGUE_ARGUMENTS`; a swing network's arrays).
-    ``block`` and ``dtype`` change only its first line (`block_multiple`)."""
+#: The arguments of a fixed-step kernel before ``extra`` (`sweep.kernels.source`'s
+#: fixed-step contract; a swing network's and a system's too).
+FIXED_ARGUMENTS = ("params", "t0", "dt", "n_steps", "n_transient", "save_every", "out",
+                   "status", "saved")
+#: The arguments of an adaptive kernel before ``extra`` (`sweep.kernels.source`'s
+#: adaptive contract).
+ADAPTIVE_ARGUMENTS = ("params", "t0", "t_end", "dt", "t_transient", "rtol", "atol", "out",
+                      "status", "stats")
+
+
+def blocks_head(block: int, extra: str = "", dtype: str = "float64", *,
+                arguments: tuple[str, ...] = FIXED_ARGUMENTS, constant_block: bool = False,
+                compiled: str = "blocks", trailing: str = "b_first, b_stop",
+                wrapper: str | None = None) -> str:
+    """The head of a CPU kernel module's body, the one writer of every kernel's head:
+    ``bind`` (`BIND`), which makes the Python ``kernel`` (the contract of
+    `sweep.kernels.source`) that spreads the compiled function over threads
+    (`sweep.kernels.threads.run_blocks`), and the signature and first line of the
+    compiled function, whose body follows.
+
+    Parameters
+    ----------
+    block : int
+        Trajectories per block (SIMD lanes): it changes only the compiled function's
+        first line (`block_multiple`; the constant with ``constant_block``).
+    extra : str
+        The kernel's arguments after ``arguments``, as source (``", name, ..."``):
+        `sweep.kernels.snippets.kernel_arguments`, a system's attractor catalogue
+        (`CATALOGUE_ARGUMENTS`), a swing network's arrays.
+    dtype : {"float64", "float32"}
+        The kernel's working precision (`block_multiple`).
+    arguments : tuple of str
+        The kernel's arguments before ``extra``: `FIXED_ARGUMENTS` or
+        `ADAPTIVE_ARGUMENTS`.
+    constant_block : bool
+        The compiled function's first line sets ``BLOCK = block``, a constant of the text
+        in place of the argument (the swing network's kernel,
+        `sweep.kernels.network`, says why); otherwise ``BLOCK`` stays the argument,
+        said to be a multiple of 8 or 16 (`block_multiple`).
+    compiled : str
+        The compiled function's name.
+    trailing : str
+        The compiled function's arguments after ``BLOCK``, as source: by default the
+        range of blocks it runs (``b_first, b_stop``).
+    wrapper : str, optional
+        The Python ``kernel``'s body, unindented, which calls ``run_blocks``; by default
+        one call over ``ceil(n / BLOCK)`` blocks, ``compiled(arguments, extra, BLOCK,
+        b_first, b_stop)`` for each thread's range (a refill kernel's groups:
+        `sweep.kernels.refill.groups_head`).
+
+    Returns
+    -------
+    str
+        Module source, from a blank line to the compiled function's first line (none
+        for a one-lane block without ``constant_block``).
+    """
+    signature = ", ".join(arguments) + extra
+    if wrapper is None:
+        wrapper = f"""run_blocks({compiled}, (params.shape[0] + BLOCK - 1) // BLOCK,
+           {", ".join(arguments[:-1])},
+           {arguments[-1]}{extra}, BLOCK)"""
+    first = (f"    BLOCK = {block}  # a constant (module docstring)\n" if constant_block
+             else block_multiple(block, dtype))
+    continuation = " " * len(f"def {compiled}(")  # the signature's second line, aligned
     return f'''
 {BIND}
 
-    def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra}):
-        run_blocks(blocks, (params.shape[0] + BLOCK - 1) // BLOCK,
-                   params, t0, dt, n_steps, n_transient, save_every, out, status,
-                   saved{extra}, BLOCK)
+    def kernel({signature}):
+{indent(wrapper, 2)}
     return kernel
 
 
 @njit(nogil=True, **JIT)
-def blocks(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra},
-           BLOCK, b_first, b_stop):
-''' + block_multiple(block, dtype)
+def {compiled}({signature},
+{continuation}BLOCK, {trailing}):
+''' + first
 
 
 #: The kernel arguments of `sweep.kernels.KernelSpec.known_cells`, after ``saved``.

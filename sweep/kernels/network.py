@@ -244,8 +244,7 @@ def accel(x, v, kx, kv, alpha, coupling, src, dst, weight, power, BLOCK):
             kv[c, j] -= f
 
 
-{blocks_head(1, NETWORK_ARGUMENTS)}    BLOCK = {spec.block}  # a constant (module docstring)
-    n = params.shape[0]
+{blocks_head(spec.block, NETWORK_ARGUMENTS, constant_block=True)}    n = params.shape[0]
     N = power.shape[0]
 {indent(NL.join(constants.values()), 1)}
     th = np.empty((N, BLOCK))

@@ -22,10 +22,9 @@ import re
 from ..observables import OBSERVABLES
 from .fixed import NL, _drives, _finish, _first_lines, _lane_dtypes, _load, _parameters
 from .lanes import (
-    BIND,
     IDENTIFIER,
     allocate,
-    block_multiple,
+    blocks_head,
     indent,
     lane_loop,
     lane_snippet,
@@ -66,34 +65,42 @@ def _sine_table(spec: KernelSpec, drives, shared: list[str]) -> tuple[str, list[
     return table, lines
 
 
+#: A refill kernel's Python ``kernel`` (`groups_head`): one group of lanes per thread.
+_GROUPS = '''"""One group of lanes per thread, but no more groups than n // BLOCK (one
+group when n < BLOCK), each group on a thread of its own
+(`sweep.kernels.threads`)."""
+if n_steps < 1:  # every lane steps before its first stop test
+    raise ValueError(f"n_steps must be >= 1 for a refill kernel, got {{n_steps!r}}")
+n = params.shape[0]
+n_groups = min(max(n // BLOCK, 1), n, get_num_threads())
+run_blocks(grouped, n_groups, params, t0, dt, n_steps, n_transient, save_every,
+           out, status, saved{extra}, BLOCK, n_groups)'''
+
+
 def groups_head(block: int, extra: str = "", dtype: str = "float64") -> str:
-    """The head of a refill kernel module's body: ``bind`` (`sweep.kernels.lanes.BIND`),
-    which makes the Python ``kernel`` (the contract of `sweep.kernels.source`) that runs
-    one group of ``BLOCK`` lanes per thread (`sweep.kernels.threads.run_blocks`), and
-    the signature of the compiled ``grouped``, whose body follows (``extra``: arguments
-    after ``saved``); shared by the single pendulum's and the systems' refill kernels.
-    ``block`` and ``dtype`` change only its first line
-    (`sweep.kernels.lanes.block_multiple`)."""
-    return f'''
-{BIND}
+    """The head of a refill kernel module's body (`sweep.kernels.lanes.blocks_head`):
+    its Python ``kernel`` runs one group of ``BLOCK`` lanes per thread
+    (`sweep.kernels.threads.run_blocks`) and its compiled ``grouped`` takes the number
+    of groups and each thread's range of them; shared by the single pendulum's and the
+    systems' refill kernels.
 
-    def kernel(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra}):
-        """One group of lanes per thread, but no more groups than n // BLOCK (one
-        group when n < BLOCK), each group on a thread of its own
-        (`sweep.kernels.threads`)."""
-        if n_steps < 1:  # every lane steps before its first stop test
-            raise ValueError(f"n_steps must be >= 1 for a refill kernel, got {{n_steps!r}}")
-        n = params.shape[0]
-        n_groups = min(max(n // BLOCK, 1), n, get_num_threads())
-        run_blocks(grouped, n_groups, params, t0, dt, n_steps, n_transient, save_every,
-                   out, status, saved{extra}, BLOCK, n_groups)
-    return kernel
+    Parameters
+    ----------
+    block : int
+        Lanes per group (`sweep.kernels.lanes.block_multiple`).
+    extra : str
+        The kernel's arguments after ``saved``, as source.
+    dtype : {"float64", "float32"}
+        The kernel's working precision.
 
-
-@njit(nogil=True, **JIT)
-def grouped(params, t0, dt, n_steps, n_transient, save_every, out, status, saved{extra},
-            BLOCK, n_groups, g_first, g_stop):
-''' + block_multiple(block, dtype)
+    Returns
+    -------
+    str
+        Module source up to the compiled function's first line.
+    """
+    return blocks_head(block, extra, dtype, compiled="grouped",
+                       trailing="n_groups, g_first, g_stop",
+                       wrapper=_GROUPS.format(extra=extra))
 
 
 #: A known-cells kernel whose observables act at stroboscopic steps only (`_sampled`):
