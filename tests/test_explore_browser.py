@@ -144,6 +144,25 @@ for (const name of ['trajectory', 'phase']) {
 return out;
 """
 
+#: The map's colour bar as drawn: the tick values its axis view placed (not only the
+#: model's ticker: BokehJS 3.9 kept drawing a colour bar's first ticker after the model
+#: was given another), the model's ticks and the colour mapper's range.
+_COLOUR_BAR = """
+const m = Bokeh.documents[0].get_model_by_name('map');
+const view = Bokeh.index.find_one(m);
+for (const r of m.right) {
+  if (r.color_mapper === undefined) continue;  // a ColorBar has a colour mapper
+  const axis = view.views.find_one(r)._axis_view;
+  const o = r.major_label_overrides;  // a Map, or a plain object when empty
+  const labels = o instanceof Map ? Array.from(o.values()) : Object.values(o || {});
+  if (!axis || !axis.tick_coords) return null;
+  return {drawn: Array.from(axis.tick_coords.major[axis.dimension]),
+          ticks: Array.from(r.ticker.ticks || []), low: r.color_mapper.low,
+          high: r.color_mapper.high, labels: labels};
+}
+return null;
+"""
+
 #: Every text shown by a Panel Markdown/Alert model containing a word.
 _TEXTS = """
 const word = arguments[0];
@@ -210,6 +229,11 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
     numbers = _wait(driver, _TEXTS, lambda texts: len(texts) == 1, 30, "Sbb")[0]
     assert "share of the view" in numbers and "well 0" in numbers
     assert "on a boundary" in numbers
+    # a map of labels: the colour bar names each well at its colour, and draws no other
+    # tick (the values between two labels, -0.5 or 0.5, mean nothing)
+    bar = _wait(driver, _COLOUR_BAR, lambda b: len(b["ticks"]) > 1)
+    assert bar["drawn"] == bar["ticks"] == list(range(len(bar["ticks"]))), bar
+    assert all("well" in label for label in bar["labels"]), bar
 
     # box-zoom: a real mouse drag over the middle of the frame
     frame = driver.execute_script(_FRAME)
@@ -281,6 +305,25 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
     assert driver.execute_script(_MAP)["sum"] == damped["sum"]
     driver.save_screenshot(str(tmp_path / "6-refused.png"))
     assert driver.execute_script(set_value, "damping c [1/s]", 0.08)  # back to valid
+
+    # a map of values, then labels again: the colour bar's ticks follow, as drawn
+    options = driver.execute_script(
+        "for (const m of Bokeh.documents[0].all_models)"
+        " if (m.title === 'quantity') return [m.value, m.options.map((o) => o[0])];")
+    home_quantity, keys = options
+    assert "var:theta_final" in keys
+    assert driver.execute_script(set_value, "quantity", "var:theta_final")
+    _wait(driver, _MAP, lambda s: s["stage"] == "final" and "theta_final" in s["title"])
+    bar = _wait(driver, _COLOUR_BAR, lambda b: not b["labels"])
+    assert len(bar["drawn"]) >= 3 and bar["drawn"] == bar["ticks"], bar
+    span = bar["high"] - bar["low"]
+    assert all(bar["low"] - 1e-9 * span <= t <= bar["high"] + 1e-9 * span
+               for t in bar["drawn"]), bar  # round values inside the colour range
+    driver.save_screenshot(str(tmp_path / "7-values.png"))
+    assert driver.execute_script(set_value, "quantity", home_quantity)
+    _wait(driver, _MAP, lambda s: s["stage"] == "final" and "well" in s["title"])
+    bar = _wait(driver, _COLOUR_BAR, lambda b: bool(b["labels"]))
+    assert bar["drawn"] == bar["ticks"] == list(range(len(bar["ticks"]))), bar
 
     for shot in sorted(tmp_path.glob("*.png")):
         assert shot.stat().st_size > 20_000, shot  # a rendered page, not a blank one

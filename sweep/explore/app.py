@@ -40,7 +40,6 @@ try:
     import panel as pn
     from bokeh.events import Tap
     from bokeh.models import (
-        BasicTicker,
         ColorBar,
         ColumnDataSource,
         FixedTicker,
@@ -141,6 +140,19 @@ def _axis_label(name: str) -> str:
         if p.axis == name:
             return f"{name} [{p.unit_text}]"
     return name
+
+
+def _nice_ticks(low: float, high: float, count: int = 6) -> list[float]:
+    """About ``count`` round tick values in [low, high] for a continuous colour bar
+    (matplotlib's `~matplotlib.ticker.MaxNLocator`: steps of 1, 2, 2.5, 5 times a power
+    of ten)."""
+    from matplotlib.ticker import MaxNLocator
+
+    values = MaxNLocator(nbins=count, steps=[1, 2, 2.5, 5, 10]).tick_values(low, high)
+    span = high - low
+    # 12 significant digits: no rounding noise (2.5000000000000005e-05) on the page
+    return [float(f"{v:.12g}") for v in values
+            if low - 1e-9 * span <= v <= high + 1e-9 * span]
 
 
 def _palette(result: MapResult) -> list[str]:
@@ -272,8 +284,11 @@ class _Session:
         # "stage" says which picture it is ("preview", "step", "final")
         self.source = ColumnDataSource({"image": [], "x": [], "y": [], "dw": [], "dh": [],
                                         "stage": []})
-        self.ticker = FixedTicker(ticks=[])  # discrete maps' ticks, updated in place
-        self.basic_ticker = BasicTicker()
+        # the colour bar's only ticker, its ticks updated in place: BokehJS (3.9) does not
+        # redraw a colour bar whose ticker is swapped for another model, so a page that
+        # opened on a continuous map kept its ticks between the categories (-0.5, 0.5,
+        # 1.5) beside their names
+        self.ticker = FixedTicker(ticks=[])
         n = s.resolution
         self.map = figure(name="map", frame_width=n, frame_height=n,
                           x_range=Range1d(*v.x_range), y_range=Range1d(*v.y_range),
@@ -287,7 +302,7 @@ class _Session:
         self.map.scatter("x", "y", source=self.clicked, size=12, marker="x", line_width=3,
                          color="white")
         self.colorbar = ColorBar(color_mapper=self.mapper, title="", width=16,
-                                 ticker=self.basic_ticker, title_text_font_size="12px",
+                                 ticker=self.ticker, title_text_font_size="12px",
                                  major_label_text_font_size="11px")
         self.map.add_layout(self.colorbar, "right")
         for r in (self.map.x_range, self.map.y_range):
@@ -545,7 +560,7 @@ class _Session:
             step = max(1, math.ceil(len(palette) / 16))
             ticks = list(range(0, len(palette), step))
             self.ticker.ticks = ticks
-            self.colorbar.update(ticker=self.ticker, major_label_overrides={
+            self.colorbar.update(major_label_overrides={
                 k: result.legend[k][1] for k in ticks}, title=result.title)
         else:
             finite = result.image[np.isfinite(result.image)]
@@ -555,8 +570,8 @@ class _Session:
             if list(self.mapper.palette) != list(Viridis256):
                 self.mapper.palette = Viridis256
             self.mapper.update(low=low, high=high)
-            self.colorbar.update(ticker=self.basic_ticker, major_label_overrides={},
-                                 title=result.title)
+            self.ticker.ticks = _nice_ticks(low, high)
+            self.colorbar.update(major_label_overrides={}, title=result.title)
 
     def _show_numbers(self, request: int, result: MapResult, numbers) -> None:
         """The numbers of the final map under it (None: a map of continuous values)."""
