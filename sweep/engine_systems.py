@@ -26,7 +26,7 @@ from .observables import STROBE_SAMPLES, variable_attributes
 from .physics.network import NETWORK_PARAMETERS, SwingNetwork
 from .physics.system import System, system_parameters
 from .settings import CUDA_CHUNK, _block, _check_device, default_chunk_size, validate_settings
-from .strobe_phase import check_phase
+from .strobe_phase import check_phase, phase_axis
 from .system_attractors import catalogue_arguments, catalogue_attributes, check_catalogue
 from .system_observables import SYSTEM_OBSERVABLES, resolve_system_observe, variables
 
@@ -177,10 +177,12 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
     catalogue = check_catalogue(system, attractors, names, grid)
     drive = _check_strobe(system, grid, names, settings)
     if catalogue is not None:  # rings of another drive phase would never match
-        frequency = np.unique(grid.axes.get(drive.axis,
-                                            np.array([system.parameters()[drive.axis]])))[0]
+        values = system.parameters()
+        name = phase_axis(drive.axis)  # a Forcing(on=...)'s phase; a pivot has none
+        frequency, phase = (np.unique(grid.axes.get(axis, np.array([values.get(axis, 0.0)])))[0]
+                            for axis in (drive.axis, name or drive.axis))
         check_phase(attractors, len(catalogue["period"]), float(frequency), settings,
-                    drive.axis)
+                    drive.axis, phase=float(phase) if name else 0.0)
     check_flag("check_stability", check_stability)
     if stop_early and (names not in STOPPING or save_every is not None):
         raise ValueError(

@@ -565,14 +565,15 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
         ``theta``, ``omega``: ndarray, shape (m, P) [rad, rad/s]: the stroboscopic ring
         (oldest first, angle unwrapped) of one trajectory on each of the m attractors,
         in label order; ``period``: ndarray (m,) of int, forcing periods;
-        ``strobe_phase`` [rad] and ``drive_frequency`` [rad/s]: ndarray (m,) each, the
-        drive's phase ``W (t0 + n_transient dt) mod 2 pi`` at the rings' samples and its
-        angular frequency W (`sweep.strobe_phase`; absent where the run has no one
-        frequency): a run that uses the catalogue must sample at that phase, its ``t0 +
-        t_transient`` a whole number of periods from the run's, or it is refused. Of a
-        driven
-        system with several coordinates (a run of `sweep.DoublePendulum` with a pivot
-        drive, ...): ``theta`` and ``omega`` of shape (m, c, P), the rings of its c
+        ``drive_phase`` [rad] and ``drive_frequency`` [rad/s]: ndarray (m,) each, the
+        drive's phase ``W (t0 + n_transient dt) + phi mod 2 pi`` at the rings' samples
+        (phi its phase constant, ``forcing_phase``) and its angular frequency W
+        (`sweep.strobe_phase`; absent where the run has no one frequency and phase): a
+        run that uses the catalogue must sample at that drive phase, e.g. its ``t0 +
+        t_transient`` a whole number of periods from the pilot's with the same phi, or
+        it is refused. Of a driven system with several coordinates (a run of
+        `sweep.DoublePendulum` with a pivot drive, ...): ``theta`` and ``omega`` of
+        shape (m, c, P), the rings of its c
         coordinates and of their velocities (angles unwrapped), and ``coordinates``,
         their names; pass it to ``sweep.run(system, grid, observe=("attractor",),
         attractors=...)``.
