@@ -20,6 +20,8 @@ from ._known import check_known_cells, known_arguments, no_known_arguments
 from ._timesteps import check_sampling_period
 from ._validate import check_flag, check_positive_int
 from ._version import __version__
+from .catalogue_scene import attributes as scene_attributes
+from .catalogue_scene import check_scene, pendulum_values
 from .execution import RunContext, execute
 from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
@@ -243,6 +245,8 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     check_tangent_fits(integrator, effects, names)
     check_observables_fit(integrator, names)
     _check_stroboscopic(names, scene, grid, settings)
+    if orbits:  # the attractors of another scene: -1 everywhere
+        check_scene(attractors, pendulum_values(scene, grid))
     if orbits and scene.forcing is not None:  # rings of another drive phase: -1 everywhere
         frequency, phase = (np.unique(grid.axes.get(name, np.array([value])))[0]
                             for name, value in (("forcing_frequency", scene.forcing.frequency),
@@ -361,7 +365,7 @@ def _catalogue_attrs(attractors) -> dict:
             "attractors_omega": np.asarray(attractors["omega"], dtype=np.float64).ravel(),
             "attractors_period": np.asarray(attractors["period"], dtype=np.int64),
             "attractors_samples": int(theta.shape[1]),
-            **drive_attributes(attractors, theta.shape[0])}
+            **drive_attributes(attractors, theta.shape[0]), **scene_attributes(attractors)}
 
 
 def run(

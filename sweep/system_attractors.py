@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .catalogue_scene import FIELD as SCENE_FIELD
+from .catalogue_scene import attributes as scene_attributes
 from .strobe_phase import FIELDS, LEGACY_FIELD
 from .strobe_phase import attributes as drive_attributes
 
@@ -130,7 +132,8 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
                          f"the grid varies {', '.join(varied)}; accepted: a grid that varies "
                          f"only the initial state ({', '.join(initial_axes(system))})")
     return {"theta": theta, "omega": omega, "period": period.astype(np.int64),
-            **{name: attractors[name] for name in (*FIELDS, LEGACY_FIELD) if name in attractors}}
+            **{name: attractors[name] for name in (*FIELDS, LEGACY_FIELD, SCENE_FIELD)
+               if name in attractors}}
 
 
 def catalogue_arguments(system, catalogue: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -163,4 +166,4 @@ def catalogue_attributes(catalogue: dict | None) -> dict:
             "attractors_omega": catalogue["omega"].ravel(),
             "attractors_period": catalogue["period"],
             "attractors_samples": int(samples), "attractors_coordinates": int(m),
-            **drive_attributes(catalogue, k)}
+            **drive_attributes(catalogue, k), **scene_attributes(catalogue)}

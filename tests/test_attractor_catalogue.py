@@ -514,3 +514,55 @@ def test_an_old_catalogue_with_the_clocks_phase_keeps_its_meaning(catalogue, no_
     assert sorted(attrs) == ["attractors_drive_frequency", "attractors_strobe_phase"]
     again = sweep.strobe_phase.from_attributes(attrs)
     np.testing.assert_array_equal(again["strobe_phase"], old["strobe_phase"])
+
+
+@pytest.mark.parametrize("scene, axes, words", [
+    (sweep.Scene(gravity=1.0, length=1.0, effects=(
+        sweep.Damping(0.2), sweep.Forcing(1.5, 1.0, np.pi / 2))), {},
+     r"the catalogue was computed for forcing_amplitude = 1\.66, but this run's "
+     r"forcing_amplitude = 1\.5 \(a catalogue holds the attractors of one scene\); "
+     r"accepted: forcing_amplitude = 1\.66 \(within 1e-09 relative\), or a catalogue of "
+     r"this scene \(sweep\.maps\.pilot_catalogue"),
+    (SCENE, {"damping": [0.25]}, r"computed for damping = 0\.2, but this run's damping = "
+                                 r"0\.25"),
+    (SCENE, {"length": [2.0]}, r"computed for length = 1\.0, but this run's length = 2\.0"),
+    (sweep.Scene(gravity=1.0, length=1.0, effects=(
+        sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, np.pi / 2), sweep.Torque(0.1))), {},
+     r"computed for torque = 0\.0, but this run's torque = 0\.1"),
+])
+def test_a_catalogue_of_another_scene_is_refused_before_compute(catalogue, no_compute,
+                                                                scene, axes, words):
+    """The catalogue records the pilot's scene (its parameters of one value); a map of
+    another forcing amplitude, damping, length or with a torque (a Scene's value or a
+    grid's one-value axis) would label its starts by attractors that are not its own
+    (-1 everywhere): refused, naming the parameter, both values and what is accepted.
+    (It was accepted.)"""
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, 9), omega0=np.linspace(-4, 4, 9),
+                      **axes)
+    with pytest.raises(ValueError, match=words):
+        sweep.run(scene, grid, **EARLY, attractors=catalogue)
+
+
+def test_the_catalogues_scene_is_kept_and_its_own_scene_is_accepted(catalogue, no_compute):
+    """The pilot's parameters of one value, besides the drive's frequency and phase
+    constant (checked through the drive phase), one row per attractor; the same scene
+    given as a grid's one-value axis, or off by a rounding (1e-12 relative, below
+    SCENE_RTOL = 1e-9), is accepted; a dataset keeps the scene for a rerun."""
+    scene = catalogue["scene"]
+    assert scene.shape == catalogue["period"].shape
+    assert set(scene.dtype.names) >= {"damping", "forcing_amplitude", "gravity", "length",
+                                      "torque"}
+    assert not {"forcing_frequency", "forcing_phase"} & set(scene.dtype.names)
+    np.testing.assert_array_equal(scene["forcing_amplitude"], 1.66)
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, 9), omega0=np.linspace(-4, 4, 9),
+                      forcing_amplitude=[1.66 * (1 + 1e-12)], damping=[0.2])
+    sweep.engine.prepare(SCENE, grid, **EARLY, attractors=catalogue)
+    selected = {key: value[:2] for key, value in catalogue.items()}  # the docs' idiom
+    sweep.engine.prepare(SCENE, grid, **EARLY, attractors=selected)
+    attrs = sweep.engine._catalogue_attrs(selected)
+    again = sweep.catalogue_scene.from_attributes(attrs)["scene"]
+    np.testing.assert_array_equal(again["damping"], [0.2, 0.2])
+    with pytest.raises(ValueError, match=r"computed for damping = 0\.2, but this run's "
+                                         r"damping = 0\.3"):
+        sweep.engine.prepare(SCENE, sweep.Grid(theta0=[0.0], omega0=[0.0], damping=[0.3]),
+                             **EARLY, attractors=dict(selected, scene=again))

@@ -314,3 +314,31 @@ def test_a_forcings_phase_constant_is_part_of_the_catalogues_drive_phase():
     shifted = sweep.run(_forced(np.pi / 2), FORCED_GRID,
                         **dict(kwargs, t0=-FORCED_PERIOD / 4))
     np.testing.assert_array_equal(shifted["attractor"].values, [[0], [0]])
+
+
+@pytest.mark.parametrize("system, grid, words", [
+    (sweep.DoublePendulum(pivot_amplitude=0.12, pivot_frequency=60.0,
+                          effects=(sweep.Damping(0.5),)), GRID,
+     r"the catalogue was computed for pivot_amplitude = 0\.1, but this run's "
+     r"pivot_amplitude = 0\.12 \(a catalogue holds the attractors of one scene\); "
+     r"accepted: pivot_amplitude = 0\.1 \(within 1e-09 relative\)"),
+    (SYSTEM, sweep.Grid(theta1_0=np.linspace(-3, 3, 12), theta2_0=np.linspace(-3, 3, 12),
+                        damping=[0.6]), r"computed for damping = 0\.5, but this run's "
+                                        r"damping = 0\.6"),
+    (SYSTEM, sweep.Grid(theta1_0=[0.5], length2=[1.1]),
+     r"computed for length2 = 1\.0, but this run's length2 = 1\.1"),
+])
+def test_a_catalogue_of_another_system_is_refused_before_compute(full, no_compute, system,
+                                                                 grid, words):
+    """The catalogue records the pilot system's parameters of one value (one row per
+    attractor); a map of another pivot amplitude, damping or arm length (the system's
+    value or a grid's one-value axis) is refused before any compute, naming the
+    parameter, both values and what is accepted. (It was accepted and labelled its
+    starts by attractors not its own.)"""
+    _, _, catalogue = full
+    with pytest.raises(ValueError, match=words):
+        sweep.run(system, grid, observe=("attractor",), attractors=catalogue,
+                  stop_early=True, **dict(RUN, t_transient=0.0))
+    np.testing.assert_array_equal(catalogue["scene"]["pivot_amplitude"],
+                                  np.full(catalogue["period"].shape, 0.1))
+    assert "pivot_frequency" not in catalogue["scene"].dtype.names  # the drive's: its phase

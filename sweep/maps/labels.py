@@ -21,6 +21,7 @@ import xarray as xr
 
 from .._timesteps import transient_steps
 from .._validate import check_count, check_numbers, check_quantity
+from ..catalogue_scene import dataset_scene
 from ..kernels import Status
 from ..strobe_phase import dataset_drive
 from . import _strobe
@@ -598,7 +599,8 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
         rings = _catalogue_rings(ds.attrs, flat_theta.shape[1])
     theta, omega = _rings_by_label(period.size, flat, index, rings, flat_theta, flat_omega)
     return {"theta": theta, "omega": omega, "period": period,
-            **dataset_drive(ds, "forcing_frequency", period.size)}
+            **dataset_drive(ds, "forcing_frequency", period.size),
+            **dataset_scene(ds.attrs, period.size)}
 
 
 def _rings_by_label(n: int, flat, index, rings, theta_rows, omega_rows):
@@ -642,7 +644,8 @@ def _system_catalogue(ds: xr.Dataset, labels, *, max_period: int, tol: float) ->
     theta, omega = _rings_by_label(period.size, flat, index, rings, position, velocity)
     return {"theta": theta, "omega": omega, "period": period,
             "coordinates": tuple(positions),
-            **dataset_drive(ds, str(ds.attrs["strobe_frequency"]), period.size)}
+            **dataset_drive(ds, str(ds.attrs["strobe_frequency"]), period.size),
+            **dataset_scene(ds.attrs, period.size)}
 
 
 def amplitude(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
