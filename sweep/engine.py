@@ -534,7 +534,9 @@ def run(
         which `sweep.maps.attractor_catalogue` records: the same frequency, and e.g.
         the same ``forcing_phase`` phi with the pilot's ``t0 + t_transient`` and this
         run's a whole number of forcing periods apart; `sweep.strobe_phase`), else the
-        run is refused; a catalogue without them is not checked.
+        run is refused; a catalogue without them is not checked. A run of another
+        scene than the catalogue's ``scene`` (its pilot's parameters of one value,
+        `sweep.catalogue_scene`) is refused too.
     known_cells : xarray.DataArray, optional
         With ``attractors`` and ``stop_early`` (fixed-step methods on the CPU, float64):
         a map over ``theta0`` and ``omega0`` (each evenly spaced) of the catalogued

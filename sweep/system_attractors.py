@@ -71,7 +71,8 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
         optionally ``coordinates``: the m coordinates' names, which must be the system's,
         and ``drive_phase`` [rad] and ``drive_frequency`` [rad/s] (k values each: the
         drive phase ``W t + phi`` and frequency the rings were sampled at,
-        `sweep.strobe_phase`; an older catalogue's ``strobe_phase`` instead).
+        `sweep.strobe_phase`; an older catalogue's ``strobe_phase`` instead), and
+        ``scene``, the pilot system's parameters of one value (`sweep.catalogue_scene`).
     names : tuple of str
         The run's observables.
     grid : Grid or Points
@@ -80,8 +81,8 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
     -------
     dict or None
         ``theta``, ``omega`` (k, m, P) float64, ``period`` (k,) int64, and the
-        catalogue's ``drive_phase`` (or ``strobe_phase``) and ``drive_frequency`` where
-        it has them.
+        catalogue's ``drive_phase`` (or ``strobe_phase``), ``drive_frequency`` and
+        ``scene`` where it has them.
 
     Raises
     ------
@@ -158,7 +159,8 @@ def catalogue_attributes(catalogue: dict | None) -> dict:
     """The catalogue as dataset attributes (flat, netCDF-friendly): ``attractors_theta``
     and ``attractors_omega`` (k m P values, C order), ``attractors_period``,
     ``attractors_samples`` (P) and ``attractors_coordinates`` (m), and its drive
-    (``attractors_drive_phase``, ``attractors_drive_frequency``) where it has one."""
+    (``attractors_drive_phase``, ``attractors_drive_frequency``) and scene
+    (``attractors_scene``) where it has them."""
     if catalogue is None:
         return {}
     k, m, samples = catalogue["theta"].shape

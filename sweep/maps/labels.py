@@ -572,7 +572,10 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
         (`sweep.strobe_phase`; absent where the run has no one frequency and phase): a
         run that uses the catalogue must sample at that drive phase, e.g. its ``t0 +
         t_transient`` a whole number of periods from the pilot's with the same phi, or
-        it is refused. Of a driven system with several coordinates (a run of
+        it is refused; ``scene``: the run's parameters of one value (a structured
+        array, a row per attractor; `sweep.catalogue_scene`; absent for a dataset
+        without ``strobe_scene``): a run of another value is refused. Of a driven
+        system with several coordinates (a run of
         `sweep.DoublePendulum` with a pivot drive, ...): ``theta`` and ``omega`` of
         shape (m, c, P), the rings of its c
         coordinates and of their velocities (angles unwrapped), and ``coordinates``,
