@@ -21,11 +21,10 @@ A catalogue records, per attractor, ``drive_phase`` [rad] (``W t_s + phi mod 2 p
 ``catalogue[key][keep]``, keeps them). A catalogue without both (one built by hand from
 rings) is not checked.
 
-Catalogues made before the drive's phase constant was counted (sweep 0.3.0.dev2 and
-earlier; netCDF attribute ``attractors_strobe_phase``) record ``strobe_phase``, the
-phase of the clock alone, ``W t_s mod 2 pi``, and not their pilot's phi. Such a
-catalogue is read with its old meaning: it is compared with the run's clock phase ``W
-t_s``, as before, which assumes the pilot's phi was the run's (a phi it never recorded
+Catalogues made before the drive's phase constant was counted (netCDF attribute
+``attractors_strobe_phase``) record ``strobe_phase``, the phase of the clock alone, ``W
+t_s mod 2 pi``, and not their pilot's phi. Such a catalogue is read with its old
+meaning: it is compared with the run's clock phase ``W t_s``, as before, which assumes the pilot's phi was the run's (a phi it never recorded
 cannot be checked, and reading it as phi = 0 would refuse every old catalogue of a
 ``sin(W t + pi/2)`` forcing used with its own scene). So nothing an old catalogue was
 accepted or refused for changes; a run file or dataset that kept it (``sweep.io.
