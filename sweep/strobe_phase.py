@@ -24,12 +24,12 @@ rings) is not checked.
 Catalogues made before the drive's phase constant was counted (netCDF attribute
 ``attractors_strobe_phase``) record ``strobe_phase``, the phase of the clock alone, ``W
 t_s mod 2 pi``, and not their pilot's phi. Such a catalogue is read with its old
-meaning: it is compared with the run's clock phase ``W t_s``, as before, which assumes the pilot's phi was the run's (a phi it never recorded
-cannot be checked, and reading it as phi = 0 would refuse every old catalogue of a
-``sin(W t + pi/2)`` forcing used with its own scene). So nothing an old catalogue was
-accepted or refused for changes; a run file or dataset that kept it (``sweep.io.
-run_arguments``) keeps ``strobe_phase``. Where a catalogue has both, ``drive_phase``
-counts.
+meaning: it is compared with the run's clock phase ``W t_s``, as before, which assumes
+the pilot's phi was the run's (a phi it never recorded cannot be checked, and reading
+it as phi = 0 would refuse every old catalogue of a ``sin(W t + pi/2)`` forcing used
+with its own scene). So nothing an old catalogue was accepted or refused for changes; a
+run file or dataset that kept it (``sweep.io.run_arguments``) keeps ``strobe_phase``.
+Where a catalogue has both, ``drive_phase`` counts.
 """
 
 from __future__ import annotations
