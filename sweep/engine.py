@@ -20,6 +20,8 @@ from ._known import check_known_cells, known_arguments, no_known_arguments
 from ._timesteps import check_sampling_period
 from ._validate import check_flag, check_positive_int
 from ._version import __version__
+from .catalogue_scene import attributes as scene_attributes
+from .catalogue_scene import check_scene, pendulum_values
 from .execution import RunContext, execute
 from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
@@ -243,11 +245,14 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     check_tangent_fits(integrator, effects, names)
     check_observables_fit(integrator, names)
     _check_stroboscopic(names, scene, grid, settings)
+    if orbits:  # the attractors of another scene: -1 everywhere
+        check_scene(attractors, pendulum_values(scene, grid))
     if orbits and scene.forcing is not None:  # rings of another drive phase: -1 everywhere
-        frequency = np.unique(grid.axes.get("forcing_frequency",
-                                            np.array([scene.forcing.frequency])))[0]
+        frequency, phase = (np.unique(grid.axes.get(name, np.array([value])))[0]
+                            for name, value in (("forcing_frequency", scene.forcing.frequency),
+                                                ("forcing_phase", scene.forcing.phase)))
         check_phase(attractors, len(orbits), float(frequency), settings,
-                    "forcing_frequency")
+                    "forcing_frequency", phase=float(phase))
     _check_stop_early(names, scene, grid, stop_early, save_every)
     if known_cells is not None:
         check_known_cells(known_cells, attractors=len(orbits), stop_early=stop_early,
@@ -360,7 +365,7 @@ def _catalogue_attrs(attractors) -> dict:
             "attractors_omega": np.asarray(attractors["omega"], dtype=np.float64).ravel(),
             "attractors_period": np.asarray(attractors["period"], dtype=np.int64),
             "attractors_samples": int(theta.shape[1]),
-            **drive_attributes(attractors, theta.shape[0])}
+            **drive_attributes(attractors, theta.shape[0]), **scene_attributes(attractors)}
 
 
 def run(
@@ -525,10 +530,13 @@ def run(
         such a trajectory by the catalogued attractor. Attractors not in the catalogue
         are still found by the ``strobe`` test. The catalogue is stored in the
         dataset's attributes (``attractors_*``). Its rings must have been sampled at
-        this run's drive phase (``strobe_phase`` and ``drive_frequency``, which
-        `sweep.maps.attractor_catalogue` records: the pilot's ``t0 + t_transient`` and
-        this run's a whole number of forcing periods apart, the same frequency), else
-        the run is refused; a catalogue without them is not checked.
+        this run's drive phase ``W t + phi`` (``drive_phase`` and ``drive_frequency``,
+        which `sweep.maps.attractor_catalogue` records: the same frequency, and e.g.
+        the same ``forcing_phase`` phi with the pilot's ``t0 + t_transient`` and this
+        run's a whole number of forcing periods apart; `sweep.strobe_phase`), else the
+        run is refused; a catalogue without them is not checked. A run of another
+        scene than the catalogue's ``scene`` (its pilot's parameters of one value,
+        `sweep.catalogue_scene`) is refused too.
     known_cells : xarray.DataArray, optional
         With ``attractors`` and ``stop_early`` (fixed-step methods on the CPU, float64):
         a map over ``theta0`` and ``omega0`` (each evenly spaced) of the catalogued

@@ -14,6 +14,8 @@ import numpy as np
 import xarray as xr
 
 from . import _config
+from .catalogue_scene import ATTRIBUTE as SCENE_ATTRIBUTE
+from .catalogue_scene import check_scene, scene_values
 from .execution import RunContext, execute
 from .execution.local import allocate
 from .execution.progress import progress_bar
@@ -26,7 +28,7 @@ from .observables import STROBE_SAMPLES, variable_attributes
 from .physics.network import NETWORK_PARAMETERS, SwingNetwork
 from .physics.system import System, system_parameters
 from .settings import CUDA_CHUNK, _block, _check_device, default_chunk_size, validate_settings
-from .strobe_phase import check_phase
+from .strobe_phase import check_phase, phase_axis
 from .system_attractors import catalogue_arguments, catalogue_attributes, check_catalogue
 from .system_observables import SYSTEM_OBSERVABLES, resolve_system_observe, variables
 
@@ -90,6 +92,16 @@ def _prepare_network(network, grid, settings, observe, save_every, stop_early,
                        synchronous=tuple(network.synchronous_state(coupling).tolist()),
                        observe=names, save=save_every is not None, method=settings.method,
                        block=_block(grid.size, False), device=device)
+
+
+def system_values(system: System, grid: ParameterRows, drive_axis: str) -> dict:
+    """`sweep.catalogue_scene.scene_values` of a system's run (``system`` switched on by
+    the grid's axes): its parameters of one value, without its initial state and its
+    drive's frequency ``drive_axis`` and phase constant (`sweep.strobe_phase.phase_axis`)."""
+    from .system_attractors import initial_axes
+
+    return scene_values(system.parameters(), grid, initial_axes(system),
+                        (drive_axis, phase_axis(drive_axis)))
 
 
 def _check_strobe(system: System, grid: ParameterRows, names, settings):
@@ -177,10 +189,13 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
     catalogue = check_catalogue(system, attractors, names, grid)
     drive = _check_strobe(system, grid, names, settings)
     if catalogue is not None:  # rings of another drive phase would never match
-        frequency = np.unique(grid.axes.get(drive.axis,
-                                            np.array([system.parameters()[drive.axis]])))[0]
+        values = system.parameters()
+        name = phase_axis(drive.axis)  # a Forcing(on=...)'s phase; a pivot has none
+        frequency, phase = (np.unique(grid.axes.get(axis, np.array([values.get(axis, 0.0)])))[0]
+                            for axis in (drive.axis, name or drive.axis))
         check_phase(attractors, len(catalogue["period"]), float(frequency), settings,
-                    drive.axis)
+                    drive.axis, phase=float(phase) if name else 0.0)
+        check_scene(attractors, system_values(system, grid, drive.axis))
     check_flag("check_stability", check_stability)
     if stop_early and (names not in STOPPING or save_every is not None):
         raise ValueError(
@@ -325,6 +340,8 @@ def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
         attrs["stop_early"] = "at the first flip" if "flip" in spec.observe else \
             "once settled on a catalogued attractor"
     if "strobe" in spec.observe:  # what `sweep.maps.basins` reads of the samples
+        attrs[SCENE_ATTRIBUTE] = json.dumps(system_values(
+            system, grid, system.drive_frequency_parameter.axis), sort_keys=True)
         attrs.update(strobe_samples=spec.strobe_samples,
                      strobe_frequency=system.drive_frequency_parameter.axis,
                      strobe_positions=" ".join(c.name for c in coordinates),

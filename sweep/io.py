@@ -17,6 +17,9 @@ import xarray as xr
 
 from . import _config
 from ._version import __version__
+from .catalogue_scene import ATTRIBUTE as SCENE_ATTRIBUTE
+from .catalogue_scene import from_attributes as scene_from_attributes
+from .catalogue_scene import pendulum_values
 from .grid import Grid, Points
 from .kernels import Status, vectors
 from .observables import OBSERVABLES, variable_attributes
@@ -133,8 +136,9 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
         **grid.provenance(),  # grid_axes (a Grid) or point_axes (Points): grid_from
         **run_attributes(settings, spec),
     }
-    if "strobe" in spec.observe:
+    if "strobe" in spec.observe:  # and the scene an attractor catalogue of it is of
         attrs["strobe_samples"] = spec.strobe_samples
+        attrs[SCENE_ATTRIBUTE] = json.dumps(pendulum_values(scene, grid), sort_keys=True)
     attrs.update(device_attributes(spec))
     if spec.dtype != "float64":  # its working precision, when not the default
         attrs["dtype"] = spec.dtype
@@ -259,6 +263,7 @@ def run_arguments(ds: xr.Dataset) -> dict:
         kwargs["attractors"]["period"] = np.atleast_1d(
             np.asarray(a["attractors_period"], dtype=np.int64))
         kwargs["attractors"].update(from_attributes(a))  # its drive phase, if any
+        kwargs["attractors"].update(scene_from_attributes(a))  # its scene, if any
     return kwargs
 
 

@@ -390,13 +390,14 @@ def map_accuracy(scene: Scene, starts, label=basins, ladder=None, *, repeats: in
             and not any(starts.varies(a) for a in starts.axes
                         if a not in engine.INITIAL_AXES):
         catalogue = pilot_catalogue(scene, starts, pilot, **reference_kwargs)
-        frequency = float(np.unique(starts.axes.get(
-            "forcing_frequency", np.array([scene.forcing.frequency])))[0])
+        frequency, phase = (float(np.unique(starts.axes.get(name, np.array([value])))[0])
+                            for name, value in (("forcing_frequency", scene.forcing.frequency),
+                                                ("forcing_phase", scene.forcing.phase)))
         for (_, _, kwargs, _), plan in zip(levels, plans):
             # a level of another t_transient or dt may sample another drive phase, where
             # no start could match the catalogue (sweep.run refuses it): no catalogue
             if phase_mismatch(catalogue, len(catalogue["period"]), frequency, plan[0],
-                              "forcing_frequency") is None:
+                              "forcing_frequency", phase=phase) is None:
                 kwargs["attractors"] = catalogue
     labeller = _Labeller(label, func, options, forced,
                          levels[-1][3].get("tol", options.get("tol", 1e-3)))

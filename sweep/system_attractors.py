@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .strobe_phase import FIELDS
+from .catalogue_scene import FIELD as SCENE_FIELD
+from .catalogue_scene import attributes as scene_attributes
+from .strobe_phase import FIELDS, LEGACY_FIELD
 from .strobe_phase import attributes as drive_attributes
 
 __all__ = ["catalogue_arguments", "catalogue_attributes", "catalogue_parts", "check_catalogue",
@@ -67,8 +69,10 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
         ``theta``, ``omega``: (k, m, P) rings of the m coordinates and their velocities
         [their units; angles unwrapped], ``period``: (k,) ints (1 <= period <= P / 2);
         optionally ``coordinates``: the m coordinates' names, which must be the system's,
-        and ``strobe_phase`` [rad] and ``drive_frequency`` [rad/s] (k values each: the
-        drive phase and frequency the rings were sampled at, `sweep.strobe_phase`).
+        and ``drive_phase`` [rad] and ``drive_frequency`` [rad/s] (k values each: the
+        drive phase ``W t + phi`` and frequency the rings were sampled at,
+        `sweep.strobe_phase`; an older catalogue's ``strobe_phase`` instead), and
+        ``scene``, the pilot system's parameters of one value (`sweep.catalogue_scene`).
     names : tuple of str
         The run's observables.
     grid : Grid or Points
@@ -77,7 +81,8 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
     -------
     dict or None
         ``theta``, ``omega`` (k, m, P) float64, ``period`` (k,) int64, and the
-        catalogue's ``strobe_phase`` and ``drive_frequency`` where it has them.
+        catalogue's ``drive_phase`` (or ``strobe_phase``), ``drive_frequency`` and
+        ``scene`` where it has them.
 
     Raises
     ------
@@ -128,7 +133,8 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
                          f"the grid varies {', '.join(varied)}; accepted: a grid that varies "
                          f"only the initial state ({', '.join(initial_axes(system))})")
     return {"theta": theta, "omega": omega, "period": period.astype(np.int64),
-            **{name: attractors[name] for name in FIELDS if name in attractors}}
+            **{name: attractors[name] for name in (*FIELDS, LEGACY_FIELD, SCENE_FIELD)
+               if name in attractors}}
 
 
 def catalogue_arguments(system, catalogue: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -153,7 +159,8 @@ def catalogue_attributes(catalogue: dict | None) -> dict:
     """The catalogue as dataset attributes (flat, netCDF-friendly): ``attractors_theta``
     and ``attractors_omega`` (k m P values, C order), ``attractors_period``,
     ``attractors_samples`` (P) and ``attractors_coordinates`` (m), and its drive
-    (``attractors_strobe_phase``, ``attractors_drive_frequency``) where it has one."""
+    (``attractors_drive_phase``, ``attractors_drive_frequency``) and scene
+    (``attractors_scene``) where it has them."""
     if catalogue is None:
         return {}
     k, m, samples = catalogue["theta"].shape
@@ -161,4 +168,4 @@ def catalogue_attributes(catalogue: dict | None) -> dict:
             "attractors_omega": catalogue["omega"].ravel(),
             "attractors_period": catalogue["period"],
             "attractors_samples": int(samples), "attractors_coordinates": int(m),
-            **drive_attributes(catalogue, k)}
+            **drive_attributes(catalogue, k), **scene_attributes(catalogue)}

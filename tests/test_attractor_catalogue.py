@@ -395,15 +395,16 @@ def test_the_strobe_table_of_some_rows_is_those_rows_of_the_whole_table():
 
 def test_the_catalogue_records_its_drive_phase_and_a_whole_period_later_labels_alike(
         catalogue):
-    """The pilot (t0 = 0, t_transient = 20 periods) sampled its rings at drive phase 0
-    of W = 1 rad/s, and the catalogue says so, one value per attractor (so that
-    selecting attractors keeps them). A map whose transient is one period longer
-    samples the same Poincare section: every start matches, the same attractor as with
-    the pilot's own settings (a settled trajectory is on its attractor at every
-    period), and the dataset keeps the drive for a rerun (`sweep.io.run_arguments`)."""
+    """The pilot (t0 = 0, t_transient = 20 periods, phase constant pi/2) sampled its
+    rings at drive phase W t + phi = pi/2 of W = 1 rad/s, and the catalogue says so, one
+    value per attractor (so that selecting attractors keeps them). A map whose transient
+    is one period longer samples the same Poincare section: every start matches, the
+    same attractor as with the pilot's own settings (a settled trajectory is on its
+    attractor at every period), and the dataset keeps the drive for a rerun
+    (`sweep.io.run_arguments`)."""
     # 1e-9 rad: 2000 steps of dt = 2 pi / 100 summed in float64 round to ~1e-13 rad
-    np.testing.assert_allclose(np.cos(catalogue["strobe_phase"]), 1.0, atol=1e-9)
-    assert catalogue["strobe_phase"].shape == catalogue["period"].shape
+    np.testing.assert_allclose(catalogue["drive_phase"], np.pi / 2, atol=1e-9)
+    assert catalogue["drive_phase"].shape == catalogue["period"].shape
     np.testing.assert_array_equal(catalogue["drive_frequency"], [1.0, 1.0, 1.0])
     grid = _grid(9)
     same = sweep.run(SCENE, grid, **EARLY, attractors=catalogue)
@@ -413,19 +414,22 @@ def test_the_catalogue_records_its_drive_phase_and_a_whole_period_later_labels_a
     np.testing.assert_array_equal(later.attractor.values, same.attractor.values)
     np.testing.assert_array_equal(maps.basins(later).values, maps.basins(same).values)
     again = sweep.io.run_arguments(later)["attractors"]
-    for key in ("strobe_phase", "drive_frequency"):
+    for key in ("drive_phase", "drive_frequency"):
         np.testing.assert_array_equal(again[key], catalogue[key], err_msg=key)
 
 
 @pytest.mark.parametrize("scene, run, words", [
     (SCENE, dict(t_transient=20.5 * PERIOD),
      r"t0 \+ t_transient = 0\.0 \+ 128\.80\d* s puts this run's first stroboscopic "
-     r"sample at t = 128\.80\d* s, drive phase 3\.14159 rad \(forcing_frequency = 1\.0 "
-     r"rad/s, period 6\.283185307 s\), but the catalogue's attractor 0 was sampled at "
-     r"drive phase .* rad, so no start could match it; accepted: t0 \+ t_transient = "
-     r".* \+ k \* 6\.283185307 s"),
+     r"sample at t = 128\.80\d* s, drive phase W t \+ phi = 4\.71239 rad "
+     r"\(forcing_frequency = 1\.0 rad/s, forcing_phase = 1\.5707\d* rad, period "
+     r"6\.283185307 s\), but the catalogue's attractor 0 was sampled at drive phase "
+     r"1\.5708 rad, so no start could match it; accepted: t0 \+ t_transient = "
+     r"0 \+ k \* 6\.283185307 s \(k a whole number, on a step of dt\), forcing_phase = "
+     r"4\.71238898\d* rad \(mod 2 pi\) with this t0 \+ t_transient, or a catalogue"),
     (SCENE, dict(t0=PERIOD / 4, t_end=320.25 * PERIOD),
-     r"t0 \+ t_transient = 1\.5707\d* \+ 125\.66\d* s .* drive phase 1\.5708 rad"),
+     r"t0 \+ t_transient = 1\.5707\d* \+ 125\.66\d* s .* drive phase W t \+ phi = "
+     r"3\.14159 rad"),
     (sweep.Scene(gravity=1.0, length=1.0, effects=(
         sweep.Damping(0.2), sweep.Forcing(1.66, 2.0, np.pi / 2))), {},
      r"attractor 0 was sampled at drive frequency 1\.0 rad/s, but this run's "
@@ -449,6 +453,116 @@ def test_a_catalogue_without_its_drive_is_not_checked_and_half_of_one_is_refused
     sweep.engine.prepare(SCENE, _grid(9), **dict(EARLY, t_transient=20.5 * PERIOD),
                          attractors=rings)
     with pytest.raises(ValueError, match="a catalogue without 'drive_frequency'; accepted: "
-                                         "both 'strobe_phase'"):
+                                         "both 'drive_phase'"):
         sweep.run(SCENE, _grid(9), **EARLY,
-                  attractors=dict(rings, strobe_phase=catalogue["strobe_phase"]))
+                  attractors=dict(rings, drive_phase=catalogue["drive_phase"]))
+
+
+def test_a_catalogue_of_another_forcing_phase_is_refused_before_compute(catalogue,
+                                                                         no_compute):
+    """The drive's phase constant phi is part of the Poincare section W t + phi: the
+    catalogue of SCENE (phi = pi/2) on the same scene with phi = 0 and the pilot's t0
+    and t_transient (every start would be labelled -1) is refused, as a Forcing of
+    phase 0 and as a grid's one-value forcing_phase axis. (It was accepted: the
+    check compared the clock's phase W t only.)"""
+    other = sweep.Scene(gravity=1.0, length=1.0, effects=(
+        sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, 0.0)))
+    # the run's own phase W t_s = 40 pi shows as ~0 or ~2 pi (its float64 rounding)
+    words = (r"drive phase W t \+ phi = \S+ rad \(forcing_frequency = 1\.0 rad/s, "
+             r"forcing_phase = 0\.0 rad, period 6\.283185307 s\), but the catalogue's "
+             r"attractor 0 was sampled at drive phase 1\.5708 rad, so no start could "
+             r"match it; accepted: t0 \+ t_transient = 1\.570796327 \+ k \* 6\.283185307 "
+             r"s \(k a whole number, on a step of dt\), forcing_phase = 1\.570796327 rad")
+    with pytest.raises(ValueError, match=words):
+        sweep.run(other, _grid(9), **EARLY, attractors=catalogue)
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, 9), omega0=np.linspace(-4, 4, 9),
+                      forcing_phase=[0.0])
+    with pytest.raises(ValueError, match=words):
+        sweep.run(SCENE, grid, **EARLY, attractors=catalogue)
+
+
+def test_a_run_of_another_phase_shifted_onto_the_same_section_labels_alike(catalogue):
+    """phi = 0 with t0 a quarter period (25 steps) later samples W t + phi = pi/2 + 2 pi
+    k, the pilot's section: its trajectories are SCENE's shifted in time, so the
+    catalogue is accepted and labels every start as on SCENE itself. (It was refused:
+    the clock's phase pi/2 is not the pilot's clock phase 0.)"""
+    other = sweep.Scene(gravity=1.0, length=1.0, effects=(
+        sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, 0.0)))
+    grid = _grid(9)
+    same = sweep.run(SCENE, grid, **EARLY, attractors=catalogue)
+    shifted = sweep.run(other, grid, **dict(EARLY, t0=PERIOD / 4, t_end=320.25 * PERIOD),
+                        attractors=catalogue)
+    assert (shifted.attractor >= 0).all()
+    np.testing.assert_array_equal(shifted.attractor.values, same.attractor.values)
+
+
+def test_an_old_catalogue_with_the_clocks_phase_keeps_its_meaning(catalogue, no_compute):
+    """A catalogue made before phi was counted records ``strobe_phase``, the clock's
+    phase W t_s alone (0 for this pilot): it is read with that meaning, so it is still
+    accepted with its own scene (phi = pi/2: read as phi = 0 it would be refused), and
+    still refused half a period off, naming its strobe_phase; a dataset keeps it under
+    its old name."""
+    old = {key: catalogue[key] for key in ("theta", "omega", "period", "drive_frequency")}
+    old["strobe_phase"] = np.zeros(catalogue["period"].size)
+    sweep.engine.prepare(SCENE, _grid(9), **EARLY, attractors=old)
+    with pytest.raises(ValueError, match=r"drive phase W t = 3\.14159 rad .* sampled at "
+                                         r"drive phase 0 rad \(its strobe_phase, the "
+                                         r"clock W t alone\)"):
+        sweep.run(SCENE, _grid(9), **dict(EARLY, t_transient=20.5 * PERIOD),
+                  attractors=old)
+    attrs = sweep.strobe_phase.attributes(old, old["period"].size)
+    assert sorted(attrs) == ["attractors_drive_frequency", "attractors_strobe_phase"]
+    again = sweep.strobe_phase.from_attributes(attrs)
+    np.testing.assert_array_equal(again["strobe_phase"], old["strobe_phase"])
+
+
+@pytest.mark.parametrize("scene, axes, words", [
+    (sweep.Scene(gravity=1.0, length=1.0, effects=(
+        sweep.Damping(0.2), sweep.Forcing(1.5, 1.0, np.pi / 2))), {},
+     r"the catalogue was computed for forcing_amplitude = 1\.66, but this run's "
+     r"forcing_amplitude = 1\.5 \(a catalogue holds the attractors of one scene\); "
+     r"accepted: forcing_amplitude = 1\.66 \(within 1e-09 relative\), or a catalogue of "
+     r"this scene \(sweep\.maps\.pilot_catalogue"),
+    (SCENE, {"damping": [0.25]}, r"computed for damping = 0\.2, but this run's damping = "
+                                 r"0\.25"),
+    (SCENE, {"length": [2.0]}, r"computed for length = 1\.0, but this run's length = 2\.0"),
+    (sweep.Scene(gravity=1.0, length=1.0, effects=(
+        sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, np.pi / 2), sweep.Torque(0.1))), {},
+     r"computed for torque = 0\.0, but this run's torque = 0\.1"),
+])
+def test_a_catalogue_of_another_scene_is_refused_before_compute(catalogue, no_compute,
+                                                                scene, axes, words):
+    """The catalogue records the pilot's scene (its parameters of one value); a map of
+    another forcing amplitude, damping, length or with a torque (a Scene's value or a
+    grid's one-value axis) would label its starts by attractors that are not its own
+    (-1 everywhere): refused, naming the parameter, both values and what is accepted.
+    (It was accepted.)"""
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, 9), omega0=np.linspace(-4, 4, 9),
+                      **axes)
+    with pytest.raises(ValueError, match=words):
+        sweep.run(scene, grid, **EARLY, attractors=catalogue)
+
+
+def test_the_catalogues_scene_is_kept_and_its_own_scene_is_accepted(catalogue, no_compute):
+    """The pilot's parameters of one value, besides the drive's frequency and phase
+    constant (checked through the drive phase), one row per attractor; the same scene
+    given as a grid's one-value axis, or off by a rounding (1e-12 relative, below
+    SCENE_RTOL = 1e-9), is accepted; a dataset keeps the scene for a rerun."""
+    scene = catalogue["scene"]
+    assert scene.shape == catalogue["period"].shape
+    assert set(scene.dtype.names) >= {"damping", "forcing_amplitude", "gravity", "length",
+                                      "torque"}
+    assert not {"forcing_frequency", "forcing_phase"} & set(scene.dtype.names)
+    np.testing.assert_array_equal(scene["forcing_amplitude"], 1.66)
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, 9), omega0=np.linspace(-4, 4, 9),
+                      forcing_amplitude=[1.66 * (1 + 1e-12)], damping=[0.2])
+    sweep.engine.prepare(SCENE, grid, **EARLY, attractors=catalogue)
+    selected = {key: value[:2] for key, value in catalogue.items()}  # the docs' idiom
+    sweep.engine.prepare(SCENE, grid, **EARLY, attractors=selected)
+    attrs = sweep.engine._catalogue_attrs(selected)
+    again = sweep.catalogue_scene.from_attributes(attrs)["scene"]
+    np.testing.assert_array_equal(again["damping"], [0.2, 0.2])
+    with pytest.raises(ValueError, match=r"computed for damping = 0\.2, but this run's "
+                                         r"damping = 0\.3"):
+        sweep.engine.prepare(SCENE, sweep.Grid(theta0=[0.0], omega0=[0.0], damping=[0.3]),
+                             **EARLY, attractors=dict(selected, scene=again))

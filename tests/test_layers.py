@@ -22,6 +22,7 @@ LAYERS = {
     "sweep._config": 0, "sweep._validate": 0, "sweep._version": 0, "sweep._timesteps": 0,
     "sweep._moved": 0,
     "sweep.strobe_phase": 0,  # a catalogue's drive phase: numpy and sweep._timesteps
+    "sweep.catalogue_scene": 0,  # a catalogue's scene: numpy and json
     "sweep._known": 1,  # the known-cells rule reads the hits of sweep.observables
     "sweep.physics": 1, "sweep.methods": 1, "sweep.observables": 1,
     "sweep.system_observables": 1,

@@ -69,12 +69,12 @@ def test_the_catalogues_labels_are_the_basins_of_the_full_strobe_run(full):
     # 40 steps: float64 rounds the phase to ~1e-11 rad, far below 1e-9), as the route's
     # t0 + t_transient = 0, a whole number of periods before: the catalogue records
     # it, and the route's dataset keeps it for a rerun
-    np.testing.assert_allclose(np.cos(catalogue["strobe_phase"]), 1.0, atol=1e-9)
+    np.testing.assert_allclose(np.cos(catalogue["drive_phase"]), 1.0, atol=1e-9)
     np.testing.assert_array_equal(catalogue["drive_frequency"],
                                   np.full(catalogue["period"].shape, 60.0))
     np.testing.assert_array_equal(
-        sweep.io.run_arguments(route)["attractors"]["strobe_phase"],
-        catalogue["strobe_phase"])
+        sweep.io.run_arguments(route)["attractors"]["drive_phase"],
+        catalogue["drive_phase"])
 
 
 
@@ -255,12 +255,12 @@ def test_without_lane_refill_blocks_of_copies_label_every_start(full, monkeypatc
 
 @pytest.mark.parametrize("run, words", [
     (dict(t_transient=0.5 * PERIOD),
-     r"t0 \+ t_transient = 0\.0 \+ 0\.0523\d* s .* drive phase 3\.14159 rad "
+     r"t0 \+ t_transient = 0\.0 \+ 0\.0523\d* s .* drive phase W t = 3\.14159 rad "
      r"\(pivot_frequency = 60\.0 rad/s, period 0\.1047197551 s\), but the catalogue's "
      r"attractor 0 was sampled at drive phase .* rad, so no start could match it; "
      r"accepted: t0 \+ t_transient = .* \+ k \* 0\.1047197551 s"),
     (dict(t0=0.25 * PERIOD, t_end=800.25 * PERIOD, t_transient=0.0),
-     r"t0 \+ t_transient = 0\.0261\d* \+ 0\.0 s .* drive phase 1\.5708 rad"),
+     r"t0 \+ t_transient = 0\.0261\d* \+ 0\.0 s .* drive phase W t = 1\.5708 rad"),
 ])
 def test_a_catalogue_of_another_drive_phase_is_refused_before_compute(full, no_compute,
                                                                        run, words):
@@ -278,3 +278,67 @@ def test_a_catalogue_of_another_drive_phase_is_refused_before_compute(full, no_c
                                          r"pivot_frequency = 30\.0 rad/s"):
         sweep.run(other, GRID, observe=("attractor",), attractors=catalogue,
                   stop_early=True, **RUN)
+
+
+#: A double pendulum driven by a sweep.Forcing on theta1, of phase constant ``phase``
+#: [rad]: heavily damped and weakly forced, so that both starts of FORCED_GRID settle
+#: on one period-1 orbit within 24 drive periods (basins' tol = 1e-3).
+def _forced(phase):
+    return sweep.DoublePendulum(effects=(sweep.Damping(2.0),
+                                         sweep.Forcing(0.5, 2.0, phase, on="theta1")))
+
+
+FORCED_PERIOD = np.pi  # 2 pi / W, W = 2 rad/s
+FORCED_GRID = sweep.Grid(theta1_0=[0.0, 0.3], theta2_0=[0.0])
+FORCED_RUN = dict(t_end=40 * FORCED_PERIOD, dt=FORCED_PERIOD / 40, progress=False)
+
+
+def test_a_forcings_phase_constant_is_part_of_the_catalogues_drive_phase():
+    """A system's catalogue records the drive phase W t_s + phi of its Forcing on a
+    coordinate (phi = forcing_phase_theta1): a run with phi = pi/2 at the pilot's t0
+    (every start would be labelled -1) is refused before any compute, and one whose t0
+    is a quarter period earlier, W t_s + phi the pilot's section again, is accepted
+    and labels both starts with the one attractor. (The check compared the clock's
+    phase W t only: it accepted the first and refused the second.)"""
+    pilot = sweep.run(_forced(0.0), FORCED_GRID, observe=("strobe",),
+                      t_transient=24 * FORCED_PERIOD, **FORCED_RUN)
+    catalogue = maps.attractor_catalogue(pilot)
+    assert catalogue["period"].tolist() == [1]
+    # 24 periods of 40 steps: W t_s = 48 pi, rounded in float64 to ~1e-14 rad
+    np.testing.assert_allclose(np.cos(catalogue["drive_phase"]), 1.0, atol=1e-9)
+    kwargs = dict(FORCED_RUN, observe=("attractor",), attractors=catalogue, stop_early=True)
+    with pytest.raises(ValueError, match=r"drive phase W t \+ phi = 1\.5708 rad "
+                                         r"\(forcing_frequency_theta1 = 2\.0 rad/s, "
+                                         r"forcing_phase_theta1 = 1\.5707\d* rad"):
+        sweep.engine.prepare(_forced(np.pi / 2), FORCED_GRID, **kwargs)
+    shifted = sweep.run(_forced(np.pi / 2), FORCED_GRID,
+                        **dict(kwargs, t0=-FORCED_PERIOD / 4))
+    np.testing.assert_array_equal(shifted["attractor"].values, [[0], [0]])
+
+
+@pytest.mark.parametrize("system, grid, words", [
+    (sweep.DoublePendulum(pivot_amplitude=0.12, pivot_frequency=60.0,
+                          effects=(sweep.Damping(0.5),)), GRID,
+     r"the catalogue was computed for pivot_amplitude = 0\.1, but this run's "
+     r"pivot_amplitude = 0\.12 \(a catalogue holds the attractors of one scene\); "
+     r"accepted: pivot_amplitude = 0\.1 \(within 1e-09 relative\)"),
+    (SYSTEM, sweep.Grid(theta1_0=np.linspace(-3, 3, 12), theta2_0=np.linspace(-3, 3, 12),
+                        damping=[0.6]), r"computed for damping = 0\.5, but this run's "
+                                        r"damping = 0\.6"),
+    (SYSTEM, sweep.Grid(theta1_0=[0.5], length2=[1.1]),
+     r"computed for length2 = 1\.0, but this run's length2 = 1\.1"),
+])
+def test_a_catalogue_of_another_system_is_refused_before_compute(full, no_compute, system,
+                                                                 grid, words):
+    """The catalogue records the pilot system's parameters of one value (one row per
+    attractor); a map of another pivot amplitude, damping or arm length (the system's
+    value or a grid's one-value axis) is refused before any compute, naming the
+    parameter, both values and what is accepted. (It was accepted and labelled its
+    starts by attractors not its own.)"""
+    _, _, catalogue = full
+    with pytest.raises(ValueError, match=words):
+        sweep.run(system, grid, observe=("attractor",), attractors=catalogue,
+                  stop_early=True, **dict(RUN, t_transient=0.0))
+    np.testing.assert_array_equal(catalogue["scene"]["pivot_amplitude"],
+                                  np.full(catalogue["period"].shape, 0.1))
+    assert "pivot_frequency" not in catalogue["scene"].dtype.names  # the drive's: its phase

@@ -21,6 +21,7 @@ import xarray as xr
 
 from .._timesteps import transient_steps
 from .._validate import check_count, check_numbers, check_quantity
+from ..catalogue_scene import dataset_scene
 from ..kernels import Status
 from ..strobe_phase import dataset_drive
 from . import _strobe
@@ -565,14 +566,18 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
         ``theta``, ``omega``: ndarray, shape (m, P) [rad, rad/s]: the stroboscopic ring
         (oldest first, angle unwrapped) of one trajectory on each of the m attractors,
         in label order; ``period``: ndarray (m,) of int, forcing periods;
-        ``strobe_phase`` [rad] and ``drive_frequency`` [rad/s]: ndarray (m,) each, the
-        drive's phase ``W (t0 + n_transient dt) mod 2 pi`` at the rings' samples and its
-        angular frequency W (`sweep.strobe_phase`; absent where the run has no one
-        frequency): a run that uses the catalogue must sample at that phase, its ``t0 +
-        t_transient`` a whole number of periods from the run's, or it is refused. Of a
-        driven
-        system with several coordinates (a run of `sweep.DoublePendulum` with a pivot
-        drive, ...): ``theta`` and ``omega`` of shape (m, c, P), the rings of its c
+        ``drive_phase`` [rad] and ``drive_frequency`` [rad/s]: ndarray (m,) each, the
+        drive's phase ``W (t0 + n_transient dt) + phi mod 2 pi`` at the rings' samples
+        (phi its phase constant, ``forcing_phase``) and its angular frequency W
+        (`sweep.strobe_phase`; absent where the run has no one frequency and phase): a
+        run that uses the catalogue must sample at that drive phase, e.g. its ``t0 +
+        t_transient`` a whole number of periods from the pilot's with the same phi, or
+        it is refused; ``scene``: the run's parameters of one value (a structured
+        array, a row per attractor; `sweep.catalogue_scene`; absent for a dataset
+        without ``strobe_scene``): a run of another value is refused. Of a driven
+        system with several coordinates (a run of
+        `sweep.DoublePendulum` with a pivot drive, ...): ``theta`` and ``omega`` of
+        shape (m, c, P), the rings of its c
         coordinates and of their velocities (angles unwrapped), and ``coordinates``,
         their names; pass it to ``sweep.run(system, grid, observe=("attractor",),
         attractors=...)``.
@@ -597,7 +602,8 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
         rings = _catalogue_rings(ds.attrs, flat_theta.shape[1])
     theta, omega = _rings_by_label(period.size, flat, index, rings, flat_theta, flat_omega)
     return {"theta": theta, "omega": omega, "period": period,
-            **dataset_drive(ds, "forcing_frequency", period.size)}
+            **dataset_drive(ds, "forcing_frequency", period.size),
+            **dataset_scene(ds.attrs, period.size)}
 
 
 def _rings_by_label(n: int, flat, index, rings, theta_rows, omega_rows):
@@ -641,7 +647,8 @@ def _system_catalogue(ds: xr.Dataset, labels, *, max_period: int, tol: float) ->
     theta, omega = _rings_by_label(period.size, flat, index, rings, position, velocity)
     return {"theta": theta, "omega": omega, "period": period,
             "coordinates": tuple(positions),
-            **dataset_drive(ds, str(ds.attrs["strobe_frequency"]), period.size)}
+            **dataset_drive(ds, str(ds.attrs["strobe_frequency"]), period.size),
+            **dataset_scene(ds.attrs, period.size)}
 
 
 def amplitude(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
