@@ -23,6 +23,7 @@ from .._timesteps import transient_steps
 from .._validate import check_count, check_numbers, check_quantity
 from ..kernels import Status
 from ..strobe_phase import dataset_drive
+from ..system_attractors import coordinate_rows
 from . import _strobe
 
 __all__ = ["motion", "well", "basins", "attractor_catalogue", "amplitude", "inverted",
@@ -573,9 +574,13 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
         driven
         system with several coordinates (a run of `sweep.DoublePendulum` with a pivot
         drive, ...): ``theta`` and ``omega`` of shape (m, c, P), the rings of its c
-        coordinates and of their velocities (angles unwrapped), and ``coordinates``,
-        their names; pass it to ``sweep.run(system, grid, observe=("attractor",),
-        attractors=...)``.
+        coordinates and of their velocities (angles unwrapped), and ``coordinates``:
+        ndarray (m, c) of str, their names, one row per attractor (every row the
+        same); pass it to ``sweep.run(system, grid, observe=("attractor",),
+        attractors=...)``. Every value is an array with one entry per attractor first,
+        so that selecting attractors, ``{key: value[keep] for key, value in
+        catalogue.items()}`` (``keep`` a boolean mask, indices or a slice), gives a
+        catalogue of those attractors.
 
     Raises
     ------
@@ -640,7 +645,7 @@ def _system_catalogue(ds: xr.Dataset, labels, *, max_period: int, tol: float) ->
         rings = _system_rings(ds, position.shape[2])
     theta, omega = _rings_by_label(period.size, flat, index, rings, position, velocity)
     return {"theta": theta, "omega": omega, "period": period,
-            "coordinates": tuple(positions),
+            "coordinates": coordinate_rows(positions, period.size),
             **dataset_drive(ds, str(ds.attrs["strobe_frequency"]), period.size)}
 
 
