@@ -73,6 +73,8 @@ def _log10(ds, name: str):
     da.name = f"log10_{name}"
     da.attrs = {"units": "1", "long_name": f"log10 of {name} [{ds[name].attrs.get('units', '')}]"
                 f": {ds[name].attrs.get('long_name', '')}"}
+    if "comment" in ds[name].attrs:  # the variable's full meaning (MapResult.caption)
+        da.attrs["comment"] = ds[name].attrs["comment"]
     return da
 
 
