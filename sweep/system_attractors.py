@@ -19,7 +19,7 @@ from .strobe_phase import FIELDS, LEGACY_FIELD
 from .strobe_phase import attributes as drive_attributes
 
 __all__ = ["catalogue_arguments", "catalogue_attributes", "catalogue_parts", "check_catalogue",
-           "check_rings", "initial_axes"]
+           "check_rings", "coordinate_rows", "initial_axes"]
 
 
 def catalogue_parts(attractors, accepted: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -50,6 +50,36 @@ def check_rings(theta: np.ndarray, omega: np.ndarray, period: np.ndarray, accept
                          f"periods {period.tolist()!r}; {accepted}")
 
 
+def coordinate_rows(names, attractors: int) -> np.ndarray:
+    """A catalogue's ``coordinates``: the coordinates' ``names`` (m) as one row per
+    attractor, an ndarray (``attractors``, m) of str, so that selecting attractors,
+    ``{key: value[keep] for key, value in catalogue.items()}``, keeps the names of the
+    kept ones (a tuple of names would be indexed by ``keep`` as if it were attractors)."""
+    names = np.asarray([str(name) for name in names], dtype=str)
+    return np.tile(names, (int(attractors), 1))
+
+
+def _check_coordinates(given, k: int, expected: tuple[str, ...], title: str,
+                       accepted: str) -> None:
+    """Refuse a catalogue's ``coordinates`` that are not ``expected``: one row of names
+    per attractor (k rows, `coordinate_rows`), or one row of names for all of them (a
+    catalogue built by hand)."""
+    rows = np.asarray(given, dtype=object)
+    if rows.ndim == 1:
+        rows = rows[np.newaxis]
+    elif rows.ndim != 2 or rows.shape[0] != k:
+        raise ValueError(f"attractors: coordinates of shape {np.shape(given)} for {k} "
+                         f"attractors; accepted: the names {expected!r}, once or once per "
+                         f"attractor ({k} x {len(expected)}, as "
+                         "sweep.maps.attractor_catalogue gives them, every array of the "
+                         "catalogue selected alike); " + accepted)
+    for row in rows:
+        if tuple(str(name) for name in row) != expected:
+            raise ValueError(f"attractors: a catalogue of coordinates "
+                             f"{tuple(str(name) for name in row)!r}, but {title} has "
+                             f"{expected!r}; {accepted}")
+
+
 def initial_axes(system) -> tuple[str, ...]:
     """The grid axes of ``system``'s initial state (``theta1_0``, ..., ``omega2_0``):
     the only axes a catalogue, the attractors of one system, may be used across."""
@@ -69,7 +99,9 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
         ``theta``, ``omega``: (k, m, P) rings of the m coordinates and their velocities
         [their units; angles unwrapped], ``period``: (k,) ints (1 <= period <= P / 2);
         optionally ``coordinates``: the m coordinates' names, which must be the system's,
-        and ``drive_phase`` [rad] and ``drive_frequency`` [rad/s] (k values each: the
+        once per attractor ((k, m) strings, `coordinate_rows`, as
+        `sweep.maps.attractor_catalogue` gives them) or once for all (m), and
+        ``drive_phase`` [rad] and ``drive_frequency`` [rad/s] (k values each: the
         drive phase ``W t + phi`` and frequency the rings were sampled at,
         `sweep.strobe_phase`; an older catalogue's ``strobe_phase`` instead), and
         ``scene``, the pilot system's parameters of one value (`sweep.catalogue_scene`).
@@ -122,10 +154,9 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
         raise ValueError(f"attractors: points of {theta.shape[1] if theta.ndim == 3 else 1} "
                          f"coordinates (rings of shape {theta.shape}), but {system.title} "
                          f"has {m} ({', '.join(expected)}); {accepted}")
-    if given is not None and tuple(str(name) for name in given) != expected:
-        raise ValueError(f"attractors: a catalogue of coordinates {tuple(given)!r}, but "
-                         f"{system.title} has {expected!r}; {accepted}")
     check_rings(theta, omega, period, accepted)
+    if given is not None:
+        _check_coordinates(given, theta.shape[0], expected, system.title, accepted)
     varied = [name for name in grid.axes
               if name not in initial_axes(system) and grid.varies(name)]
     if varied:

@@ -92,6 +92,36 @@ def test_state_grid_run_image_is_sweep_run_and_maps():
     assert result.title == "well" and "rest at theta" in result.description
 
 
+def test_the_caption_shows_the_maps_cf_comment(monkeypatch):
+    """A variable whose long name is a short label keeps its full meaning in a CF
+    ``comment`` (`sweep.observables.COMMENTS`, as the ``attractor`` variable does): the
+    caption below the map shows the long name and then the comment, Markdown's
+    characters escaped (``attractors_*`` or ``t_end ... theta_final`` would start an
+    emphasis); a map without one shows its long name alone. (The caption showed the
+    long name alone, unescaped.)"""
+    from sweep import observables
+
+    plain = explorer(quantity="var:winding").compute()
+    label = plain.description.replace("_", "\\_")  # "t_end", "theta_final" as written
+    assert "t_end" in plain.description and plain.comment == ""
+    assert plain.caption == f"*{label}*"
+    monkeypatch.setitem(observables.COMMENTS, "winding",
+                        "net turns over the run (attributes winding_*); 0: none")
+    result = explorer(quantity="var:winding").compute()
+    assert result.description == plain.description  # the short label is unchanged
+    assert result.comment == "net turns over the run (attributes winding_*); 0: none"
+    assert result.caption == (f"*{label}*\n\nnet turns over the run "
+                              "(attributes winding\\_\\*); 0: none")
+    # a system's log10 map of a variable keeps the variable's comment
+    import xarray as xr
+
+    from sweep.explore.systems import _log10
+
+    ds = xr.Dataset({"t": ("x", [1.0, 10.0], {"units": "s", "long_name": "time",
+                                             "comment": "until the first flip"})})
+    assert _log10(ds, "t").attrs["comment"] == "until the first flip"
+
+
 def test_bands_give_the_one_run_map(monkeypatch):
     e = explorer()
     whole = e.compute().values

@@ -91,6 +91,7 @@ def test_the_page_draws_the_final_map_with_its_stage_and_its_numbers(session):
     assert (data["x"][0], data["y"][0]) == (WINDOW[0][0], WINDOW[1][0])
     numbers = session.explorer.numbers(session.result)
     assert session.numbers.object == numbers.markdown()
+    assert session.caption.object == session.result.caption  # long name and CF comment
     assert "python" in session.map_python.object  # written after the picture
     events = [event for _, r, event, _ in session.timeline if r == request]
     assert events[0] == "zoom" and events[1] == "submit"

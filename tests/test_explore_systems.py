@@ -558,8 +558,9 @@ def test_the_catalogue_is_reused_on_zoom_and_rebuilt_when_the_system_changes(
     """One pilot per system, run settings and start: zooms, pans, a new resolution and
     the exact route's maps reuse it (no new pilot run), a changed parameter or t_end
     runs a new one over the new system; the page's Python reproduces the catalogue
-    route's map to the bit, and its run file (a run file takes no pilot for a system
-    yet) says so and gives the exact route's map."""
+    route's map to the bit, and its run file (a run file's pilot thins the map's own
+    grid, not the home window: another catalogue) says so and gives the exact route's
+    map."""
     calls = []
     pilot = maps.pilot_catalogue
     monkeypatch.setattr(maps, "pilot_catalogue",
@@ -583,6 +584,7 @@ def test_the_catalogue_is_reused_on_zoom_and_rebuilt_when_the_system_changes(
     assert "stopped on the catalogue" in panned.route
     text = e.toml_text()
     assert "by the catalogue route" in text and "runs the exact" in text
+    assert "pilot = N thins this map's" in text and "takes no pilot" not in text
     path = tmp_path / "basins.toml"
     path.write_text(text)
     system, grid, kwargs = load_run(path, {})

@@ -55,7 +55,7 @@ def test_the_catalogues_labels_are_the_basins_of_the_full_strobe_run(full):
     ``attractor``, and the catalogue is kept in the attributes."""
     _, labels, catalogue = full
     assert catalogue["theta"].shape == (len(labels.attrs["attractor_period"]), 2, 16)
-    assert catalogue["coordinates"] == ("theta1", "theta2")
+    assert catalogue["coordinates"].tolist() == [["theta1", "theta2"]] * len(catalogue["period"])
     assert sorted(labels.attrs["attractor_period"].tolist()) == [1, 1, 1, 1, 4]
     route = sweep.run(SYSTEM, GRID, observe=("attractor",), attractors=catalogue,
                       stop_early=True, **dict(RUN, t_transient=0.0))
@@ -140,6 +140,45 @@ def test_a_declared_system_with_a_drive_frequency_axis():
     np.testing.assert_array_equal(route["attractor"].values, labels.values)
 
 
+@pytest.mark.parametrize("keep", ["mask", [0], slice(0, 1)])
+def test_selecting_attractors_of_a_systems_catalogue_gives_its_catalogue(keep, tmp_path):
+    """The documented selection ``{key: value[keep] for key, value in catalogue.items()}``
+    (a boolean mask, indices, a slice) of a system's catalogue (the declared system
+    above, 5 x 5 starts) keeps one attractor with its coordinates' names: the map run
+    with it labels 0 exactly the starts the full catalogue labels 0 and the others -1,
+    and the catalogue survives the netCDF file (`sweep.io.run_arguments`). The names
+    were a tuple, which a mask or indices could not index (TypeError) and a slice cut
+    to ('p1',), refused as a catalogue of other coordinates."""
+    period = 2 * np.pi / 0.75
+    run = dict(t_end=60 * period, dt=period / 100, t_transient=44 * period, progress=False)
+    system = sweep.DeclaredSystem(_two_forced_pendula(Coordinate, Parameter, SystemDeclaration),
+                                  drive_frequency_axis="frequency", friction=0.15,
+                                  amplitude=0.3, frequency=0.75)
+    starts = np.linspace(-2.5, 2.5, 5)
+    grid = sweep.Grid(p1_0=starts, p2_0=starts)
+    catalogue = maps.attractor_catalogue(sweep.run(system, grid, observe=("strobe",), **run))
+    assert len(catalogue["period"]) > 1  # selecting one of them drops some
+    if keep == "mask":
+        keep = np.arange(len(catalogue["period"])) == 0
+    one = {key: value[keep] for key, value in catalogue.items()}
+    assert one["coordinates"].tolist() == [["p1", "p2"]]
+    assert one["theta"].shape == (1,) + catalogue["theta"].shape[1:]
+    every = sweep.run(system, grid, observe=("attractor",), stop_early=True,
+                      attractors=catalogue, **run)["attractor"].values
+    route = sweep.run(system, grid, observe=("attractor",), stop_early=True,
+                      attractors=one, **run)
+    assert 0 < (every == 0).sum() < every.size
+    np.testing.assert_array_equal(route["attractor"].values, np.where(every == 0, 0, -1))
+    sweep.io.save(route, tmp_path / "route.nc")
+    again = sweep.io.run_arguments(sweep.io.load(tmp_path / "route.nc"))["attractors"]
+    for key in ("theta", "omega", "period", "drive_phase", "drive_frequency", "scene"):
+        np.testing.assert_array_equal(again[key], one[key])
+    renamed = dict(one, coordinates=np.array([["p1", "q2"]]))
+    with pytest.raises(ValueError, match=r"a catalogue of coordinates \('p1', 'q2'\), but "
+                                         r"two_forced_pendula has \('p1', 'p2'\)"):
+        sweep.run(system, grid, observe=("attractor",), attractors=renamed, **run)
+
+
 def _catalogue(k=1, m=2, samples=4):
     return {"theta": np.zeros((k, m, samples)), "omega": np.zeros((k, m, samples)),
             "period": np.ones(k, dtype=int)}
@@ -153,6 +192,12 @@ def _catalogue(k=1, m=2, samples=4):
      "points of 1 coordinates"),
     (SYSTEM, GRID, {"attractors": dict(_catalogue(), coordinates=("p1", "p2"))},
      r"a catalogue of coordinates \('p1', 'p2'\), but DoublePendulum has"),
+    (SYSTEM, GRID, {"attractors": dict(_catalogue(k=2), coordinates=[["theta1", "theta2"],
+                                                                     ["theta1", "p2"]])},
+     r"a catalogue of coordinates \('theta1', 'p2'\), but DoublePendulum has"),
+    (SYSTEM, GRID, {"attractors": dict(_catalogue(k=2), coordinates=[["theta1", "theta2"]] * 3)},
+     r"coordinates of shape \(3, 2\) for 2 attractors; accepted: the names \('theta1', "
+     r"'theta2'\), once or once per attractor"),
     (SYSTEM, GRID, {"attractors": dict(_catalogue(), period=[3])}, "periods \\[3\\]"),
     (sweep.DoublePendulum(), sweep.Grid(theta1_0=[0.1]), {"attractors": _catalogue()},
      "this DoublePendulum has no periodic drive; accepted: attractors=None"),

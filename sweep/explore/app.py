@@ -539,7 +539,7 @@ class _Session:
                 else ""
             self.status.object = (f"**{word}** {nx} x {ny} in {result.seconds:.2f} s"
                                   f"{pilot}{route}{found}{more}")
-            self.caption.object = f"*{result.description}*"
+            self.caption.object = result.caption
             self.map.title.text = f"{self.explorer.quantity_info(s.quantity).label}"
         seconds = result.seconds + (result.preview_seconds if result.stage == "final" else 0)
         self.timeline.append((time.perf_counter(), request, result.stage, seconds))

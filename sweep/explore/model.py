@@ -22,6 +22,7 @@ import io as _stdio
 import json
 import math
 import os
+import re
 import tempfile
 import threading
 import time
@@ -385,7 +386,11 @@ class MapResult:
     title : str
         Colour bar title: name and units (``"lyapunov_max [1/s]"``).
     description : str
-        The map's long name.
+        The map's long name (short: a label).
+    comment : str
+        The map's CF ``comment``: its full meaning where the long name is a short label
+        (the ``attractor`` variable's, `sweep.observables.COMMENTS`); "" without one.
+        The page shows both below the map (`caption`).
     da : xarray.DataArray
         The map (2-D, dims (y, x)).
     ds : xarray.Dataset or None
@@ -434,6 +439,20 @@ class MapResult:
     numbers: Any = None
     preview_seconds: float = 0.0
     summary: str = ""
+    comment: str = ""
+
+    @property
+    def caption(self) -> str:
+        """The text below the map (Markdown): the long name in italics and, where the
+        map has a CF ``comment``, that comment on a line of its own."""
+        text = f"*{_markdown(self.description)}*"
+        return text + (f"\n\n{_markdown(self.comment)}" if self.comment else "")
+
+
+def _markdown(text: str) -> str:
+    """``text`` with Markdown's emphasis, code and link characters escaped, so that it
+    shows as written (``attractors_*`` is not the start of an emphasis)."""
+    return re.sub(r"([\\`*_\[\]<>])", r"\\\1", str(text))
 
 
 @dataclass
@@ -1247,7 +1266,8 @@ class Explorer:
         return MapResult(state=state, preview=preview, x=np.asarray(da[v.x].values),
                          y=np.asarray(da[v.y].values), values=values, image=image,
                          legend=legend, title=title,
-                         description=str(da.attrs.get("long_name", name)), da=da,
+                         description=str(da.attrs.get("long_name", name)),
+                         comment=str(da.attrs.get("comment", "")), da=da,
                          ds=None if preview else ds,
                          seconds=0.0, catalogue=catalogue,
                          summary=label_summary(state.quantity, values))

@@ -73,6 +73,8 @@ def _log10(ds, name: str):
     da.name = f"log10_{name}"
     da.attrs = {"units": "1", "long_name": f"log10 of {name} [{ds[name].attrs.get('units', '')}]"
                 f": {ds[name].attrs.get('long_name', '')}"}
+    if "comment" in ds[name].attrs:  # the variable's full meaning (MapResult.caption)
+        da.attrs["comment"] = ds[name].attrs["comment"]
     return da
 
 
@@ -658,8 +660,10 @@ class SystemExplorer(Explorer):
 
     def toml_text(self, state: State | None = None) -> str:
         """`Explorer.toml_text`; on the catalogue route the exact route's run file with a
-        note that says so: a run file gives no pilot catalogue to a system yet (the
-        Python snippet is the catalogue route)."""
+        note that says so (the Python snippet is the catalogue route): a run file's
+        ``pilot = N`` thins the map's own grid, not the explorer's home window, so its
+        catalogue, and the labels it gives starts not settled by ``t_end``, would not
+        be the page's."""
         state = state or self.state
         if not self.uses_pilot(state):
             return super().toml_text(state)
@@ -668,9 +672,11 @@ class SystemExplorer(Explorer):
         p = self.pilot_points
         note = (f"# the explorer drew this map by the catalogue route (a {p} x {p} pilot "
                 "over the home window, then each start stopped on a\n# catalogued "
-                "attractor: the Python snippet); a run file takes no pilot for a system "
-                "yet, so this file runs the exact\n# route: the same labels but where the "
-                "catalogue labelled a start that had not settled by t_end")
+                "attractor: the Python snippet); a run file's pilot = N thins this map's "
+                "own grid,\n# not the home window, so its catalogue would differ, and with "
+                "it the labels of starts not settled by t_end;\n# this file runs the exact "
+                "route: the same labels but where the catalogue labelled a start that had "
+                "not settled by t_end")
         return f"{first}\n{note}\n{rest}"
 
     # -- one trajectory -----------------------------------------------------------------

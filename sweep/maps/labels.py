@@ -24,6 +24,7 @@ from .._validate import check_count, check_numbers, check_quantity
 from ..catalogue_scene import dataset_scene
 from ..kernels import Status
 from ..strobe_phase import dataset_drive
+from ..system_attractors import coordinate_rows
 from . import _strobe
 
 __all__ = ["motion", "well", "basins", "attractor_catalogue", "amplitude", "inverted",
@@ -575,12 +576,15 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
         it is refused; ``scene``: the run's parameters of one value (a structured
         array, a row per attractor; `sweep.catalogue_scene`; absent for a dataset
         without ``strobe_scene``): a run of another value is refused. Of a driven
-        system with several coordinates (a run of
-        `sweep.DoublePendulum` with a pivot drive, ...): ``theta`` and ``omega`` of
-        shape (m, c, P), the rings of its c
-        coordinates and of their velocities (angles unwrapped), and ``coordinates``,
-        their names; pass it to ``sweep.run(system, grid, observe=("attractor",),
-        attractors=...)``.
+        system with several coordinates (a run of `sweep.DoublePendulum` with a pivot
+        drive, ...): ``theta`` and ``omega`` of shape (m, c, P), the rings of its c
+        coordinates and of their velocities (angles unwrapped), and ``coordinates``:
+        ndarray (m, c) of str, their names, one row per attractor (every row the
+        same); pass it to ``sweep.run(system, grid, observe=("attractor",),
+        attractors=...)``. Every value is an array with one entry per attractor first,
+        so that selecting attractors, ``{key: value[keep] for key, value in
+        catalogue.items()}`` (``keep`` a boolean mask, indices or a slice), gives a
+        catalogue of those attractors.
 
     Raises
     ------
@@ -646,7 +650,7 @@ def _system_catalogue(ds: xr.Dataset, labels, *, max_period: int, tol: float) ->
         rings = _system_rings(ds, position.shape[2])
     theta, omega = _rings_by_label(period.size, flat, index, rings, position, velocity)
     return {"theta": theta, "omega": omega, "period": period,
-            "coordinates": tuple(positions),
+            "coordinates": coordinate_rows(positions, period.size),
             **dataset_drive(ds, str(ds.attrs["strobe_frequency"]), period.size),
             **dataset_scene(ds.attrs, period.size)}
 
