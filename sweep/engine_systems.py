@@ -30,7 +30,12 @@ from .physics.system import System, system_parameters
 from .settings import CUDA_CHUNK, _block, _check_device, default_chunk_size, validate_settings
 from .strobe_phase import check_phase, phase_axis
 from .system_attractors import catalogue_arguments, catalogue_attributes, check_catalogue
-from .system_observables import SYSTEM_OBSERVABLES, resolve_system_observe, variables
+from .system_observables import (
+    SYSTEM_OBSERVABLES,
+    comments,
+    resolve_system_observe,
+    variables,
+)
 
 __all__ = ["kernel_arguments", "prepare_system", "run_system", "system_dataset",
            "to_network_dataset", "to_system_dataset"]
@@ -310,8 +315,9 @@ def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
     coordinates = spec.system.coordinates
     for name in spec.observe:
         width = spec.strobe_samples if SYSTEM_OBSERVABLES[name].sampled else 1
+        notes = comments(name, coordinates)
         for variable, units, long_name in variables(name, coordinates, system.energy_units):
-            attrs = variable_attributes(variable, units, long_name)
+            attrs = variable_attributes(variable, units, long_name, notes.get(variable, ""))
             if width == 1:
                 data_vars[variable] = xr.Variable(dims, grid.unflatten(out[:, col]), attrs)
             else:  # as the single pendulum's strobe_theta (sweep.io)

@@ -218,10 +218,7 @@ OBSERVABLES: dict[str, Observable] = {
         Observable(
             name="winding",
             variables=(
-                ("winding", "1",
-                 "wells crossed from t0 to t_end, round(theta_final / 2 pi) - "
-                 "round(theta0 / 2 pi) (half to even): the net signed number of passes "
-                 "over the top (theta = pi mod 2 pi)"),
+                ("winding", "1", "wells crossed from t0 to t_end"),
             ),
             # the well index k (rest at 2 pi k) of the end minus that of the start. It
             # changes by +-1 exactly where the angle crosses a top, so it is the net count
@@ -256,9 +253,7 @@ OBSERVABLES: dict[str, Observable] = {
         Observable(
             name="omega_mean",
             variables=(
-                ("omega_mean", "rad s-1",
-                 "mean angular velocity over t >= t0 + t_transient: net angle turned in "
-                 "that window divided by its duration"),
+                ("omega_mean", "rad s-1", "mean angular velocity over t >= t0 + t_transient"),
             ),
             init="acc_n_steady = 0\nacc_th_steady = th",
             update=(
@@ -273,12 +268,9 @@ OBSERVABLES: dict[str, Observable] = {
         Observable(
             name="strobe",
             variables=(
-                ("strobe_theta", "rad",
-                 "angle (unwrapped) at the last strobe_samples forcing periods "
-                 "(oldest first): stroboscopic samples at t0 + n_transient dt + m 2 pi / W"),
+                ("strobe_theta", "rad", "angle at the last strobe_samples forcing periods"),
                 ("strobe_omega", "rad s-1",
-                 "angular velocity at the last strobe_samples forcing periods "
-                 "(oldest first)"),
+                 "angular velocity at the last strobe_samples forcing periods"),
             ),
             # a ring of the last NSTROBE samples; `final` rotates it oldest-first
             init=(
@@ -411,10 +403,8 @@ OBSERVABLES: dict[str, Observable] = {
         Observable(
             name="capture",
             variables=(
-                ("well", "1", "potential well k (rest at theta = 2 pi k) the pendulum is "
-                              "captured in: energy below the separatrix 2 g/L; NaN if never"),
-                ("capture_time", "s", "first time the energy is below the separatrix "
-                                      "energy 2 g/L (from t0 + t_transient on); NaN if never"),
+                ("well", "1", "potential well k captured in (rest at theta = 2 pi k)"),
+                ("capture_time", "s", "time of capture in a well"),
             ),
             init="acc_cap = False\nacc_well = math.nan\nacc_tcap = math.nan",
             update=(
@@ -433,12 +423,8 @@ OBSERVABLES: dict[str, Observable] = {
         Observable(
             name="tension",
             variables=(
-                ("tension_min", "m s-2",
-                 "min rod tension per unit mass, T/m = L omega^2 + g cos(theta), "
-                 "over t >= t0 + t_transient"),
-                ("tension_max", "m s-2",
-                 "max rod tension per unit mass, T/m = L omega^2 + g cos(theta), "
-                 "over t >= t0 + t_transient"),
+                ("tension_min", "m s-2", "min rod tension per unit mass T/m"),
+                ("tension_max", "m s-2", "max rod tension per unit mass T/m"),
             ),
             init="acc_T_min = math.inf\nacc_T_max = -math.inf",
             update=(
@@ -453,10 +439,8 @@ OBSERVABLES: dict[str, Observable] = {
         Observable(
             name="energy",
             variables=(
-                ("energy_initial", "s-2",
-                 "mechanical energy per unit m L^2 at t0: omega^2/2 + (g/L) V(theta)"),
-                ("energy_final", "s-2",
-                 "mechanical energy per unit m L^2 at t_end: omega^2/2 + (g/L) V(theta)"),
+                ("energy_initial", "s-2", "mechanical energy per unit m L^2 at t0"),
+                ("energy_final", "s-2", "mechanical energy per unit m L^2 at t_end"),
             ),
             init="acc_E0 = energy(th, om, w0sq)",
             final="out[i, COL] = acc_E0\nout[i, COL + 1] = energy(th, om, w0sq)",
@@ -466,9 +450,7 @@ OBSERVABLES: dict[str, Observable] = {
         Observable(
             name="top_distance",
             variables=(
-                ("top_distance_max", "rad",
-                 "max distance of theta from the upright position (pi mod 2 pi) over "
-                 "t >= t0 + t_transient"),
+                ("top_distance_max", "rad", "max distance from the upright position"),
             ),
             init="acc_top = 0.0",
             # theta - pi reduced to [-pi, pi): np.floor keeps it branch-free (vectorised)
@@ -481,14 +463,8 @@ OBSERVABLES: dict[str, Observable] = {
         Observable(
             name="lyapunov",
             variables=(
-                ("lyapunov_max", "s-1",
-                 "largest Lyapunov exponent over t >= t0 + t_transient (finite-time, "
-                 "of the integrator's step map; Gram-Schmidt every "
-                 f"{LYAPUNOV_EVERY} steps)"),
-                ("lyapunov_min", "s-1",
-                 "smallest Lyapunov exponent over t >= t0 + t_transient (finite-time, "
-                 "of the integrator's step map; Gram-Schmidt every "
-                 f"{LYAPUNOV_EVERY} steps)"),
+                ("lyapunov_max", "s-1", "largest Lyapunov exponent"),
+                ("lyapunov_min", "s-1", "smallest Lyapunov exponent"),
             ),
             # two tangent vectors from the identity; Gram-Schmidt every
             # LYAPUNOV_EVERY steps: the first vector's growth gives the largest
@@ -521,22 +497,46 @@ OBSERVABLES: dict[str, Observable] = {
     )
 }
 
-#: CF ``comment`` attributes of the variables whose meaning takes more than their
-#: ``long_name``, which plots and the explorer show as a label and so is kept short.
+#: CF ``comment`` attributes: what a variable means beyond its ``long_name``, which plots
+#: (a colour bar's label) and the explorer (under its map) show and so is kept short.
+_STEADY = "over t >= t0 + t_transient"
+_STROBE = "stroboscopic samples at t0 + n_transient dt + m 2 pi / W, oldest first"
+_LYAPUNOV = (f"{_STEADY}; finite-time, of the integrator's step map (two tangent vectors "
+             f"from the identity, Gram-Schmidt every {LYAPUNOV_EVERY} steps)")
 COMMENTS = {
+    "winding": "round(theta_final / 2 pi) - round(theta0 / 2 pi) (half to even): the net "
+               "signed number of passes over the top (theta = pi mod 2 pi)",
+    "omega_mean": "net angle turned over t >= t0 + t_transient divided by that window's "
+                  "duration",
+    "strobe_theta": f"{_STROBE}; the angle unwrapped",
+    "strobe_omega": _STROBE,
     "attractor": "its index in the run's attractor catalogue (attributes attractors_*); "
                  "settled on: the trajectory's stroboscopic point within ATTRACTOR_TOL of "
                  "the successive points of that attractor's orbit for ATTRACTOR_MATCHES "
                  "forcing periods running; -1: it never was",
+    "well": "captured: the energy below the separatrix energy 2 g/L (from t0 + "
+            "t_transient on); NaN if never",
+    "capture_time": "first time the energy is below the separatrix energy 2 g/L (from t0 "
+                    "+ t_transient on); NaN if never",
+    "tension_min": f"T/m = L omega^2 + g cos(theta), {_STEADY}",
+    "tension_max": f"T/m = L omega^2 + g cos(theta), {_STEADY}",
+    "energy_initial": "omega^2/2 + (g/L) V(theta)",
+    "energy_final": "omega^2/2 + (g/L) V(theta)",
+    "top_distance_max": f"|theta - pi| reduced modulo 2 pi to [0, pi], {_STEADY}",
+    "lyapunov_max": _LYAPUNOV,
+    "lyapunov_min": _LYAPUNOV,
 }
 
 
-def variable_attributes(name: str, units: str, long_name: str) -> dict[str, str]:
+def variable_attributes(name: str, units: str, long_name: str,
+                        comment: str | None = None) -> dict[str, str]:
     """The netCDF attributes of an observable's variable ``name``: ``units``,
-    ``long_name`` (a short label) and, for the variables in `COMMENTS`, ``comment``."""
+    ``long_name`` (a short label) and its CF ``comment`` (``comment``, by default the
+    variable's entry in `COMMENTS`; none where that is empty)."""
     attrs = {"units": units, "long_name": long_name}
-    if name in COMMENTS:
-        attrs["comment"] = COMMENTS[name]
+    comment = COMMENTS.get(name, "") if comment is None else comment
+    if comment:
+        attrs["comment"] = comment
     return attrs
 
 

@@ -40,9 +40,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .observables import LYAPUNOV_EVERY, OBSERVABLES
+from .observables import COMMENTS, LYAPUNOV_EVERY, OBSERVABLES
 
-__all__ = ["SYSTEM_OBSERVABLES", "SystemObservable", "resolve_system_observe", "variables"]
+__all__ = ["SYSTEM_OBSERVABLES", "SystemObservable", "comments", "resolve_system_observe",
+           "variables"]
 
 
 @dataclass(frozen=True)
@@ -105,7 +106,8 @@ def resolve_system_observe(observe) -> tuple[str, ...]:
 def variables(name: str, coordinates, energy_units: str) -> list[tuple[str, str, str]]:
     """``(variable, units, long_name)`` of observable ``name`` for these coordinates, in
     the order of the kernel's output columns (a ``sampled`` observable's variable has
-    ``strobe_samples`` columns each).
+    ``strobe_samples`` columns each); the long names are short labels, and `comments`
+    has what they leave out.
 
     Parameters
     ----------
@@ -115,37 +117,52 @@ def variables(name: str, coordinates, energy_units: str) -> list[tuple[str, str,
     energy_units : str
         Units of the system's energy (its Lagrangian's).
     """
+    return [row[:3] for row in _variables(name, coordinates, energy_units)]
+
+
+def comments(name: str, coordinates) -> dict[str, str]:
+    """The CF ``comment`` of each variable of observable ``name`` that has one
+    (`variables`' full meaning), by variable name."""
+    return {row[0]: row[3] for row in _variables(name, coordinates, "") if row[3]}
+
+
+def _variables(name: str, coordinates, energy_units: str) -> list[tuple[str, str, str, str]]:
+    """`variables` with each variable's comment ("" for none)."""
     if name == "final":
-        return [(f"{c.name}_final", c.units, f"{c.long_name or c.name} at t_end"
-                 + (", unwrapped (not reduced modulo 2 pi)" if c.angular else ""))
+        return [(f"{c.name}_final", c.units, f"{c.long_name or c.name} at t_end",
+                 "unwrapped (not reduced modulo 2 pi)" if c.angular else "")
                 for c in coordinates] + \
-            [(f"{c.velocity}_final", c.velocity_units, f"{c.velocity} at t_end")
+            [(f"{c.velocity}_final", c.velocity_units, f"{c.velocity} at t_end", "")
              for c in coordinates]
     if name == "winding":
-        return [(f"winding_{c.name}", "1",
-                 f"wells of {c.name} crossed from t0 to t_end: round({c.name}_final / 2 pi) "
-                 f"- round({c.name}_0 / 2 pi) (half to even): the net signed number of "
-                 f"passes of {c.name} over the top")
+        return [(f"winding_{c.name}", "1", f"wells of {c.name} crossed from t0 to t_end",
+                 f"round({c.name}_final / 2 pi) - round({c.name}_0 / 2 pi) (half to "
+                 f"even): the net signed number of passes of {c.name} over the top")
                 for c in coordinates if c.angular]
     if name == "energy":
-        return [("energy_initial", energy_units, "energy of the system at t0"),
-                ("energy_final", energy_units, "energy of the system at t_end")]
+        return [("energy_initial", energy_units, "energy of the system at t0", ""),
+                ("energy_final", energy_units, "energy of the system at t_end", "")]
     if name == "flip":
-        return [("flip_time", "s", "time of the first flip: the first time any angle "
-                 "passes an upright position (an odd multiple of pi), interpolated within "
-                 "the step; NaN where none flipped before t_end")]
+        return [("flip_time", "s", "time of the first flip",
+                 "the first time any angle passes an upright position (an odd multiple "
+                 "of pi), interpolated within the step; NaN where none flipped before "
+                 "t_end")]
     if name == "lyapunov":
-        return [("lyapunov_max", "s-1", "largest Lyapunov exponent over t >= t0 + t_transient "
-                 "(finite-time, of the integrator's step map; one tangent vector from "
-                 f"(1, ..., 1) / sqrt(2 m), renormalised every {LYAPUNOV_EVERY} steps)")]
+        return [("lyapunov_max", "s-1", "largest Lyapunov exponent",
+                 "over t >= t0 + t_transient; finite-time, of the integrator's step map "
+                 "(one tangent vector from (1, ..., 1) / sqrt(2 m), renormalised every "
+                 f"{LYAPUNOV_EVERY} steps)")]
     if name == "strobe":
-        when = ("at the last strobe_samples drive periods (oldest first): stroboscopic "
-                "samples at t0 + n_transient dt + m 2 pi / nu, nu the drive's frequency")
-        return [(f"{c.name}_strobe", c.units, f"{c.long_name or c.name}"
-                 + (" (unwrapped)" if c.angular else "") + f" {when}")
+        when = "at the last strobe_samples drive periods"
+        samples = ("stroboscopic samples at t0 + n_transient dt + m 2 pi / nu, nu the "
+                   "drive's frequency, oldest first")
+        return [(f"{c.name}_strobe", c.units, f"{c.name} {when}",
+                 (f"{c.long_name}; " if c.long_name else "") + samples
+                 + ("; unwrapped" if c.angular else ""))
                 for c in coordinates] + \
-            [(f"{c.velocity}_strobe", c.velocity_units, f"{c.velocity} {when}")
+            [(f"{c.velocity}_strobe", c.velocity_units, f"{c.velocity} {when}", samples)
              for c in coordinates]
-    if name == "attractor":  # the single pendulum's variable, units and meaning
-        return [OBSERVABLES["attractor"].variables[0]]
+    if name == "attractor":  # the single pendulum's variable, units, meaning, comment
+        variable = OBSERVABLES["attractor"].variables[0]
+        return [(*variable, COMMENTS["attractor"])]
     raise ValueError(f"unknown system observable {name!r}")

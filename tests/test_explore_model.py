@@ -101,17 +101,20 @@ def test_the_caption_shows_the_maps_cf_comment(monkeypatch):
     long name alone, unescaped.)"""
     from sweep import observables
 
-    plain = explorer(quantity="var:winding").compute()
-    label = plain.description.replace("_", "\\_")  # "t_end", "theta_final" as written
-    assert "t_end" in plain.description and plain.comment == ""
-    assert plain.caption == f"*{label}*"
+    plain = explorer(quantity="var:theta_final").compute()  # no comment
+    assert plain.comment == "" and "_" in plain.description
+    assert plain.caption == "*" + plain.description.replace("_", "\\_") + "*"
+    result = explorer(quantity="var:winding").compute()
+    assert result.description == "wells crossed from t0 to t_end"  # a short label
+    assert result.comment == observables.COMMENTS["winding"]
+    assert "theta_final" in result.comment and "*" not in result.comment
+    assert result.caption == ("*wells crossed from t0 to t\\_end*\n\n"
+                              + result.comment.replace("_", "\\_"))
     monkeypatch.setitem(observables.COMMENTS, "winding",
                         "net turns over the run (attributes winding_*); 0: none")
     result = explorer(quantity="var:winding").compute()
-    assert result.description == plain.description  # the short label is unchanged
-    assert result.comment == "net turns over the run (attributes winding_*); 0: none"
-    assert result.caption == (f"*{label}*\n\nnet turns over the run "
-                              "(attributes winding\\_\\*); 0: none")
+    assert result.caption == ("*wells crossed from t0 to t\\_end*\n\nnet turns over the "
+                              "run (attributes winding\\_\\*); 0: none")
     # a system's log10 map of a variable keeps the variable's comment
     import xarray as xr
 

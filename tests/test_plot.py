@@ -244,3 +244,42 @@ def test_basins_plot_marks_attractors(tmp_path):
     assert len(stars) == 1 and np.allclose(stars[0].get_xydata(), [[0.0, 0.0]])
     sweep.plot.save_figure(fig, tmp_path / "basins.png")
     assert (tmp_path / "basins.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def _every_observed_variable():
+    """``(name, attributes)`` of every variable the single pendulum's observables and a
+    double pendulum's write, as `sweep.io` and `sweep.engine_systems` make them."""
+    import sweep
+    from sweep.observables import OBSERVABLES, variable_attributes
+    from sweep.system_observables import SYSTEM_OBSERVABLES, comments, variables
+
+    for observable in OBSERVABLES.values():
+        for name, units, long_name in observable.variables:
+            yield name, variable_attributes(name, units, long_name)
+    system = sweep.DoublePendulum(mass1=1.0, mass2=1.0, length1=1.0, length2=1.0,
+                                  gravity=9.81)
+    coordinates = system.declaration.coordinates
+    for observable in SYSTEM_OBSERVABLES:
+        notes = comments(observable, coordinates)
+        for name, units, long_name in variables(observable, coordinates,
+                                                system.energy_units):
+            yield name, variable_attributes(name, units, long_name, notes.get(name, ""))
+
+
+def test_every_observables_colour_bar_label_is_a_label_and_its_meaning_a_comment():
+    """A colour bar names its variable in at most two lines (`plot._variable_label`
+    wraps at 48 characters); what the variable means beyond that (a formula, a window,
+    when it is NaN) is its CF ``comment``, which the explorer shows under its map.
+    ``winding``'s label was four lines of formula beside the map of examples/forced.toml."""
+    seen = dict(_every_observed_variable())
+    assert {"winding", "lyapunov_max", "strobe_theta", "winding_theta1", "flip_time",
+            "attractor"} <= set(seen)
+    for name, attrs in seen.items():
+        da = xr.DataArray(np.zeros((2, 2)), name=name, attrs=attrs)
+        label = plot._variable_label(da)
+        assert label.count("\n") <= 1, (name, label)
+    for name in ("winding", "omega_mean", "strobe_theta", "well", "capture_time",
+                 "tension_max", "top_distance_max", "lyapunov_max", "attractor",
+                 "winding_theta1", "flip_time", "theta1_strobe"):
+        assert len(seen[name].get("comment", "")) > 20, name  # the meaning is kept
+    assert "round(theta_final / 2 pi)" in seen["winding"]["comment"]
