@@ -122,15 +122,22 @@ def test_a_trajectory_never_stopped_keeps_the_samples_of_a_run_without_catalogue
     np.testing.assert_array_equal(whole["attractor"].values, route["attractor"].values)
 
 
-def test_a_declared_system_with_a_drive_frequency_axis():
-    """Two uncoupled forced pendula declared as one system (tests/test_system_basins.py,
-    60 drive periods): the catalogue of the full run labels the 15 x 15 starts as
-    `sweep.maps.basins` does."""
+def _declared_forced_pair():
+    """Two uncoupled forced pendula declared as one system, with a drive frequency axis,
+    and the run settings of the tests that use it (60 drive periods, 44 of transient)."""
     period = 2 * np.pi / 0.75
     run = dict(t_end=60 * period, dt=period / 100, t_transient=44 * period, progress=False)
     system = sweep.DeclaredSystem(_two_forced_pendula(Coordinate, Parameter, SystemDeclaration),
                                   drive_frequency_axis="frequency", friction=0.15,
                                   amplitude=0.3, frequency=0.75)
+    return system, run
+
+
+def test_a_declared_system_with_a_drive_frequency_axis():
+    """Two uncoupled forced pendula declared as one system (tests/test_system_basins.py,
+    60 drive periods): the catalogue of the full run labels the 15 x 15 starts as
+    `sweep.maps.basins` does."""
+    system, run = _declared_forced_pair()
     starts = np.linspace(-2.5, 2.5, 15)
     grid = sweep.Grid(p1_0=starts, p2_0=starts)
     ds = sweep.run(system, grid, observe=("strobe",), **run)
@@ -149,11 +156,7 @@ def test_selecting_attractors_of_a_systems_catalogue_gives_its_catalogue(keep, t
     and the catalogue survives the netCDF file (`sweep.io.run_arguments`). The names
     were a tuple, which a mask or indices could not index (TypeError) and a slice cut
     to ('p1',), refused as a catalogue of other coordinates."""
-    period = 2 * np.pi / 0.75
-    run = dict(t_end=60 * period, dt=period / 100, t_transient=44 * period, progress=False)
-    system = sweep.DeclaredSystem(_two_forced_pendula(Coordinate, Parameter, SystemDeclaration),
-                                  drive_frequency_axis="frequency", friction=0.15,
-                                  amplitude=0.3, frequency=0.75)
+    system, run = _declared_forced_pair()
     starts = np.linspace(-2.5, 2.5, 5)
     grid = sweep.Grid(p1_0=starts, p2_0=starts)
     catalogue = maps.attractor_catalogue(sweep.run(system, grid, observe=("strobe",), **run))
