@@ -566,3 +566,25 @@ def test_the_catalogues_scene_is_kept_and_its_own_scene_is_accepted(catalogue, n
                                          r"damping = 0\.3"):
         sweep.engine.prepare(SCENE, sweep.Grid(theta0=[0.0], omega0=[0.0], damping=[0.3]),
                              **EARLY, attractors=dict(selected, scene=again))
+
+
+def test_a_catalogue_of_a_slice_of_a_run_over_scenes_is_of_the_slice_s_scene():
+    """A strobe run over two forcing amplitudes, then the catalogue of one slice
+    (``ds.sel(forcing_amplitude=1.3)``, or an ``isel`` keeping the dim): the run's
+    ``strobe_scene`` lacks the amplitude it varied, the slice has one value of it, and
+    that value is the slice's scene. Its own amplitude is accepted (it was refused as
+    a scene without forcing_amplitude, and worked before the scene was recorded);
+    another amplitude is refused."""
+    run = dict(EARLY, t_end=40 * PERIOD)  # short: only the catalogue's scene is read
+    axes = dict(theta0=np.linspace(-np.pi, np.pi, 5), omega0=np.linspace(-4, 4, 5))
+    ds = sweep.run(SCENE, sweep.Grid(**axes, forcing_amplitude=[1.2, 1.3]), **run)
+    for part in (ds.sel(forcing_amplitude=1.3), ds.isel(forcing_amplitude=[1])):
+        catalogue = maps.attractor_catalogue(part)
+        np.testing.assert_array_equal(catalogue["scene"]["forcing_amplitude"], 1.3)
+        assert "theta0" not in catalogue["scene"].dtype.names
+        sweep.engine.prepare(SCENE, sweep.Grid(**axes, forcing_amplitude=[1.3]), **run,
+                             attractors=catalogue)
+        with pytest.raises(ValueError, match=r"computed for forcing_amplitude = 1\.3, "
+                                             r"but this run's forcing_amplitude = 1\.2"):
+            sweep.engine.prepare(SCENE, sweep.Grid(**axes, forcing_amplitude=[1.2]), **run,
+                                 attractors=catalogue)
