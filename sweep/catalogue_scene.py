@@ -12,7 +12,8 @@ catalogue as ``scene``, a structured array of one row per attractor and a float6
 per parameter [its units] (so that selecting attractors, ``catalogue[key][keep]``, keeps
 it; a mapping of parameter names to values is accepted too), and `check_scene` refuses,
 before any compute, a run whose value of one of them differs beyond `SCENE_RTOL`, or
-that has a parameter the catalogue's scene has not (or lacks one it has). A dataset of
+that has a parameter the catalogue's scene has not (or lacks one it has), unless that
+parameter is 0 (an effect registered in one session only, absent: 0). A dataset of
 a run with a catalogue keeps it (``attractors_scene``, JSON) for
 `sweep.io.run_arguments`.
 
@@ -125,6 +126,11 @@ def check_scene(attractors, values: dict) -> None:
            "scene and settings)")
     for name in sorted(set(scene) | set(values)):
         recorded, own = scene.get(name), values.get(name)
+        # a parameter only one side knows, at 0 there: an effect registered in one
+        # session only (sweep.physics.register), absent from the scene, whose parameters
+        # are 0 and never read (Scene.parameters); nothing to compare
+        if (recorded is None and own == 0.0) or (own is None and np.all(recorded == 0.0)):
+            continue
         if recorded is None:
             raise ValueError(f"attractors: this run's {name} = {own!r}, but the catalogue "
                              f"was computed for a scene without {name} (a catalogue holds "

@@ -588,3 +588,30 @@ def test_a_catalogue_of_a_slice_of_a_run_over_scenes_is_of_the_slice_s_scene():
                                              r"but this run's forcing_amplitude = 1\.2"):
             sweep.engine.prepare(SCENE, sweep.Grid(**axes, forcing_amplitude=[1.2]), **run,
                                  attractors=catalogue)
+
+
+def test_a_parameter_only_one_side_knows_is_accepted_at_zero(catalogue, no_compute):
+    """A catalogue made where another effect was registered (its parameters recorded at
+    0, the value of an absent effect) or where one was not (the run's scene then has a
+    parameter at 0 that the catalogue lacks) holds the same scene: accepted (both were
+    refused, as a scene with or without that parameter). At another value it is
+    another scene: refused."""
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, 9), omega0=np.linspace(-4, 4, 9))
+    recorded = {name: catalogue["scene"][name][0] for name in catalogue["scene"].dtype.names}
+    count = catalogue["period"].size
+    with_plugin = dict(catalogue, scene=sweep.catalogue_scene.as_record(
+        dict(recorded, plugin_stiffness=0.0), count))
+    sweep.engine.prepare(SCENE, grid, **EARLY, attractors=with_plugin)
+    without_torque = dict(catalogue, scene=sweep.catalogue_scene.as_record(
+        {k: v for k, v in recorded.items() if k != "torque"}, count))
+    sweep.engine.prepare(SCENE, grid, **EARLY, attractors=without_torque)
+    stiff = dict(catalogue, scene=sweep.catalogue_scene.as_record(
+        dict(recorded, plugin_stiffness=0.5), count))
+    with pytest.raises(ValueError, match=r"computed for plugin_stiffness = 0\.5, and this "
+                                         r"run has no one value of plugin_stiffness"):
+        sweep.engine.prepare(SCENE, grid, **EARLY, attractors=stiff)
+    torqued = sweep.Scene(gravity=1.0, length=1.0, effects=(
+        sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, np.pi / 2), sweep.Torque(0.1)))
+    with pytest.raises(ValueError, match=r"this run's torque = 0\.1, but the catalogue "
+                                         r"was computed for a scene without torque"):
+        sweep.engine.prepare(torqued, grid, **EARLY, attractors=without_torque)
