@@ -12,7 +12,8 @@ catalogue as ``scene``, a structured array of one row per attractor and a float6
 per parameter [its units] (so that selecting attractors, ``catalogue[key][keep]``, keeps
 it; a mapping of parameter names to values is accepted too), and `check_scene` refuses,
 before any compute, a run whose value of one of them differs beyond `SCENE_RTOL`, or
-that has a parameter the catalogue's scene has not (or lacks one it has). A dataset of
+that has a parameter the catalogue's scene has not (or lacks one it has), unless that
+parameter is 0 (an effect registered in one session only, absent: 0). A dataset of
 a run with a catalogue keeps it (``attractors_scene``, JSON) for
 `sweep.io.run_arguments`.
 
@@ -34,8 +35,9 @@ import json
 
 import numpy as np
 
-__all__ = ["ATTRIBUTE", "FIELD", "SCENE_RTOL", "as_record", "attributes", "check_scene",
-           "dataset_scene", "from_attributes", "pendulum_values", "scene_values"]
+__all__ = ["ATTRIBUTE", "FIELD", "PENDULUM_DRIVE", "PENDULUM_INITIAL", "SCENE_RTOL",
+           "as_record", "attributes", "check_scene", "dataset_scene", "from_attributes",
+           "pendulum_values", "scene_values"]
 
 #: The catalogue's key of its scene: a dict of parameter name to value.
 FIELD = "scene"
@@ -70,12 +72,16 @@ def scene_values(parameters: dict, grid, initial: tuple, drive: tuple = ()) -> d
             if name not in initial and name not in drive}
 
 
+#: The single pendulum's initial state and its drive's frequency and phase constant:
+#: the axes that are never of its scene (`pendulum_values`).
+PENDULUM_INITIAL, PENDULUM_DRIVE = ("theta0", "omega0"), ("forcing_frequency", "forcing_phase")
+
+
 def pendulum_values(scene, grid) -> dict:
     """`scene_values` of a single pendulum's run: ``scene`` (a `sweep.Scene`) over
     ``grid``, without ``theta0`` and ``omega0`` and the forcing's frequency and phase
     constant."""
-    return scene_values(scene.parameters(), grid, ("theta0", "omega0"),
-                        ("forcing_frequency", "forcing_phase"))
+    return scene_values(scene.parameters(), grid, PENDULUM_INITIAL, PENDULUM_DRIVE)
 
 
 def as_record(values: dict, count: int) -> np.ndarray:
@@ -120,6 +126,11 @@ def check_scene(attractors, values: dict) -> None:
            "scene and settings)")
     for name in sorted(set(scene) | set(values)):
         recorded, own = scene.get(name), values.get(name)
+        # a parameter only one side knows, at 0 there: an effect registered in one
+        # session only (sweep.physics.register), absent from the scene, whose parameters
+        # are 0 and never read (Scene.parameters); nothing to compare
+        if (recorded is None and own == 0.0) or (own is None and np.all(recorded == 0.0)):
+            continue
         if recorded is None:
             raise ValueError(f"attractors: this run's {name} = {own!r}, but the catalogue "
                              f"was computed for a scene without {name} (a catalogue holds "
@@ -165,8 +176,26 @@ def from_attributes(attrs) -> dict:
     return {FIELD: record}
 
 
-def dataset_scene(attrs, count: int) -> dict:
-    """``{"scene": ...}`` (`as_record`, ``count`` rows) of a strobe run's dataset
-    attributes (``strobe_scene``), for its catalogue, or ``{}`` without it."""
-    values = json.loads(attrs[ATTRIBUTE]) if ATTRIBUTE in attrs else {}
+def dataset_scene(ds, count: int, initial: tuple = (), drive: tuple = ()) -> dict:
+    """``{"scene": ...}`` (`as_record`, ``count`` rows) of a strobe run's dataset ``ds``
+    (its attribute ``strobe_scene``), for its catalogue, or ``{}`` without it.
+
+    A grid axis the run varied, so not in ``strobe_scene``, that has one value in ``ds``
+    (a slice of the run: ``ds.sel(forcing_amplitude=1.3)``) is of the slice's scene
+    too, and is added; ``initial`` and ``drive`` name the axes that never are (the
+    initial state, the drive's frequency and phase constant: `scene_values`). Without
+    it a catalogue of such a slice had no ``forcing_amplitude``, and a run of
+    ``forcing_amplitude = 1.3`` was refused as of another scene."""
+    attrs = ds.attrs
+    if ATTRIBUTE not in attrs:
+        return {}
+    values = dict(json.loads(attrs[ATTRIBUTE]))
+    axes = str(attrs.get("grid_axes", attrs.get("point_axes", ""))).split()
+    for name in axes:  # `sweep.Grid.provenance`, `sweep.Points.provenance`
+        if name in values or name in initial or name in drive or name not in ds.coords:
+            continue
+        distinct = np.unique(np.asarray(ds[name].values, dtype=np.float64))
+        if distinct.size == 1:
+            values[name] = float(distinct[0])
+    values = dict(sorted(values.items()))
     return {FIELD: as_record(values, count)} if values else {}

@@ -446,8 +446,11 @@ def _command_run(args: argparse.Namespace) -> int:
                     from .maps.known import background
 
                     run = {k: v for k, v in kwargs.items() if k != "attractors"}
+                    fixed = {name: float(np.asarray(values)[0])  # one value each
+                             for name, values in grid.axes.items()
+                             if name not in ("theta0", "omega0")}
                     cells, _ = background(scene, grid.axes["theta0"], grid.axes["omega0"],
-                                          kwargs["attractors"], **run)
+                                          kwargs["attractors"], fixed=fixed, **run)
                     if cells is not None:  # None: a grid too small for a background
                         kwargs["known_cells"] = cells
                 if not args.no_space_check:

@@ -566,3 +566,52 @@ def test_the_catalogues_scene_is_kept_and_its_own_scene_is_accepted(catalogue, n
                                          r"damping = 0\.3"):
         sweep.engine.prepare(SCENE, sweep.Grid(theta0=[0.0], omega0=[0.0], damping=[0.3]),
                              **EARLY, attractors=dict(selected, scene=again))
+
+
+def test_a_catalogue_of_a_slice_of_a_run_over_scenes_is_of_the_slice_s_scene():
+    """A strobe run over two forcing amplitudes, then the catalogue of one slice
+    (``ds.sel(forcing_amplitude=1.3)``, or an ``isel`` keeping the dim): the run's
+    ``strobe_scene`` lacks the amplitude it varied, the slice has one value of it, and
+    that value is the slice's scene. Its own amplitude is accepted (it was refused as
+    a scene without forcing_amplitude, and worked before the scene was recorded);
+    another amplitude is refused."""
+    run = dict(EARLY, t_end=40 * PERIOD)  # short: only the catalogue's scene is read
+    axes = dict(theta0=np.linspace(-np.pi, np.pi, 5), omega0=np.linspace(-4, 4, 5))
+    ds = sweep.run(SCENE, sweep.Grid(**axes, forcing_amplitude=[1.2, 1.3]), **run)
+    for part in (ds.sel(forcing_amplitude=1.3), ds.isel(forcing_amplitude=[1])):
+        catalogue = maps.attractor_catalogue(part)
+        np.testing.assert_array_equal(catalogue["scene"]["forcing_amplitude"], 1.3)
+        assert "theta0" not in catalogue["scene"].dtype.names
+        sweep.engine.prepare(SCENE, sweep.Grid(**axes, forcing_amplitude=[1.3]), **run,
+                             attractors=catalogue)
+        with pytest.raises(ValueError, match=r"computed for forcing_amplitude = 1\.3, "
+                                             r"but this run's forcing_amplitude = 1\.2"):
+            sweep.engine.prepare(SCENE, sweep.Grid(**axes, forcing_amplitude=[1.2]), **run,
+                                 attractors=catalogue)
+
+
+def test_a_parameter_only_one_side_knows_is_accepted_at_zero(catalogue, no_compute):
+    """A catalogue made where another effect was registered (its parameters recorded at
+    0, the value of an absent effect) or where one was not (the run's scene then has a
+    parameter at 0 that the catalogue lacks) holds the same scene: accepted (both were
+    refused, as a scene with or without that parameter). At another value it is
+    another scene: refused."""
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, 9), omega0=np.linspace(-4, 4, 9))
+    recorded = {name: catalogue["scene"][name][0] for name in catalogue["scene"].dtype.names}
+    count = catalogue["period"].size
+    with_plugin = dict(catalogue, scene=sweep.catalogue_scene.as_record(
+        dict(recorded, plugin_stiffness=0.0), count))
+    sweep.engine.prepare(SCENE, grid, **EARLY, attractors=with_plugin)
+    without_torque = dict(catalogue, scene=sweep.catalogue_scene.as_record(
+        {k: v for k, v in recorded.items() if k != "torque"}, count))
+    sweep.engine.prepare(SCENE, grid, **EARLY, attractors=without_torque)
+    stiff = dict(catalogue, scene=sweep.catalogue_scene.as_record(
+        dict(recorded, plugin_stiffness=0.5), count))
+    with pytest.raises(ValueError, match=r"computed for plugin_stiffness = 0\.5, and this "
+                                         r"run has no one value of plugin_stiffness"):
+        sweep.engine.prepare(SCENE, grid, **EARLY, attractors=stiff)
+    torqued = sweep.Scene(gravity=1.0, length=1.0, effects=(
+        sweep.Damping(0.2), sweep.Forcing(1.66, 1.0, np.pi / 2), sweep.Torque(0.1)))
+    with pytest.raises(ValueError, match=r"this run's torque = 0\.1, but the catalogue "
+                                         r"was computed for a scene without torque"):
+        sweep.engine.prepare(torqued, grid, **EARLY, attractors=without_torque)

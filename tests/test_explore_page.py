@@ -108,6 +108,22 @@ def test_the_colour_bar_keeps_its_ticker_model(session):
     assert list(ticker.ticks) == list(range(len(session.result.legend)))
 
 
+@pytest.mark.parametrize("low, high, want", [
+    (0.0, 1.0, [0.0, 0.2, 0.4, 0.6, 0.8, 1.0]),
+    (-3.0, -1.0, [-3.0, -2.5, -2.0, -1.5, -1.0]),
+    (0.0, 1e-4, [0.0, 2e-05, 4e-05, 6e-05, 8e-05, 1e-04]),  # no rounding noise
+    # narrow against its values: 12 significant digits drew 12345.6 three times
+    (12345.6, 12345.6000001, [12345.6, 12345.60000002, 12345.60000004, 12345.60000006,
+                              12345.60000008, 12345.6000001]),
+    (-9e307, 9e307, [-9e307, 9e307]),  # a span beyond float64: matplotlib raised
+    (1e-300, 2e-300, [1e-300, 2e-300]),  # matplotlib's ticks all fell outside: none
+])
+def test_a_continuous_colour_bar_gets_distinct_round_ticks_inside_its_range(low, high, want):
+    got = explore_app._nice_ticks(low, high)
+    assert got == want  # exact: each tick is rounded to the digits that tell them apart
+    assert len(set(got)) == len(got) and all(low <= v <= high for v in got)
+
+
 def test_range_changes_wait_for_a_quiet_debounce_before_the_zoom():
     page = explore_app._Session(demo_app())
     try:

@@ -138,6 +138,26 @@ def test_refine_runs_the_half_resolution_background_whatever_the_size(wada_catal
     assert _refined(wada_catalogue).attrs["background_cells"] == 24 * 24
 
 
+def test_refine_runs_its_backgrounds_on_the_grid_s_one_value_axes():
+    """A grid's one-value axis (damping = 0.25 over the scene's 0.2) is the map's scene,
+    and the catalogue's (the pilot runs the grid): the background maps run it too. They
+    ran the scene's 0.2 (silently, then refused as another scene than the catalogue's),
+    so the map must equal the same map of a scene with damping 0.25 and no such axis."""
+    run = dict(WADA_PILOT, t_end=40 * 2 * np.pi)  # short: the oracle is the other map
+    axes = dict(theta0=np.linspace(-np.pi, np.pi, 32), omega0=np.linspace(-4, 4, 32))
+    # 32 points per axis: the 1/2 background (16 x 16) is the one run
+    grid = sweep.Grid(**axes, damping=np.array([0.25]))
+    catalogue = maps.pilot_catalogue(WADA_SCENE, grid, 5, **run)
+    got = maps.refine(WADA_SCENE, grid, attractors=catalogue, known_cells=True, **run)
+    scene = sweep.Scene(gravity=1.0, length=1.0, effects=(
+        sweep.Damping(0.25), sweep.Forcing(1.66, 1.0, np.pi / 2)))
+    plain = sweep.Grid(**axes)
+    want = maps.refine(scene, plain, attractors=maps.pilot_catalogue(scene, plain, 5, **run),
+                       known_cells=True, **run)
+    assert got.attrs["background_cells"] == want.attrs["background_cells"] == 16 * 16
+    np.testing.assert_array_equal(got.values.reshape(32, 32), want.values)
+
+
 def test_settled_cells_are_those_whose_neighbours_agree():
     labels = np.zeros((5, 6), dtype=np.int64)
     labels[2, 3] = 1

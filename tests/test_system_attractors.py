@@ -390,3 +390,22 @@ def test_a_catalogue_of_another_system_is_refused_before_compute(full, no_comput
     np.testing.assert_array_equal(catalogue["scene"]["pivot_amplitude"],
                                   np.full(catalogue["period"].shape, 0.1))
     assert "pivot_frequency" not in catalogue["scene"].dtype.names  # the drive's: its phase
+
+
+def test_a_catalogue_of_a_slice_of_a_system_run_over_scenes_is_of_the_slice_s_scene():
+    """A strobe run over two pivot amplitudes, then the catalogue of one slice: the
+    amplitude the run varied is of the slice's scene (its own amplitude is accepted,
+    where it was refused as a scene without pivot_amplitude; the system's 0.1 is
+    refused), and the initial state and the drive's frequency are not."""
+    axes = dict(theta1_0=np.linspace(-3, 3, 4), theta2_0=np.linspace(-3, 3, 4))
+    ds = sweep.run(SYSTEM, sweep.Grid(**axes, pivot_amplitude=[0.1, 0.12]),
+                   observe=("strobe",), **RUN)
+    catalogue = maps.attractor_catalogue(ds.sel(pivot_amplitude=0.12))
+    names = catalogue["scene"].dtype.names
+    np.testing.assert_array_equal(catalogue["scene"]["pivot_amplitude"], 0.12)
+    assert not {"theta1_0", "omega2_0", "pivot_frequency"} & set(names)
+    run = dict(RUN, observe=("strobe", "attractor"), attractors=catalogue, stop_early=True)
+    sweep.engine.prepare(SYSTEM, sweep.Grid(**axes, pivot_amplitude=[0.12]), **run)
+    with pytest.raises(ValueError, match=r"computed for pivot_amplitude = 0\.12, but this "
+                                         r"run's pivot_amplitude = 0\.1\b"):
+        sweep.engine.prepare(SYSTEM, sweep.Grid(**axes), **run)

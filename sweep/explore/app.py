@@ -148,11 +148,21 @@ def _nice_ticks(low: float, high: float, count: int = 6) -> list[float]:
     of ten)."""
     from matplotlib.ticker import MaxNLocator
 
-    values = MaxNLocator(nbins=count, steps=[1, 2, 2.5, 5, 10]).tick_values(low, high)
     span = high - low
-    # 12 significant digits: no rounding noise (2.5000000000000005e-05) on the page
-    return [float(f"{v:.12g}") for v in values
-            if low - 1e-9 * span <= v <= high + 1e-9 * span]
+    try:
+        values = MaxNLocator(nbins=count, steps=[1, 2, 2.5, 5, 10]).tick_values(low, high)
+    except (ValueError, OverflowError):  # a span beyond float64 (-1e308 to 1e308)
+        values = np.array([])
+    inside = [float(v) for v in values
+              if np.isfinite(v) and low - 1e-9 * span <= v <= high + 1e-9 * span]
+    if len(inside) < 2:  # matplotlib widens a range of values below ~1e-288 to +-1e-13
+        return [float(low), float(high)]
+    # the digits that tell the ticks apart, and 3 more: no rounding noise on the page
+    # (2.5000000000000005e-05), and no ticks merged where the range is narrow against
+    # its values (12345.6 to 12345.6000001: 12 digits drew 12345.6 three times)
+    ratio = max(abs(low), abs(high)) / (inside[1] - inside[0])
+    digits = min(15, 3 + max(0, math.ceil(math.log10(ratio))))
+    return [float(f"{v:.{digits}g}") for v in inside]
 
 
 def _palette(result: MapResult) -> list[str]:

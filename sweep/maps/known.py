@@ -116,11 +116,15 @@ def background_factors(n0: int, n1: int) -> tuple[int, ...]:
 
 
 def background(scene, theta: np.ndarray, omega: np.ndarray, catalogue: dict,
-               factors: tuple[int, ...] | None = None,
+               factors: tuple[int, ...] | None = None, fixed: dict | None = None,
                **run_kwargs) -> tuple[xr.DataArray | None, int]:
     """The known cells of the window ``theta`` x ``omega`` from coarse maps of it at
     1 / ``factors`` of its resolution (default: `background_factors`), each run with
-    the known cells of the one before (settled cells and seeds).
+    the known cells of the one before (settled cells and seeds). ``fixed``: the map's
+    other grid axes, each of one value (name -> value, e.g. ``{"damping": 0.25}``), so
+    that the backgrounds run the map's scene, the one its ``catalogue`` was found for
+    (without them a grid's ``damping = [0.25]`` over a scene's 0.2 was run at 0.2, and
+    `sweep.run` refuses the catalogue of another scene).
 
     Returns
     -------
@@ -139,10 +143,12 @@ def background(scene, theta: np.ndarray, omega: np.ndarray, catalogue: dict,
             continue
         axes = [np.linspace(axis[0], axis[-1], n) for axis, n in zip((theta, omega), size)]
         extra = {} if known is None else {"known_cells": known}
-        ds = engine.run(scene, Grid(theta0=axes[0], omega0=axes[1]), attractors=catalogue,
-                        **run_kwargs, **extra)
+        others = {name: np.array([float(value)]) for name, value in (fixed or {}).items()}
+        ds = engine.run(scene, Grid(theta0=axes[0], omega0=axes[1], **others),
+                        attractors=catalogue, **run_kwargs, **extra)
         cells += int(np.prod(size))
-        index = np.where(np.isfinite(ds["attractor"].values), ds["attractor"].values, -1)
+        found = ds["attractor"].values.reshape(size)  # the one-value axes dropped
+        index = np.where(np.isfinite(found), found, -1)
         known = known_map(seed_attractors(settled(index.astype(np.int64)), *axes,
                                           catalogue), *axes)
     return known, cells

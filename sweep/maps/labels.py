@@ -21,9 +21,9 @@ import xarray as xr
 
 from .._timesteps import transient_steps
 from .._validate import check_count, check_numbers, check_quantity
-from ..catalogue_scene import dataset_scene
+from ..catalogue_scene import PENDULUM_DRIVE, PENDULUM_INITIAL, dataset_scene
 from ..kernels import Status
-from ..strobe_phase import dataset_drive
+from ..strobe_phase import dataset_drive, phase_axis
 from ..system_attractors import coordinate_rows
 from . import _strobe
 
@@ -607,7 +607,7 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
     theta, omega = _rings_by_label(period.size, flat, index, rings, flat_theta, flat_omega)
     return {"theta": theta, "omega": omega, "period": period,
             **dataset_drive(ds, "forcing_frequency", period.size),
-            **dataset_scene(ds.attrs, period.size)}
+            **dataset_scene(ds, period.size, PENDULUM_INITIAL, PENDULUM_DRIVE)}
 
 
 def _rings_by_label(n: int, flat, index, rings, theta_rows, omega_rows):
@@ -638,7 +638,7 @@ def _resolved_periods(labels: xr.DataArray) -> np.ndarray:
 
 def _system_catalogue(ds: xr.Dataset, labels, *, max_period: int, tol: float) -> dict:
     """`attractor_catalogue` of a driven system's run (its rings of every coordinate)."""
-    position, velocity, _, dims, positions, _ = system_strobe_table(ds)
+    position, velocity, _, dims, positions, velocities = system_strobe_table(ds)
     if labels is None:
         labels = basins(ds, max_period=max_period, tol=tol)
     flat = labels.transpose(*dims).values.ravel()
@@ -649,10 +649,12 @@ def _system_catalogue(ds: xr.Dataset, labels, *, max_period: int, tol: float) ->
         index = np.where(np.isfinite(index), index, -1).astype(np.int64)
         rings = _system_rings(ds, position.shape[2])
     theta, omega = _rings_by_label(period.size, flat, index, rings, position, velocity)
+    drive = str(ds.attrs["strobe_frequency"])
+    initial = tuple(f"{name}_0" for name in positions + velocities)  # initial_axes
     return {"theta": theta, "omega": omega, "period": period,
             "coordinates": coordinate_rows(positions, period.size),
-            **dataset_drive(ds, str(ds.attrs["strobe_frequency"]), period.size),
-            **dataset_scene(ds.attrs, period.size)}
+            **dataset_drive(ds, drive, period.size),
+            **dataset_scene(ds, period.size, initial, (drive, phase_axis(drive)))}
 
 
 def amplitude(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
