@@ -44,6 +44,9 @@ parameter sets, `sweep.Points`)::
     dt = 0.01                    # s (required)
     t0 = 0.0                     # s
     t_transient = 80.0           # s
+    # or, for a driven run, in drive periods 2 pi / W (sweep.toml_periods):
+    # t_end = { periods = 26 }   # 26 periods [s]; likewise t0, t_transient
+    # dt = { per_period = 1000 } # the period / 1000 [s] (divides it, for strobe)
     observe = ["final", "winding"]
     strobe_samples = 64          # samples kept by observe "strobe" (2 to 4096; 16)
     save_every = 10              # steps; stores theta(t), omega(t)
@@ -108,6 +111,7 @@ from .kernels.spec import check_device, check_dtype
 from .observables import DEFAULT_OBSERVE, resolve
 from .physics import Scene, parameter_names, parameters
 from .toml_effects import system_effects
+from .toml_periods import resolve_periods
 
 __all__ = ["OPTION_KEYS", "REFINE_MAPS", "RUN_KEYS", "SYSTEM_KINDS", "TABLES", "angle_axes",
            "check_scheduler",
@@ -186,7 +190,9 @@ def load_run(path, options: dict | None = None) -> tuple[Scene, Grid, dict[str, 
     grid : Grid
     run_kwargs : dict
         Keyword arguments for `sweep.run` (``t_end`` and ``dt`` always present, the
-        other keys of ``[run]`` when given), already validated.
+        other keys of ``[run]`` when given), already validated; times given in drive
+        periods (``{ periods = k }``, ``{ per_period = N }``) are in seconds
+        (`sweep.toml_periods`).
 
     Raises
     ------
@@ -264,7 +270,11 @@ def parse_run(spec: dict[str, Any], source: str = "run file", options: dict | No
             else _grid(source, tables["grid"], names))
     with _context(source, which):
         grid.check_against(scene)
-    kwargs = _run(source, tables["run"], system="system" in spec)
+    _check_keys(source, "[run]", tables["run"], RUN_KEYS)
+    with _context(source, "run"):
+        # times in drive periods -> seconds, from the scene's (system's) drive
+        run_table = resolve_periods(tables["run"], scene, grid, which)
+    kwargs = _run(source, run_table, system="system" in spec)
     found = {key: kwargs.pop(key) for key in OPTION_KEYS if key in kwargs}
     if "system" in spec:
         with _context(source, "run"):

@@ -32,7 +32,7 @@ LAYERS = {
     "sweep.engine": 4, "sweep.engine_systems": 4,
     "sweep.maps": 5, "sweep.accuracy": 5, "sweep.map_precision": 5, "sweep.plot": 5,
     "sweep.toml_spec": 5, "sweep.toml_declared": 5, "sweep.toml_effects": 5,
-    "sweep.toml_pilot": 5,
+    "sweep.toml_pilot": 5, "sweep.toml_periods": 5,
     "sweep.distributed": 5, "sweep.diskspace": 5,
     "sweep.cli": 6, "sweep.__main__": 7,
     "sweep.explore": 6,  # the browser explorer, beside cli: the public API and maps
