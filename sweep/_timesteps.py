@@ -13,13 +13,24 @@ __all__ = ["WHOLE_STEPS_RTOL", "check_sampling_period", "transient_steps", "whol
 # A time span must be a whole number of steps to within this relative slack:
 # (t_end - t0) / dt is computed in floating point, so 300 / 0.01 = 30000.000000000004.
 WHOLE_STEPS_RTOL = 1e-9
+# ... and never more than this many steps: from 1e9 steps on the relative slack would
+# reach a whole step (a span 1 step off accepted, a transient ending a step early),
+# while the rounding of span / dt stays far below it (2e-16 relative: 2e-4 steps at
+# 1e12 steps).
+_MAX_SLACK_STEPS = 0.25
+
+
+def _slack(steps: float) -> float:
+    """The slack [steps] of a count of ``steps`` (`WHOLE_STEPS_RTOL`, at most
+    `_MAX_SLACK_STEPS`)."""
+    return min(WHOLE_STEPS_RTOL * max(1.0, abs(steps)), _MAX_SLACK_STEPS)
 
 
 def whole_steps(name: str, span: float, dt: float) -> int:
     """Number of steps ``dt`` in ``span``; ValueError (suggesting a dt) unless whole."""
     exact = span / dt
     n = round(exact)
-    if abs(exact - n) > WHOLE_STEPS_RTOL * max(1.0, exact):
+    if abs(exact - n) > _slack(exact):
         suggestion = span / max(n, 1)
         raise ValueError(
             f"{name} = {span!r} is not a whole number of steps dt = {dt!r} "
@@ -31,7 +42,8 @@ def whole_steps(name: str, span: float, dt: float) -> int:
 def transient_steps(t_transient: float, dt: float) -> int:
     """First step index n whose time ``t0 + n dt`` is >= ``t0 + t_transient`` (a
     transient meant to end on a step counts as ending there, despite rounding)."""
-    return math.ceil(t_transient / dt - WHOLE_STEPS_RTOL * max(1.0, t_transient / dt))
+    steps = t_transient / dt
+    return math.ceil(steps - _slack(steps))
 
 
 def check_sampling_period(name: str, frequencies, dt: float, *,

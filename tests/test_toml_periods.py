@@ -97,11 +97,7 @@ def test_the_drive_frequency_is_the_runs_one_frequency(scene, rows):
 def test_the_steps_fit_whole_periods_for_counts_up_to_a_million(frequency):
     """`sweep._timesteps` accepts every resolved run: t_end - t0 a whole number of steps
     and the period a whole number of steps for stroboscopic sampling; the steady window
-    starts on the transient's last period boundary.
-
-    (`transient_steps` allows a relative slack of 1e-9 steps, which reaches one whole
-    step from 1e9 steps on: there it starts the window a step or more early, whatever
-    the units of the run file. So the transient is checked below 1e9 steps.)"""
+    starts on the transient's last period boundary."""
     period = 2 * math.pi / frequency
     for per_period in (1, 3, 7, 40, 100, 1000, 12345, 10**6):
         dt = period / per_period
@@ -110,8 +106,23 @@ def test_the_steps_fit_whole_periods_for_counts_up_to_a_million(frequency):
             for start in (0, 3, -7):
                 span = periods * period - start * period
                 assert whole_steps("t_end - t0", span, dt) == (periods - start) * per_period
-            if periods * per_period < 10**9:
-                assert transient_steps(periods * period, dt) == periods * per_period
+            assert transient_steps(periods * period, dt) == periods * per_period
+
+
+def test_the_slack_of_whole_steps_stays_below_a_step_for_long_runs():
+    """The relative slack (1e-9, for the rounding of span / dt) is capped at a quarter
+    step: from 1e9 steps on it reached a whole step, so the steady window began a step
+    early (`transient_steps(1e6, 1e-3)` gave 999999999) and a span a step off whole was
+    accepted. An exact binary case (dt = 2^-10) and a decimal one."""
+    assert transient_steps(1e6, 1e-3) == 10**9
+    assert transient_steps(3e9 * 2.0**-10, 2.0**-10) == 3 * 10**9
+    assert transient_steps((3e9 + 0.5) * 2.0**-10, 2.0**-10) == 3 * 10**9 + 1
+    assert whole_steps("t_end - t0", 3e9 * 2.0**-10, 2.0**-10) == 3 * 10**9
+    with pytest.raises(ValueError, match="not a whole number of steps"):
+        whole_steps("t_end - t0", (3e9 + 0.6) * 2.0**-10, 2.0**-10)
+    # the rounding slack still holds where it is needed: 300 / 0.01 = 30000.000000000004
+    assert whole_steps("t_end - t0", 300.0, 0.01) == 30000
+    assert transient_steps(300.0, 0.01) == 30000
 
 
 def test_a_strobe_run_with_periods_samples_at_one_phase():
