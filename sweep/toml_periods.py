@@ -106,7 +106,7 @@ def drive_frequency(scene, grid, what: str, rows: str = "grid") -> float:
     from .physics.system import System
 
     system = isinstance(scene, System)
-    drives = _system_drives(scene) if system else _scene_drives(scene)
+    drives = _system_drives(scene, grid) if system else _scene_drives(scene)
     accepted = ("times in seconds, or a run with one drive frequency W > 0 (the drive "
                 "period 2 pi / W)")
     if not drives:
@@ -174,9 +174,11 @@ def _scene_drives(scene) -> dict[str, float]:
     return drives
 
 
-def _system_drives(system) -> dict[str, float]:
+def _system_drives(system, grid) -> dict[str, float]:
     """A system's drive frequencies: its drive parameter's and every forcing's on a
-    coordinate, {axis: value}."""
+    coordinate, {axis: value}, with the terms the grid's axes switch on (a
+    ``pivot_amplitude`` axis drives a `sweep.DoublePendulum`'s pivot, as in the run)."""
+    system = system.switched_on(tuple(grid.axes))
     values = system.parameters()
     drive = system.drive_frequency_parameter
     axes = [drive.axis] if drive is not None else []

@@ -277,3 +277,16 @@ def test_a_system_without_one_drive_frequency_is_refused(spec, words):
     assert message.startswith("test.toml: ") and "\n" not in message
     for word in words:
         assert word in message, message
+
+
+def test_a_pivot_the_grid_switches_on_sets_the_period():
+    # a DoublePendulum without pivot_amplitude, its pivot switched on by the [grid]'s
+    # pivot_amplitude axis (as the run does it): the pivot's frequency is the drive's
+    spec = {"system": {"kind": "DoublePendulum"},
+            "grid": {"theta1_0": [0.1], "pivot_amplitude": [0.01, 0.02],
+                     "pivot_frequency": [60.0]},
+            "run": {"t_end": {"periods": 3}, "dt": {"per_period": 40},
+                    "observe": ["strobe"]}}
+    _, _, kwargs = parse_run(spec)
+    period = 2 * math.pi / 60.0
+    assert (kwargs["t_end"], kwargs["dt"]) == (3 * period, period / 40)
