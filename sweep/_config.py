@@ -259,10 +259,12 @@ def kernel_folder() -> tuple[Path, str | None]:
     try:
         folder = root / "kernels"
         problem = checked_folder(folder / "__pycache__", root)
-        if not problem:
-            probe = folder / ".write-probe"
-            probe.touch()
-            probe.unlink()
+        if not problem:  # writable? A probe of this process's own (mkstemp): with one
+            # shared name, two processes' touch and unlink raced (FileNotFoundError), and
+            # the loser took the fallback folder below, so it compiled its kernels anew
+            fd, probe = tempfile.mkstemp(dir=folder, prefix=".write-probe-")
+            os.close(fd)
+            os.unlink(probe)
     except OSError:
         root = folder = Path(tempfile.gettempdir()) / f"sweep-kernels-{os.getuid()}"
         try:

@@ -126,3 +126,33 @@ def test_numba_index_updates_are_serialised(tmp_path, monkeypatch):
     assert fresh.load("int64 key") == "int64 code"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["f-1.py311.1.nbc", "f-1.py311.2.nbc",
                                                           "f-1.py311.nbi"]
+
+
+def test_concurrent_processes_all_get_the_configured_kernel_folder(tmp_path, monkeypatch):
+    """`sweep._config.kernel_folder` checks that the folder is writable with a probe
+    file. It was one shared name, ``.write-probe``: when two callers (two Dask workers
+    building their first kernel at once) touched and unlinked it together, one unlink
+    raised FileNotFoundError and that caller fell back to a private temporary folder,
+    so it compiled its kernels anew (seen once as a Dask worker compiling a kernel the
+    client had cached; here 54 of 1600 threaded calls took the fallback). Eight threads
+    calling it 200 times each must all get the configured folder."""
+    from sweep import _config
+
+    monkeypatch.setenv("SWEEP_CACHE_DIR", str(tmp_path / "cache"))
+    want = _config.kernel_folder()
+    assert want == (tmp_path / "cache" / "kernels", None)
+    wrong = []
+
+    def caller():
+        for _ in range(200):
+            got = _config.kernel_folder()
+            if got != want:
+                wrong.append(got)
+
+    threads = [threading.Thread(target=caller) for _ in range(8)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert not wrong, wrong[:3]
+    assert not list((tmp_path / "cache" / "kernels").glob(".write-probe*"))  # none left
