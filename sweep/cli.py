@@ -443,14 +443,12 @@ def _command_run(args: argparse.Namespace) -> int:
             if pilot is not None:  # after the scheduler answered: no pilot for a dead one
                 kwargs["attractors"] = pilot_catalogue(scene, grid, pilot, **kwargs)
                 if known:  # coarse maps of the grid, then stop on their settled cells
-                    from .maps.known import background
+                    from .maps.known import background, fixed_axes
 
                     run = {k: v for k, v in kwargs.items() if k != "attractors"}
-                    fixed = {name: float(np.asarray(values)[0])  # one value each
-                             for name, values in grid.axes.items()
-                             if name not in ("theta0", "omega0")}
                     cells, _ = background(scene, grid.axes["theta0"], grid.axes["omega0"],
-                                          kwargs["attractors"], fixed=fixed, **run)
+                                          kwargs["attractors"], fixed=fixed_axes(grid),
+                                          **run)
                     if cells is not None:  # None: a grid too small for a background
                         kwargs["known_cells"] = cells
                 if not args.no_space_check:

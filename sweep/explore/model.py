@@ -1020,18 +1020,16 @@ class Explorer:
         state = state or self.state
         if not self.uses_known(state):
             return None
-        from ..maps.known import background
+        from ..maps.known import background, fixed_axes
 
         pilot = self.pilot_state(state)
         key = (pilot.scene, pilot.view, pilot.resolution, pilot.t_end, pilot.dt,
                pilot.t_transient, pilot.method, pilot.extra)
         if key not in self._known:
             grid = self.grid(pilot)
-            fixed = {name: float(values[0]) for name, values in grid.axes.items()
-                     if name not in ("theta0", "omega0")}  # the start's other axes
             self._known[key] = background(pilot.scene, grid.axes["theta0"],
                                           grid.axes["omega0"], self.catalogue(state),
-                                          fixed=fixed, **self.run_kwargs(pilot))
+                                          fixed=fixed_axes(grid), **self.run_kwargs(pilot))
             while len(self._known) > 8:
                 self._known.popitem(last=False)
         return self._known[key][0]

@@ -115,6 +115,14 @@ def background_factors(n0: int, n1: int) -> tuple[int, ...]:
     return BACKGROUND_FACTORS
 
 
+def fixed_axes(grid) -> dict[str, float]:
+    """`background`'s ``fixed`` for a map over ``grid``: its axes other than theta0 and
+    omega0, each of one value (name -> that value), so that the backgrounds run the
+    map's scene."""
+    return {name: float(np.asarray(values)[0]) for name, values in grid.axes.items()
+            if name not in engine.INITIAL_AXES}
+
+
 def background(scene, theta: np.ndarray, omega: np.ndarray, catalogue: dict,
                factors: tuple[int, ...] | None = None, fixed: dict | None = None,
                **run_kwargs) -> tuple[xr.DataArray | None, int]:

@@ -27,7 +27,14 @@ from ..observables import DEFAULT_OBSERVE, OBSERVABLES, resolve
 from ..physics import Scene
 from ..physics.scene import check_pendulum_scene
 from ._quadtree import check_step, refine_field
-from .known import BACKGROUND_FACTORS, background, seed_attractors, settled, upsample
+from .known import (
+    BACKGROUND_FACTORS,
+    background,
+    fixed_axes,
+    seed_attractors,
+    settled,
+    upsample,
+)
 from .known import known_map as _known_map
 from .labels import (
     UNRESOLVED,
@@ -464,10 +471,9 @@ def _refine_known(scene, grid: Grid, run, keys, step: int, kwargs: dict, *, flip
     # every background level, the 1/2 map too (`HALF_BELOW` is measured for the
     # map without refine's filled blocks: at 1200 x 1200 refine then labels 1228
     # starts differently from the full run, against 696 with it)
-    fixed = {name: float(np.asarray(values)[0]) for name, values in grid.axes.items()
-             if name not in INITIAL_AXES}  # the map's one-value axes: its scene
     back, back_cells = background(scene, theta, omega, catalogue,
-                                  factors=BACKGROUND_FACTORS, fixed=fixed, **others)
+                                  factors=BACKGROUND_FACTORS, fixed=fixed_axes(grid),
+                                  **others)
     base = upsample(back, theta, omega) if back is not None else \
         np.full((theta.size, omega.size), -1, dtype=np.int32)
     lookup = {}  # the field's key -> catalogue index, from the cells run so far
