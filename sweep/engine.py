@@ -248,11 +248,9 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     if orbits:  # the attractors of another scene: -1 everywhere
         check_scene(attractors, pendulum_values(scene, grid))
     if orbits and scene.forcing is not None:  # rings of another drive phase: -1 everywhere
-        frequency, phase = (np.unique(grid.axes.get(name, np.array([value])))[0]
-                            for name, value in (("forcing_frequency", scene.forcing.frequency),
-                                                ("forcing_phase", scene.forcing.phase)))
-        check_phase(attractors, len(orbits), float(frequency), settings,
-                    "forcing_frequency", phase=float(phase))
+        frequency, phase = forcing_drive(scene, grid)
+        check_phase(attractors, len(orbits), frequency, settings, "forcing_frequency",
+                    phase=phase)
     _check_stop_early(names, scene, grid, stop_early, save_every)
     if known_cells is not None:
         check_known_cells(known_cells, attractors=len(orbits), stop_early=stop_early,
@@ -313,6 +311,16 @@ def _check_angle_range(grid: Grid, spec: KernelSpec) -> None:
 #: The grid axes an attractor catalogue may be used across: initial conditions only.
 #: Every other parameter changes the attractors themselves, and a catalogue holds the
 #: attractors of one scene.
+def forcing_drive(scene, grid) -> tuple[float, float]:
+    """The forcing's frequency W [rad/s] and phase constant phi [rad] of a run of
+    ``scene`` (with a forcing) over ``grid``: the grid's first value of
+    ``forcing_frequency`` and ``forcing_phase``, else the scene's (what a catalogue's
+    drive phase is checked against, `sweep.strobe_phase`)."""
+    return tuple(float(np.unique(grid.axes.get(name, np.array([value])))[0])
+                 for name, value in (("forcing_frequency", scene.forcing.frequency),
+                                     ("forcing_phase", scene.forcing.phase)))
+
+
 INITIAL_AXES = ("theta0", "omega0")
 
 

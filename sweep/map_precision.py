@@ -390,9 +390,7 @@ def map_accuracy(scene: Scene, starts, label=basins, ladder=None, *, repeats: in
             and not any(starts.varies(a) for a in starts.axes
                         if a not in engine.INITIAL_AXES):
         catalogue = pilot_catalogue(scene, starts, pilot, **reference_kwargs)
-        frequency, phase = (float(np.unique(starts.axes.get(name, np.array([value])))[0])
-                            for name, value in (("forcing_frequency", scene.forcing.frequency),
-                                                ("forcing_phase", scene.forcing.phase)))
+        frequency, phase = engine.forcing_drive(scene, starts)
         for (_, _, kwargs, _), plan in zip(levels, plans):
             # a level of another t_transient or dt may sample another drive phase, where
             # no start could match the catalogue (sweep.run refuses it): no catalogue
