@@ -146,7 +146,8 @@ return out;
 
 #: The map's colour bar as drawn: the tick values its axis view placed (not only the
 #: model's ticker: BokehJS 3.9 kept drawing a colour bar's first ticker after the model
-#: was given another), the model's ticks and the colour mapper's range.
+#: was given another), the texts drawn there (it also kept a label map's names once the
+#: overrides were emptied), the model's ticks and the colour mapper's range.
 _COLOUR_BAR = """
 const m = Bokeh.documents[0].get_model_by_name('map');
 const view = Bokeh.index.find_one(m);
@@ -156,7 +157,9 @@ for (const r of m.right) {
   const o = r.major_label_overrides;  // a Map, or a plain object when empty
   const labels = o instanceof Map ? Array.from(o.values()) : Object.values(o || {});
   if (!axis || !axis.tick_coords) return null;
-  return {drawn: Array.from(axis.tick_coords.major[axis.dimension]),
+  const drawn = Array.from(axis.tick_coords.major[axis.dimension]);
+  const boxes = axis.compute_labels(drawn);  // the texts the axis draws at them
+  return {drawn: drawn, texts: Array.from(boxes.items || boxes).map((box) => box.text),
           ticks: Array.from(r.ticker.ticks || []), low: r.color_mapper.low,
           high: r.color_mapper.high, labels: labels};
 }
@@ -234,6 +237,7 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
     bar = _wait(driver, _COLOUR_BAR, lambda b: len(b["ticks"]) > 1)
     assert bar["drawn"] == bar["ticks"] == list(range(len(bar["ticks"]))), bar
     assert all("well" in label for label in bar["labels"]), bar
+    assert bar["texts"] == bar["labels"], bar
 
     # box-zoom: a real mouse drag over the middle of the frame
     frame = driver.execute_script(_FRAME)
@@ -314,15 +318,19 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
     assert "var:theta_final" in keys
     assert driver.execute_script(set_value, "quantity", "var:theta_final")
     _wait(driver, _MAP, lambda s: s["stage"] == "final" and "theta_final" in s["title"])
-    bar = _wait(driver, _COLOUR_BAR, lambda b: not b["labels"])
+    bar = _wait(driver, _COLOUR_BAR,  # the values' own texts, no well's name
+                lambda b: b["labels"] and not any("well" in x for x in b["labels"]))
     assert len(bar["drawn"]) >= 3 and bar["drawn"] == bar["ticks"], bar
     span = bar["high"] - bar["low"]
     assert all(bar["low"] - 1e-9 * span <= t <= bar["high"] + 1e-9 * span
                for t in bar["drawn"]), bar  # round values inside the colour range
+    assert not any("well" in text for text in bar["texts"]), bar  # numbers, not names
+    assert [float(text) for text in bar["texts"]] == bar["drawn"], bar
     driver.save_screenshot(str(tmp_path / "7-values.png"))
     assert driver.execute_script(set_value, "quantity", home_quantity)
     _wait(driver, _MAP, lambda s: s["stage"] == "final" and "well" in s["title"])
-    bar = _wait(driver, _COLOUR_BAR, lambda b: bool(b["labels"]))
+    bar = _wait(driver, _COLOUR_BAR,
+                lambda b: b["labels"] and all("well" in x for x in b["labels"]))
     assert bar["drawn"] == bar["ticks"] == list(range(len(bar["ticks"]))), bar
 
     for shot in sorted(tmp_path.glob("*.png")):

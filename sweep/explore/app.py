@@ -165,6 +165,13 @@ def _nice_ticks(low: float, high: float, count: int = 6) -> list[float]:
     return [float(f"{v:.{digits}g}") for v in inside]
 
 
+def _tick_text(value: float) -> str:
+    """A colour-bar tick's text: the shortest that reads back as ``value`` (``20``, not
+    ``20.0``; ``2.5e-05``)."""
+    text = repr(float(value) + 0.0)  # + 0.0: no "-0"
+    return text[:-2] if text.endswith(".0") else text
+
+
 def _palette(result: MapResult) -> list[str]:
     """One colour per legend entry (NaN's entry dark grey)."""
     colours = []
@@ -580,8 +587,12 @@ class _Session:
             if list(self.mapper.palette) != list(Viridis256):
                 self.mapper.palette = Viridis256
             self.mapper.update(low=low, high=high)
-            self.ticker.ticks = _nice_ticks(low, high)
-            self.colorbar.update(major_label_overrides={}, title=result.title)
+            ticks = _nice_ticks(low, high)
+            self.ticker.ticks = ticks
+            # each tick's own text, not no overrides: BokehJS (3.9) kept drawing a label
+            # map's names ("attractor 0" at 0) once the overrides were emptied
+            self.colorbar.update(major_label_overrides={t: _tick_text(t) for t in ticks},
+                                 title=result.title)
 
     def _show_numbers(self, request: int, result: MapResult, numbers) -> None:
         """The numbers of the final map under it (None: a map of continuous values)."""
