@@ -17,6 +17,12 @@ effect with a `sweep.physics.effect.Drive`: the forcing's ``frequency``, the piv
 value. For a ``[system]``, it is the system's drive frequency
 (`sweep.physics.System.drive_frequency_parameter`, the one ``strobe`` samples by) and the
 frequency of every `sweep.Forcing` on a coordinate, again one value.
+
+The inverse, for the run files sweep writes (the explorer's downloads): `in_periods` gives
+back ``{ periods = k }`` (k a whole number) and ``{ per_period = N }`` for the seconds that
+those tables resolve to bit for bit, and `run_lines` writes a ``[run]`` table with them,
+so that reading the file back gives the very same float64 values; other seconds, and the
+times of a run without one drive frequency, stay seconds.
 """
 
 from __future__ import annotations
@@ -26,13 +32,18 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["PERIOD_KEYS", "STEP_KEY", "drive_frequency", "resolve_periods"]
+__all__ = ["PERIOD_KEYS", "STEP_KEY", "drive_frequency", "in_periods", "resolve_periods",
+           "run_lines"]
 
 #: ``[run]`` keys that accept ``{ periods = k }``.
 PERIOD_KEYS = ("t0", "t_end", "t_transient")
 
 #: The ``[run]`` key that accepts ``{ per_period = N }``.
 STEP_KEY = "dt"
+
+#: The largest count `in_periods` writes: 2^53, below which every integer is a float64
+#: (``k * P`` computes with k exactly) and a TOML integer.
+_LARGEST_COUNT = 2**53
 
 _ACCEPTED = {
     "t0": "t0 = seconds, or t0 = { periods = k } with k a finite number",
@@ -133,7 +144,90 @@ def drive_frequency(scene, grid, what: str, rows: str = "grid") -> float:
     return frequency
 
 
+def in_periods(table: dict[str, Any], scene, grid) -> dict[str, dict[str, int]]:
+    """The times of a ``[run]`` table [s] that are whole drive periods, as the tables
+    `resolve_periods` turns back into the very same float64 values.
+
+    ``t0``, ``t_end`` and ``t_transient`` equal to ``k * (2 pi / W)`` bit for bit (k a
+    nonzero whole number; > 0 for ``t_end`` and ``t_transient``) give ``{"periods": k}``;
+    ``dt`` equal to ``(2 pi / W) / N`` bit for bit (N >= 1) gives ``{"per_period": N}``.
+    A zero time, any other value, and every time of a run without one drive frequency
+    (`drive_frequency` refuses it: an undriven scene, drives of different frequencies,
+    an axis of several) are left out: they stay seconds.
+
+    Parameters
+    ----------
+    table : dict
+        The ``[run]`` keys and values, times in seconds (`sweep.run`'s keyword arguments).
+    scene : sweep.Scene or sweep.physics.System
+        The scene or system the file writes.
+    grid : sweep.Grid or sweep.Points
+        The rows the file writes (an axis of the drive frequency counts).
+
+    Returns
+    -------
+    dict
+        ``{key: {"periods": k}}`` or ``{"dt": {"per_period": N}}`` for each time that
+        resolves exactly; empty when none does.
+    """
+    times = {key: float(value) for key, value in table.items()
+             if key in (*PERIOD_KEYS, STEP_KEY) and _real(value) and value != 0}
+    if not times:
+        return {}
+    try:
+        frequency = drive_frequency(scene, grid, "a time in periods")
+    except ValueError:  # no one drive frequency: the times stay seconds
+        return {}
+    period = 2 * math.pi / frequency
+    out = {}
+    for key, seconds in times.items():
+        ratio = period / seconds if key == STEP_KEY else seconds / period
+        if not abs(ratio) < _LARGEST_COUNT:  # also inf: no count to write
+            continue
+        count = round(ratio)
+        if key == STEP_KEY:
+            if count >= 1 and period / count == seconds:
+                out[key] = {"per_period": count}
+        elif count != 0 and (key == "t0" or count > 0) and count * period == seconds:
+            out[key] = {"periods": count}
+    return out
+
+
+def run_lines(table: dict[str, Any], scene, grid, text) -> list[str]:
+    """The lines ``key = value`` of a written run file's ``[run]`` table: its times in
+    drive periods where they resolve exactly (`in_periods`), each with a comment of its
+    seconds (``t_end = {periods = 26}  # 245.04422698000386 s``), every other value as
+    ``text`` writes it.
+
+    Parameters
+    ----------
+    table : dict
+        The ``[run]`` keys and values, times in seconds.
+    scene : sweep.Scene or sweep.physics.System
+        The scene or system the file writes.
+    grid : sweep.Grid or sweep.Points
+        The rows the file writes.
+    text : callable
+        A value as TOML text (the writer's own, e.g. the explorer's ``_toml_value``);
+        it must write a dict as an inline table.
+
+    Returns
+    -------
+    list of str
+        One line per key of ``table``, in its order.
+    """
+    counts = in_periods(table, scene, grid)
+    return [f"{key} = {text(counts[key])}  # {float(value)!r} s" if key in counts
+            else f"{key} = {text(value)}" for key, value in table.items()]
+
+
 # ----------------------------------------------------------------------------- helpers
+def _real(value: Any) -> bool:
+    """A finite real number (not a bool)."""
+    return isinstance(value, (int, float, np.integer, np.floating)) \
+        and not isinstance(value, (bool, np.bool_)) and math.isfinite(value)
+
+
 def _count(key: str, value: dict) -> float | int:
     """The number in ``key = { periods = k }`` (or ``{ per_period = N }``), checked."""
     if key not in _ACCEPTED:

@@ -597,6 +597,25 @@ def test_a_forced_run_file_without_a_strobe_period_opens_on_motion():
 
 
 # ------------------------------------------------------------------ reproduction
+def test_the_run_file_of_a_driven_map_counts_drive_periods(tmp_path):
+    """The download of examples/forced.toml's map gives its times as the file does, in
+    drive periods with the seconds in a comment, and reads back as the very same
+    floats (`sweep.toml_periods.run_lines`); it wrote t_end = 245.04422698000386.
+    Nothing is computed."""
+    scene, grid, kwargs = load_run("examples/forced.toml", {})
+    e = Explorer(scene, grid, resolution=N, **kwargs)
+    text = e.toml_text()
+    for line in ("t_end = {periods = 26}  # 245.04422698000386 s",
+                 "dt = {per_period = 1000}  # 0.00942477796076938 s",
+                 "t_transient = {periods = 10}  # 94.24777960769379 s", "t0 = 0.0"):
+        assert f"\n{line}\n" in text, text
+    path = tmp_path / "map.toml"
+    path.write_text(text)
+    _, _, again = load_run(path, {})
+    for key in ("t0", "t_end", "dt", "t_transient"):
+        assert again[key].hex() == kwargs[key].hex(), key  # the same bits
+
+
 @pytest.mark.parametrize("make", [demo, wada], ids=["demo", "wada"])
 def test_toml_and_python_reproduce_the_map_exactly(make, tmp_path):
     e = explorer(make)

@@ -193,6 +193,23 @@ def test_effects_on_one_coordinate_are_controls_and_change_the_map(tmp_path):
     with pytest.raises(InvalidInput, match="finite"):
         e.update(damping_theta1=float("nan"))
 
+def test_the_run_file_of_a_driven_system_counts_drive_periods(tmp_path):
+    """A driven system's download gives examples/driven_double_pendulum_basins.toml's
+    times back in drive periods (`sweep.toml_periods.run_lines`), the seconds in a
+    comment, and reads back as the very same floats. Nothing is computed."""
+    options = {}
+    system, grid, kwargs = load_run("examples/driven_double_pendulum_basins.toml", options)
+    e = SystemExplorer(system, grid, resolution=N, **kwargs)
+    text = e.toml_text()
+    assert "\nt_end = {periods = 800}  # 83.7758040957278 s\n" in text, text
+    assert "\ndt = {per_period = 40}  # 0.002617993877991494 s\n" in text, text
+    path = tmp_path / "map.toml"
+    path.write_text(text)
+    _, _, again = load_run(path, {})
+    for key in ("t_end", "dt"):
+        assert again[key].hex() == kwargs[key].hex(), key  # the same bits
+
+
 def test_the_run_file_and_python_reproduce_the_map(tmp_path):
     e = double(sweep.DoublePendulum(mass1=2.0, effects=(sweep.Damping(0.1),)))
     e.zoom((0.0, 2.0), (-2.0, 0.0))

@@ -2,12 +2,14 @@
 }`` and ``dt = { per_period = N }`` resolve to the seconds ``k * (2 pi / W)`` and ``(2
 pi / W) / N`` of the run's one drive frequency W, bit for bit; stroboscopic sampling
 accepts them; a run without one drive frequency, or a bad table, is refused in one line
-before any compute."""
+before any compute. The run files sweep writes (`sweep.toml_periods.run_lines`) give
+those tables back where they resolve to the very same floats, and seconds elsewhere."""
 
 from __future__ import annotations
 
 import copy
 import math
+import tomllib
 
 import numpy as np
 import pytest
@@ -15,7 +17,9 @@ from test_cli import call, write
 
 import sweep
 from sweep._timesteps import check_sampling_period, transient_steps, whole_steps
-from sweep.toml_spec import parse_run
+from sweep.explore.model import _toml_value
+from sweep.toml_periods import in_periods, run_lines
+from sweep.toml_spec import load_run, parse_run
 
 W = 0.6666666666666666  # examples/forced.toml's forcing frequency [rad/s]
 
@@ -291,3 +295,82 @@ def test_a_pivot_the_grid_switches_on_sets_the_period():
     _, _, kwargs = parse_run(spec)
     period = 2 * math.pi / 60.0
     assert (kwargs["t_end"], kwargs["dt"]) == (3 * period, period / 40)
+
+
+# ------------------------------------------------------------- writing periods back
+#: The shipped driven examples, each with its times in periods.
+DRIVEN_EXAMPLES = ["forced.toml", "wada_map.toml", "points.toml", "wada_sample.toml",
+                   "driven_double_pendulum_basins.toml"]
+
+TIMES = ("t0", "t_end", "dt", "t_transient")
+
+
+def written_again(spec: dict, kwargs: dict, scene, grid,
+                  options: dict | None = None) -> tuple[str, dict]:
+    """The ``[run]`` text `run_lines` writes of ``kwargs``, and the `sweep.run` keyword
+    arguments `parse_run` reads back from ``spec`` with that ``[run]`` (and the file's
+    ``options``, `load_run`'s: a pilot)."""
+    text = "\n".join(run_lines(kwargs, scene, grid, _toml_value)) + "\n"
+    _, _, again = parse_run({**spec, "run": {**(options or {}), **tomllib.loads(text)}})
+    return text, again
+
+
+def same_floats(again: dict, kwargs: dict) -> None:
+    """Every time of ``kwargs`` read back as the very same float64 (its bits)."""
+    for key in TIMES:
+        if key in kwargs:
+            assert float(again[key]).hex() == float(kwargs[key]).hex(), key
+
+
+@pytest.mark.parametrize("name", DRIVEN_EXAMPLES)
+def test_a_written_driven_run_gives_its_times_in_periods_and_reads_back_bit_for_bit(name):
+    path = f"examples/{name}"
+    with open(path, "rb") as file:
+        spec = tomllib.load(file)
+    options = {}
+    scene, grid, kwargs = load_run(path, options)
+    text, again = written_again(spec, kwargs, scene, grid, options)
+    same_floats(again, kwargs)
+    for key in TIMES:  # the file's own tables come back, the seconds in a comment
+        value = spec["run"].get(key)
+        if isinstance(value, dict):
+            assert f"{key} = {_toml_value(value)}  # {kwargs[key]!r} s\n" in text, text
+    assert "t_end = {periods = " in text and "dt = {per_period = " in text
+
+
+def test_times_that_are_not_whole_periods_stay_seconds():
+    period = 2 * math.pi / W
+    # t_end one float above 26 periods, t_transient 2.5 periods: seconds; dt a period's
+    # 1000th: per_period; t0 = 0: seconds
+    spec = spec_with(FORCED, "run", t0=0.0, t_end=math.nextafter(26 * period, math.inf),
+                     dt={"per_period": 1000}, t_transient=2.5 * period)
+    scene, grid, kwargs = parse_run(spec)
+    text, again = written_again(spec, kwargs, scene, grid)
+    assert text.splitlines()[:4] == [
+        "t0 = 0.0", f"t_end = {kwargs['t_end']!r}",
+        f"dt = {{per_period = 1000}}  # {kwargs['dt']!r} s",
+        f"t_transient = {kwargs['t_transient']!r}"], text
+    same_floats(again, kwargs)
+    # seconds 0.01 (not a period's divisor), a step one float off one; t0 a negative
+    # count of periods
+    for dt in (0.01, math.nextafter(period / 1000, 0.0)):
+        kwargs = dict(kwargs, dt=dt, t0=-3 * period)
+        assert in_periods(kwargs, scene, grid) == {"t0": {"periods": -3}}
+
+
+@pytest.mark.parametrize("spec", [
+    # no drive: an unforced run's file is as before
+    {"scene": {"damping": {"coefficient": 0.5}}, "grid": {"theta0": [0.1]},
+     "run": {"t_end": 2 * math.pi, "dt": 2 * math.pi / 100}},
+    # the drive frequency swept: no one period
+    {**spec_with(FORCED, "grid", forcing_frequency=[W, 1.0]),
+     "run": {"t_end": 26 * (2 * math.pi / W), "dt": 2 * math.pi / W / 1000}},
+    # a system without a drive
+    {"system": {"kind": "DoublePendulum"}, "grid": {"theta1_0": [0.1]},
+     "run": {"t_end": 2 * math.pi, "dt": 2 * math.pi / 100}},
+])
+def test_a_run_without_one_drive_frequency_is_written_in_seconds(spec):
+    scene, grid, kwargs = parse_run(spec)
+    lines = run_lines(kwargs, scene, grid, _toml_value)
+    assert lines == [f"{key} = {_toml_value(value)}" for key, value in kwargs.items()]
+    assert in_periods(kwargs, scene, grid) == {}

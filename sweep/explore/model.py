@@ -46,6 +46,7 @@ from ..maps.known import KNOWN_MIN_POINTS
 from ..methods import METHODS
 from ..observables import STROBE_SAMPLES_RANGE
 from ..physics import BASE_PARAMETERS, EFFECTS, MODELS, Scene, parameters
+from ..toml_periods import run_lines
 
 __all__ = ["AXES_INITIAL", "CancelToken", "Cancelled", "Control", "Explorer", "InvalidInput",
            "MapResult", "QUANTITIES", "Quantity", "Requests", "State", "Trajectory", "View",
@@ -1443,14 +1444,9 @@ class Explorer:
             if name in spec:
                 out += ["", f"[scene.{name}]"]
                 out += [f"{k} = {_toml_value(v)}" for k, v in spec[name].items()]
-        out += ["", "[grid]"]
-        for name, value in axes.items():
-            if isinstance(value, np.ndarray):
-                value = float(value[0]) if value.size == 1 else [float(x) for x in value]
-            out.append(f"{name} = {_toml_value(value)}")
-        out += ["", "[run]"]
-        for key, value in kwargs.items():
-            out.append(f"{key} = {_toml_value(value)}")
+        grid_lines, grid = _grid_lines(axes)
+        out += ["", "[grid]", *grid_lines, "", "[run]",
+                *run_lines(kwargs, state.scene, grid, _toml_value)]
         if pilot:
             out.append(f"pilot = {PILOT_POINTS}")
         return "\n".join(out) + "\n"
@@ -1515,6 +1511,20 @@ def _grid_text(grid: Grid) -> str:
             axes.append(f"{name}=np.linspace({_fmt(values[0])}, {_fmt(values[-1])}, "
                         f"{values.size})")
     return f"sweep.Grid({', '.join(axes)})"
+
+
+def _grid_lines(axes: dict) -> tuple[list[str], Grid]:
+    """A run file's ``[grid]`` lines of ``axes`` (each an array, a number or a ``{start,
+    stop, num}`` table), and the `Grid` that `sweep.toml_spec` reads back from them
+    (``np.linspace`` of a table)."""
+    lines, rows = [], {}
+    for name, value in axes.items():
+        if isinstance(value, np.ndarray):
+            value = float(value[0]) if value.size == 1 else [float(x) for x in value]
+        lines.append(f"{name} = {_toml_value(value)}")
+        rows[name] = np.linspace(value["start"], value["stop"], value["num"]) \
+            if isinstance(value, dict) else np.atleast_1d(np.asarray(value, dtype=float))
+    return lines, Grid(**rows)
 
 
 def _number(value) -> str:

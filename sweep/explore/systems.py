@@ -43,6 +43,7 @@ from ..physics.system import SYSTEM_DAMPING, System, initial_parameters
 from ..settings import validate_settings
 from ..system_attractors import initial_axes
 from ..system_observables import SYSTEM_OBSERVABLES, variables
+from ..toml_periods import run_lines
 from .model import (
     PASSTHROUGH,
     RESOLUTION_RANGE,
@@ -54,6 +55,7 @@ from .model import (
     Quantity,
     State,
     View,
+    _grid_lines,
     _grid_text,
     _toml_value,
     check_arguments,
@@ -759,11 +761,8 @@ class SystemExplorer(Explorer):
     @staticmethod
     def _toml(state: State, axes: dict, kwargs: dict, *, pilot: bool, comment: str) -> str:
         out = [f"# {comment}", "# written by sweep explore; run: sweep run THIS.toml -o OUT.nc",
-               "", *_system_toml(state.scene), "", "[grid]"]
-        for name, value in axes.items():
-            if isinstance(value, np.ndarray):
-                value = float(value[0]) if value.size == 1 else [float(x) for x in value]
-            out.append(f"{name} = {_toml_value(value)}")
-        out += ["", "[run]"]
-        out += [f"{key} = {_toml_value(value)}" for key, value in kwargs.items()]
+               "", *_system_toml(state.scene)]
+        grid_lines, grid = _grid_lines(axes)
+        out += ["", "[grid]", *grid_lines, "", "[run]",
+                *run_lines(kwargs, state.scene, grid, _toml_value)]
         return "\n".join(out) + "\n"
