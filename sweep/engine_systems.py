@@ -15,7 +15,7 @@ import xarray as xr
 
 from . import _config
 from .catalogue_scene import ATTRIBUTE as SCENE_ATTRIBUTE
-from .catalogue_scene import check_scene, scene_values
+from .catalogue_scene import check_scene, grid_value, scene_values
 from .execution import RunContext, execute
 from .execution.local import allocate
 from .execution.progress import progress_bar
@@ -196,10 +196,10 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
     if catalogue is not None:  # rings of another drive phase would never match
         values = system.parameters()
         name = phase_axis(drive.axis)  # a Forcing(on=...)'s phase; a pivot has none
-        frequency, phase = (np.unique(grid.axes.get(axis, np.array([values.get(axis, 0.0)])))[0]
+        frequency, phase = (grid_value(grid, axis, values.get(axis, 0.0))
                             for axis in (drive.axis, name or drive.axis))
-        check_phase(attractors, len(catalogue["period"]), float(frequency), settings,
-                    drive.axis, phase=float(phase) if name else 0.0)
+        check_phase(attractors, len(catalogue["period"]), frequency, settings,
+                    drive.axis, phase=phase if name else 0.0)
         check_scene(attractors, system_values(system, grid, drive.axis))
     check_flag("check_stability", check_stability)
     if stop_early and (names not in STOPPING or save_every is not None):
