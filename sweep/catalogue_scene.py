@@ -37,7 +37,7 @@ import numpy as np
 
 __all__ = ["ATTRIBUTE", "FIELD", "PENDULUM_DRIVE", "PENDULUM_INITIAL", "SCENE_RTOL",
            "as_record", "attributes", "check_scene", "dataset_scene", "from_attributes",
-           "pendulum_values", "scene_values"]
+           "grid_value", "one_value", "pendulum_values", "scene_values"]
 
 #: The catalogue's key of its scene: a dict of parameter name to value.
 FIELD = "scene"
@@ -55,6 +55,31 @@ ATTRIBUTE = "strobe_scene"
 SCENE_RTOL = 1e-9
 
 
+def one_value(values) -> float | None:
+    """The one distinct value of ``values`` (a grid axis's column, a dataset
+    coordinate's values or attribute: a number or an array), or None where it holds
+    several (or none)."""
+    distinct = np.unique(np.asarray(values, dtype=np.float64))
+    return float(distinct[0]) if distinct.size == 1 else None
+
+
+def grid_value(grid, name: str, default: float) -> float:
+    """The one value of ``grid``'s axis ``name`` (`one_value`), or ``default`` where
+    ``grid`` has no such axis (the scene's or system's value of the parameter).
+
+    Raises
+    ------
+    ValueError
+        Where the axis has several values (a run with a catalogue never has: its grid
+        varies the initial state only).
+    """
+    value = one_value(grid.axes.get(name, default))
+    if value is None:
+        raise ValueError(f"the grid's axis {name} has several values; accepted: one value "
+                         "(a run with an attractor catalogue varies only its initial state)")
+    return value
+
+
 def scene_values(parameters: dict, grid, initial: tuple, drive: tuple = ()) -> dict:
     """The run's parameters of one value [their units]: ``parameters`` (the scene's or
     system's ``parameters()``) overridden by the grid's axes, each of the grid's axes
@@ -63,9 +88,9 @@ def scene_values(parameters: dict, grid, initial: tuple, drive: tuple = ()) -> d
     varies."""
     values = {name: float(value) for name, value in parameters.items()}
     for name, column in grid.axes.items():
-        distinct = np.unique(np.asarray(column, dtype=np.float64))
-        if distinct.size == 1:
-            values[name] = float(distinct[0])
+        value = one_value(column)
+        if value is not None:
+            values[name] = value
         else:
             values.pop(name, None)
     return {name: value for name, value in sorted(values.items())
@@ -194,8 +219,8 @@ def dataset_scene(ds, count: int, initial: tuple = (), drive: tuple = ()) -> dic
     for name in axes:  # `sweep.Grid.provenance`, `sweep.Points.provenance`
         if name in values or name in initial or name in drive or name not in ds.coords:
             continue
-        distinct = np.unique(np.asarray(ds[name].values, dtype=np.float64))
-        if distinct.size == 1:
-            values[name] = float(distinct[0])
+        value = one_value(ds[name].values)
+        if value is not None:
+            values[name] = value
     values = dict(sorted(values.items()))
     return {FIELD: as_record(values, count)} if values else {}

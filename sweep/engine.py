@@ -21,7 +21,7 @@ from ._timesteps import check_sampling_period
 from ._validate import check_flag, check_positive_int
 from ._version import __version__
 from .catalogue_scene import attributes as scene_attributes
-from .catalogue_scene import check_scene, pendulum_values
+from .catalogue_scene import check_scene, grid_value, pendulum_values
 from .execution import RunContext, execute
 from .execution.local import allocate as _allocate
 from .execution.local import integrate as _integrate
@@ -313,10 +313,11 @@ def _check_angle_range(grid: Grid, spec: KernelSpec) -> None:
 #: attractors of one scene.
 def forcing_drive(scene, grid) -> tuple[float, float]:
     """The forcing's frequency W [rad/s] and phase constant phi [rad] of a run of
-    ``scene`` (with a forcing) over ``grid``: the grid's first value of
-    ``forcing_frequency`` and ``forcing_phase``, else the scene's (what a catalogue's
-    drive phase is checked against, `sweep.strobe_phase`)."""
-    return tuple(float(np.unique(grid.axes.get(name, np.array([value])))[0])
+    ``scene`` (with a forcing) over ``grid`` (varying the initial state only: a run with
+    a catalogue, `check_one_scene`): the grid's value of ``forcing_frequency`` and
+    ``forcing_phase``, else the scene's (`sweep.catalogue_scene.grid_value`; what a
+    catalogue's drive phase is checked against, `sweep.strobe_phase`)."""
+    return tuple(grid_value(grid, name, value)
                  for name, value in (("forcing_frequency", scene.forcing.frequency),
                                      ("forcing_phase", scene.forcing.phase)))
 

@@ -15,7 +15,7 @@ import xarray as xr
 
 from . import _config
 from .catalogue_scene import ATTRIBUTE as SCENE_ATTRIBUTE
-from .catalogue_scene import check_scene, scene_values
+from .catalogue_scene import check_scene, grid_value, scene_values
 from .execution import RunContext, execute
 from .execution.local import allocate
 from .execution.progress import progress_bar
@@ -196,10 +196,10 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
     if catalogue is not None:  # rings of another drive phase would never match
         values = system.parameters()
         name = phase_axis(drive.axis)  # a Forcing(on=...)'s phase; a pivot has none
-        frequency, phase = (np.unique(grid.axes.get(axis, np.array([values.get(axis, 0.0)])))[0]
+        frequency, phase = (grid_value(grid, axis, values.get(axis, 0.0))
                             for axis in (drive.axis, name or drive.axis))
-        check_phase(attractors, len(catalogue["period"]), float(frequency), settings,
-                    drive.axis, phase=float(phase) if name else 0.0)
+        check_phase(attractors, len(catalogue["period"]), frequency, settings,
+                    drive.axis, phase=phase if name else 0.0)
         check_scene(attractors, system_values(system, grid, drive.axis))
     check_flag("check_stability", check_stability)
     if stop_early and (names not in STOPPING or save_every is not None):
@@ -405,20 +405,25 @@ def to_network_dataset(*, system: SwingNetwork, grid, settings, spec: NetworkSpe
     data_vars, col = {}, 0
     for name in spec.observe:
         if name == "final":
-            for variable, units, meaning in (
-                    ("theta_final", "rad", "phase of each node at t_end, unwrapped"),
-                    ("omega_final", "rad s-1", "frequency deviation of each node at t_end")):
+            for variable, units, meaning, comment in (
+                    ("theta_final", "rad", "node phase at t_end",
+                     "unwrapped (not reduced modulo 2 pi)"),
+                    ("omega_final", "rad s-1", "node frequency deviation at t_end", "")):
                 data_vars[variable] = xr.Variable(
                     dims + ("node",), grid.unflatten(out[:, col:col + n]),
-                    {"units": units, "long_name": meaning})
+                    variable_attributes(variable, units, meaning, comment))
                 col += n
         else:
-            data_vars["frequency_spread"] = xr.Variable(dims, grid.unflatten(out[:, col]), {
-                "units": "rad s-1", "long_name": "max |omega_i| at t_end: 0 in the "
-                                                 "synchronous state"})
-            data_vars["order_parameter"] = xr.Variable(dims, grid.unflatten(out[:, col + 1]), {
-                "units": "1", "long_name": "Kuramoto order parameter r = |mean exp(i theta)| "
-                                           "at t_end"})
+            data_vars["frequency_spread"] = xr.Variable(
+                dims, grid.unflatten(out[:, col]),
+                variable_attributes("frequency_spread", "rad s-1", "frequency spread at t_end",
+                                    "max |omega_i| over the nodes at t_end: 0 in the "
+                                    "synchronous state"))
+            data_vars["order_parameter"] = xr.Variable(
+                dims, grid.unflatten(out[:, col + 1]),
+                variable_attributes("order_parameter", "1", "Kuramoto order parameter at t_end",
+                                    "r = |mean over the nodes of exp(i theta_i)| at t_end: "
+                                    "1 where every phase is the same"))
             col += 2
     data_vars["status"] = status_variable(grid, status)
     if saved is not None:

@@ -39,6 +39,7 @@ import math
 import numpy as np
 
 from ._timesteps import WHOLE_STEPS_RTOL, transient_steps
+from .catalogue_scene import one_value
 
 __all__ = ["FIELDS", "LEGACY_FIELD", "PHASE_RTOL", "attributes", "check_phase",
            "dataset_drive", "drive_fields", "from_attributes", "phase_axis",
@@ -99,14 +100,12 @@ def drive_fields(frequency: float, t0: float, t_transient: float, dt: float,
             "drive_frequency": np.full(count, float(frequency))}
 
 
-def _one_value(ds, name: str):
-    """The one value of ``name`` in ``ds`` (a coordinate or an attribute): an array of
-    its distinct values, or None where ``ds`` has no ``name``."""
+def _recorded(ds, name: str):
+    """The values of ``name`` in ``ds`` (a coordinate's, else an attribute's), or None
+    where ``ds`` has no ``name``."""
     if name in ds.coords:
-        return np.unique(np.asarray(ds[name].values, dtype=np.float64))
-    if name in ds.attrs:
-        return np.atleast_1d(np.asarray(ds.attrs[name], dtype=np.float64))
-    return None
+        return ds[name].values
+    return ds.attrs.get(name)
 
 
 def dataset_drive(ds, axis: str, count: int) -> dict:
@@ -116,15 +115,15 @@ def dataset_drive(ds, axis: str, count: int) -> dict:
     default), or ``{}`` where the run has no one drive frequency or phase (a grid over
     several)."""
     a = ds.attrs
-    values = _one_value(ds, axis)
+    frequencies = _recorded(ds, axis)
+    frequency = None if frequencies is None else one_value(frequencies)
     name = phase_axis(axis)
-    phases = np.zeros(1) if name is None else _one_value(ds, name)
-    phases = np.zeros(1) if phases is None else phases
-    if values is None or values.size != 1 or phases.size != 1 \
+    phases = None if name is None else _recorded(ds, name)
+    phase = 0.0 if phases is None else one_value(phases)
+    if frequency is None or phase is None \
             or not all(key in a for key in ("t0", "t_transient", "dt")):
         return {}
-    return drive_fields(float(values[0]), a["t0"], a["t_transient"], a["dt"], count,
-                        float(phases[0]))
+    return drive_fields(frequency, a["t0"], a["t_transient"], a["dt"], count, phase)
 
 
 def _parse(attractors, count: int, accepted: str):

@@ -615,3 +615,18 @@ def test_a_parameter_only_one_side_knows_is_accepted_at_zero(catalogue, no_compu
     with pytest.raises(ValueError, match=r"this run's torque = 0\.1, but the catalogue "
                                          r"was computed for a scene without torque"):
         sweep.engine.prepare(torqued, grid, **EARLY, attractors=without_torque)
+
+
+def test_the_one_value_of_an_axis():
+    """`catalogue_scene.one_value`: an axis's, coordinate's or attribute's one distinct
+    value, None for several or none; `grid_value`: a grid axis's one value, else the
+    default, refused (naming the axis) where the grid varies it."""
+    from sweep.catalogue_scene import grid_value, one_value
+
+    assert one_value([1.5, 1.5]) == 1.5 and one_value(2) == 2.0
+    assert one_value([1.0, 2.0]) is None and one_value([]) is None
+    grid = sweep.Grid(theta0=[0.0, 1.0], forcing_frequency=[1.5])
+    assert grid_value(grid, "forcing_frequency", 9.0) == 1.5
+    assert grid_value(grid, "forcing_phase", 0.25) == 0.25
+    with pytest.raises(ValueError, match="axis theta0 has several values; accepted: one"):
+        grid_value(grid, "theta0", 0.0)

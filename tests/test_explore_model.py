@@ -4,6 +4,7 @@ reproduce a map (sweep.explore.model; no Panel needed)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import threading
 from dataclasses import dataclass
@@ -754,6 +755,37 @@ def test_below_the_grid_is_refused_for_a_systems_explorer():
 
     with pytest.raises(ValueError, match="pendulum scene only"):
         numbers.view_labels_of(Result(), Bare())
+
+
+def test_known_cells_background_is_cached_per_catalogue(monkeypatch):
+    """`Explorer.known` keeps one background per catalogue (`Explorer.pilot_key`): a
+    state with a catalogue of its own (another start) or other run settings (``t0``)
+    gets a background of its own, computed with its own catalogue. Stubs stand for the
+    pilot and the backgrounds: only the caching is checked."""
+    import sweep.maps.known as known_module
+
+    backgrounds = []
+
+    def fake_background(scene, theta, omega, catalogue, fixed=None, **run_kwargs):
+        backgrounds.append((catalogue, run_kwargs))
+        return object(), 0
+
+    monkeypatch.setattr(maps, "pilot_catalogue", lambda *args, **kwargs: {})
+    monkeypatch.setattr(known_module, "background", fake_background)
+    scene, _, kwargs = wada()
+    grid = sweep.Grid(theta0=np.linspace(-np.pi, np.pi, 96), omega0=np.linspace(-4, 4, 96))
+    e = model.Explorer(scene, grid, resolution=96, **kwargs)
+    home = e.state
+    first = e.known(home)
+    assert e.known(home) is first and len(backgrounds) == 1  # cached
+    moved = dataclasses.replace(home, start=tuple((n, v + 0.5) for n, v in home.start))
+    assert e.uses_known(moved) and e.catalogue(moved) is not e.catalogue(home)
+    assert e.known(moved) is not first and backgrounds[-1][0] is e.catalogue(moved)
+    later = dataclasses.replace(home, extra=(("t0", PERIOD),))
+    assert e.known(later) is not first and backgrounds[-1][1]["t0"] == PERIOD
+    # what the key leaves out cannot reach a background: one pilot quantity, the CPU
+    assert [q.name for q in QUANTITIES.values() if q.pilot] == ["basins"]
+    assert e.known(dataclasses.replace(home, device="cuda")) is None
 
 
 def test_forced_basins_stop_on_known_cells_by_default_and_the_exact_route_agrees():

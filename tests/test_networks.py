@@ -204,6 +204,10 @@ def test_dead_ends_undermine_basin_stability_and_repairing_them_restores_it():
         runs[name] = sweep.maps.basin_stability(network, 200, seed=7, t_end=200.0, dt=0.005,
                                                 delta_omega=(-30.0, 30.0), nodes=[0, 7])
     dead, repaired = runs["dead"], runs["repaired"]
+    for name in ("basin_stability", "standard_error"):  # a short label, then its meaning
+        assert len(dead[name].long_name) <= 40 and "p (1 - p)" not in dead[name].long_name
+    assert "synchronous again" in dead.basin_stability.comment
+    assert "sqrt(p (1 - p) / n)" in dead.standard_error.comment
     assert (dead.failed == 0).all() and (repaired.failed == 0).all()
     gain = repaired.basin_stability - dead.basin_stability
     error = np.hypot(repaired.standard_error, dead.standard_error)

@@ -247,9 +247,13 @@ def test_basins_plot_marks_attractors(tmp_path):
 
 
 def _every_observed_variable():
-    """``(name, attributes)`` of every variable the single pendulum's observables and a
-    double pendulum's write, as `sweep.io` and `sweep.engine_systems` make them."""
+    """``(name, attributes)`` of every variable the single pendulum's observables, a
+    double pendulum's and a swing network's write, as `sweep.io` and
+    `sweep.engine_systems` make them (the network's from zeros, no integration; its
+    names prefixed ``network.``), and of `sweep.maps.synchronized`'s labels."""
     import sweep
+    from sweep.engine_systems import prepare_system, to_network_dataset
+    from sweep.kernels.network import network_outputs
     from sweep.observables import OBSERVABLES, variable_attributes
     from sweep.system_observables import SYSTEM_OBSERVABLES, comments, variables
 
@@ -264,6 +268,17 @@ def _every_observed_variable():
         for name, units, long_name in variables(observable, coordinates,
                                                 system.energy_units):
             yield name, variable_attributes(name, units, long_name, notes.get(name, ""))
+    network = sweep.SwingNetwork([(0, 1)], power=[-1.0, 1.0])
+    grid = sweep.Grid(perturbed_node=[1], delta_theta=[0.0, 0.5])
+    settings, spec, _ = prepare_system(network, grid, t_end=1.0, dt=0.1, save_every=5,
+                                       observe=("final", "synchrony"))
+    ds = to_network_dataset(system=network, grid=grid, settings=settings, spec=spec,
+                            out=np.zeros((grid.size, network_outputs(spec))),
+                            status=np.zeros(grid.size, dtype=np.int8),
+                            saved=np.zeros((grid.size, 4, 3)))
+    ds["synchronized"] = sweep.maps.synchronized(ds)
+    for name, variable in ds.data_vars.items():
+        yield f"network.{name}", dict(variable.attrs)
 
 
 def test_every_observables_colour_bar_label_is_a_label_and_its_meaning_a_comment():
@@ -273,13 +288,16 @@ def test_every_observables_colour_bar_label_is_a_label_and_its_meaning_a_comment
     ``winding``'s label was four lines of formula beside the map of examples/forced.toml."""
     seen = dict(_every_observed_variable())
     assert {"winding", "lyapunov_max", "strobe_theta", "winding_theta1", "flip_time",
-            "attractor"} <= set(seen)
+            "attractor", "network.theta", "network.order_parameter",
+            "network.synchronized"} <= set(seen)
     for name, attrs in seen.items():
         da = xr.DataArray(np.zeros((2, 2)), name=name, attrs=attrs)
         label = plot._variable_label(da)
         assert label.count("\n") <= 1, (name, label)
     for name in ("winding", "omega_mean", "strobe_theta", "well", "capture_time",
                  "tension_max", "top_distance_max", "lyapunov_max", "attractor",
-                 "winding_theta1", "flip_time", "theta1_strobe"):
+                 "winding_theta1", "flip_time", "theta1_strobe", "network.theta_final",
+                 "network.frequency_spread", "network.order_parameter",
+                 "network.synchronized"):
         assert len(seen[name].get("comment", "")) > 20, name  # the meaning is kept
     assert "round(theta_final / 2 pi)" in seen["winding"]["comment"]

@@ -992,14 +992,32 @@ class Explorer:
         if not self.uses_pilot(state):
             return None
         pilot = self.pilot_state(state)
-        key = (pilot.scene, pilot.view, pilot.resolution, pilot.t_end, pilot.dt,
-               pilot.t_transient, pilot.method, pilot.extra, pilot.device, pilot.start)
+        key = self.pilot_key(pilot)
         if key not in self._catalogues:
             self._catalogues[key] = maps.pilot_catalogue(
                 pilot.scene, self.grid(pilot), self.pilot_points, **self.run_kwargs(pilot))
             while len(self._catalogues) > 8:
                 self._catalogues.popitem(last=False)
         return self._catalogues[key]
+
+    @staticmethod
+    def pilot_key(pilot: State) -> tuple:
+        """The cache key of the catalogue of ``pilot`` (a `pilot_state`) and of the
+        background computed with it (`known`): every field of ``pilot`` that the pilot
+        run and the background read (`grid`, `run_kwargs`; ``extra`` holds ``t0``,
+        ``rtol``, ``atol``, ``dtype``, ...).
+
+        Left out, as they cannot change either: ``quantity`` (`uses_pilot` holds for
+        the quantities with ``pilot`` only, one per explorer: ``basins``),
+        ``known_cells`` (`known` runs only with it on), ``catalogue`` (the systems'
+        route, on wherever `SystemExplorer.uses_pilot` holds) and `pilot_points` (the
+        explorer's constant). ``start`` and ``device`` are in it although, today,
+        neither reaches a pilot's grid or a background (`uses_pilot`: both initial axes
+        are shown; `uses_known`: the CPU only), so that a background is keyed as the
+        catalogue it is computed with.
+        """
+        return (pilot.scene, pilot.view, pilot.resolution, pilot.t_end, pilot.dt,
+                pilot.t_transient, pilot.method, pilot.extra, pilot.device, pilot.start)
 
     def uses_known(self, state: State | None = None) -> bool:
         """Forced basins over the initial state, run where `sweep.run` takes
@@ -1024,8 +1042,7 @@ class Explorer:
         from ..maps.known import background, fixed_axes
 
         pilot = self.pilot_state(state)
-        key = (pilot.scene, pilot.view, pilot.resolution, pilot.t_end, pilot.dt,
-               pilot.t_transient, pilot.method, pilot.extra)
+        key = self.pilot_key(pilot)  # the catalogue's: one background per catalogue
         if key not in self._known:
             grid = self.grid(pilot)
             self._known[key] = background(pilot.scene, grid.axes["theta0"],

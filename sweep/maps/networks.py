@@ -46,8 +46,9 @@ def synchronized(ds: xr.Dataset, tolerance: float = SYNC_TOLERANCE) -> xr.DataAr
                          "sweep.run(network, grid, observe=('synchrony',), ...)")
     labels = xr.where(ds.frequency_spread <= tolerance, 1, 0).astype(np.int8)
     labels = labels.where(ds.status == 0, -1).astype(np.int8)
-    labels.attrs = {"long_name": f"back in the synchronous state (max |omega_i| <= "
-                                 f"{tolerance:g} rad/s at t_end)",
+    labels.attrs = {"long_name": "back in the synchronous state",
+                    "comment": f"frequency_spread (max |omega_i| at t_end) <= {tolerance:g} "
+                               "rad/s; -1 where the trajectory failed",
                     "flag_values": np.array([-1, 0, 1], dtype=np.int8),
                     "flag_meanings": "unresolved desynchronised synchronised",
                     "unresolved": -1}
@@ -118,11 +119,15 @@ def basin_stability(network, n: int, *, seed: int, t_end: float = 200.0, dt: flo
     coords = {"node": nodes.astype(int)}
     degree = (network.adjacency[nodes.astype(int)] > 0).sum(axis=1)
     return xr.Dataset(
-        {"basin_stability": ("node", p, {"units": "1", "long_name": "single-node basin "
-                                         "stability: fraction of perturbations after which "
-                                         "the grid is synchronous again"}),
-         "standard_error": ("node", error, {"units": "1", "long_name": "binomial standard "
-                                           "error sqrt(p (1 - p) / n)"}),
+        {"basin_stability": ("node", p, {
+            "units": "1", "long_name": "single-node basin stability",
+            "comment": "fraction p of the node's perturbations after which the grid is "
+                       "synchronous again (sweep.maps.synchronized); NaN where every "
+                       "trajectory failed"}),
+         "standard_error": ("node", error, {
+             "units": "1", "long_name": "standard error of the basin stability",
+             "comment": "binomial: sqrt(p (1 - p) / n), n the trajectories that did not "
+                        "fail"}),
          "failed": ("node", (~ok).sum(axis=1), {"long_name": "failed trajectories"}),
          "degree": ("node", degree, {"long_name": "number of lines of the node"})},
         coords, {"perturbations_per_node": n, "seed": seed, "t_end": t_end, "dt": dt,
