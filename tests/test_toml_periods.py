@@ -17,7 +17,7 @@ from test_cli import call, write
 
 import sweep
 from sweep._timesteps import check_sampling_period, transient_steps, whole_steps
-from sweep.explore.model import _toml_value
+from sweep.explore.texts import toml_value as _toml_value
 from sweep.toml_periods import in_periods, run_lines
 from sweep.toml_spec import load_run, parse_run
 

@@ -13,13 +13,16 @@ exports (netCDF with `sweep.save`'s attributes, PNG, run file) as bytes.
 Nothing typed is executed: every value is a number or a choice from a fixed list, and
 goes through `sweep.Scene`, `sweep.Grid` and `sweep.io.layout` (the checks `sweep.run`
 makes) before any compute.
+
+Beside it, each with one job: `sweep.explore.quantities` (the maps a scene offers),
+`sweep.explore.requests` (the newest request wins), `sweep.explore.legend` (a discrete
+map's words) and `sweep.explore.texts` (numbers and grids as exact Python and TOML text).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import io as _stdio
-import json
 import math
 import os
 import re
@@ -47,6 +50,10 @@ from ..methods import METHODS
 from ..observables import STROBE_SAMPLES_RANGE
 from ..physics import BASE_PARAMETERS, EFFECTS, MODELS, Scene, parameters
 from ..toml_periods import run_lines
+from .legend import MOTION_TEXT, label_summary, legend_of
+from .quantities import QUANTITIES, Quantity, default_quantity, effect_names, forced
+from .requests import Cancelled, CancelToken, Requests
+from .texts import grid_lines, grid_text, number_text, toml_value
 
 __all__ = ["AXES_INITIAL", "CancelToken", "Cancelled", "Control", "Explorer", "InvalidInput",
            "MapResult", "QUANTITIES", "Quantity", "Requests", "State", "Trajectory", "View",
@@ -139,130 +146,6 @@ class InvalidInput(ValueError):
     def __init__(self, control: str, message: str) -> None:
         super().__init__(message)
         self.control = control
-
-
-class Cancelled(Exception):
-    """Raised inside a computation whose request a newer one replaced."""
-
-
-class CancelToken:
-    """A flag a computation checks between bands (`check`)."""
-
-    def __init__(self) -> None:
-        self._event = threading.Event()
-
-    def cancel(self) -> None:
-        """Ask the computation to stop at its next check."""
-        self._event.set()
-
-    @property
-    def cancelled(self) -> bool:
-        return self._event.is_set()
-
-    def check(self) -> None:
-        """Raise `Cancelled` if `cancel` was called."""
-        if self._event.is_set():
-            raise Cancelled()
-
-
-# ------------------------------------------------------------------------ quantities
-def _effects(scene: Scene) -> set[str]:
-    return {effect.declaration.name for effect in scene.effects}
-
-
-def _forced(scene: Scene) -> bool:
-    return scene.forcing is not None
-
-
-def _only_damping(scene: Scene) -> bool:
-    return _effects(scene) == {"damping"}
-
-
-def _pivot(scene: Scene) -> bool:
-    return "pivot" in _effects(scene)
-
-
-def _always(scene: Scene) -> bool:
-    return True
-
-
-@dataclass(frozen=True)
-class Quantity:
-    """One map the explorer can draw.
-
-    Attributes
-    ----------
-    name : str
-        Key (``"basins"``, ``"var:theta_final"``).
-    label : str
-        What the selector shows.
-    observe : tuple of str
-        The observables `sweep.run` computes for it.
-    stop_early : bool
-        Run with ``stop_early=True`` (only with settled observables).
-    applies : callable
-        ``applies(scene) -> bool``: offered for this scene.
-    compute : callable
-        ``compute(ds) -> xarray.DataArray``: the map (a `sweep.maps` function or a
-        variable of the dataset).
-    discrete : bool
-        Integer labels with a legend (else a continuous colour bar).
-    pilot : bool
-        Forced basins: find the attractors first (`sweep.maps.pilot_catalogue`).
-    expression : str
-        The Python expression of the map of ``ds``, for the snippets.
-    """
-
-    name: str
-    label: str
-    observe: tuple[str, ...]
-    stop_early: bool
-    applies: Callable[[Scene], bool]
-    compute: Callable[[Any], Any]
-    discrete: bool
-    pilot: bool = False
-    expression: str = ""
-
-
-def _variable(name: str, observable: str, label: str, applies=_always) -> Quantity:
-    return Quantity(f"var:{name}", label, (observable,), False, applies,
-                    lambda ds, name=name: ds[name], False, expression=f'ds["{name}"]')
-
-
-#: Every quantity, in the order the selector lists them.
-QUANTITIES: dict[str, Quantity] = {q.name: q for q in (
-    Quantity("well", "final well (damped, unforced)", ("capture",), True, _only_damping,
-             maps.well, True, expression="maps.well(ds)"),
-    Quantity("basins", "attractor basins (forced)", ("strobe",), True, _forced, maps.basins,
-             True, pilot=True, expression="maps.basins(ds)"),
-    Quantity("motion", "motion: rotation or libration", ("omega_mean",), False, _always,
-             maps.motion, True, expression="maps.motion(ds)"),
-    Quantity("period", "period map (forced)", ("strobe",), True, _forced, maps.period, True,
-             expression="maps.period(ds)"),
-    Quantity("inverted", "stays inverted (pivot drive)", ("top_distance",), False, _pivot,
-             maps.inverted, True, expression="maps.inverted(ds)"),
-    Quantity("lyapunov_max", "largest Lyapunov exponent", ("lyapunov",), False, _always,
-             lambda ds: ds["lyapunov_max"], False, expression='ds["lyapunov_max"]'),
-    Quantity("amplitude", "steady amplitude (librations)", ("amplitude", "omega_mean"), False,
-             _always, maps.amplitude, False, expression="maps.amplitude(ds)"),
-    _variable("theta_final", "final", "observed: theta_final"),
-    _variable("omega_final", "final", "observed: omega_final"),
-    _variable("winding", "winding", "observed: winding"),
-    _variable("theta_max", "theta_max", "observed: theta_max"),
-    _variable("omega_mean", "omega_mean", "observed: omega_mean"),
-    _variable("energy_final", "energy", "observed: energy_final"),
-    _variable("tension_max", "tension", "observed: tension_max"),
-    _variable("top_distance_max", "top_distance", "observed: top_distance_max"),
-)}
-
-
-def default_quantity(scene: Scene) -> str:
-    """Forced scenes: basins; damping alone: the final well; otherwise motion."""
-    if _forced(scene):
-        return "basins"
-    if _only_damping(scene):
-        return "well"
-    return "motion"
 
 
 # ------------------------------------------------------------------------ state
@@ -493,11 +376,6 @@ class Trajectory:
 
 
 # ------------------------------------------------------------------------ explorer
-def _fmt(value: float) -> str:
-    """A float as Python and TOML read it back exactly."""
-    return repr(float(value))
-
-
 def check_arguments(grid, run_kwargs: dict) -> None:
     """Refuse an explorer's grid that is not a `sweep.Grid`, and run keywords it does not
     take or lacks (``t_end`` and ``dt`` are required).
@@ -777,7 +655,7 @@ class Explorer:
         if not QUANTITIES[state.quantity].applies(state.scene):
             names = [q.name for q in QUANTITIES.values() if q.applies(state.scene)]
             raise ValueError(f"quantity {state.quantity!r} does not apply to this scene "
-                             f"(effects: {', '.join(sorted(_effects(state.scene))) or 'none'}"
+                             f"(effects: {', '.join(sorted(effect_names(state.scene))) or 'none'}"
                              f"); accepted: {', '.join(names)}")
 
     def validate(self, state: State, control: str) -> State:
@@ -1276,7 +1154,7 @@ class Explorer:
         units = str(da.attrs.get("units", ""))
         name = str(da.name) if da.name is not None else state.quantity
         if q.discrete:
-            legend, image = _legend(state.quantity, da, values)
+            legend, image = legend_of(state.quantity, da, values)
         else:
             legend = []
             image = values.astype(np.float64)
@@ -1300,9 +1178,9 @@ class Explorer:
         if result.legend:
             index = result.image[row, col]
             if np.isfinite(index):
-                return f"{result.legend[int(index)][1]} ({_number(value)})"
+                return f"{result.legend[int(index)][1]} ({number_text(value)})"
             return "none"
-        return f"{_number(value)} ({result.title})"
+        return f"{number_text(value)} ({result.title})"
 
     # -- one trajectory ---------------------------------------------------------
     def clicked(self, x, y, result: MapResult | None, state: State | None):
@@ -1356,7 +1234,7 @@ class Explorer:
         else:
             st = so = np.empty(0)
         if not label:
-            label = _MOTION_TEXT.get(int(maps.motion(ds).isel(one)), "")
+            label = MOTION_TEXT.get(int(maps.motion(ds).isel(one)), "")
         start = dict(state.start)
         return Trajectory(
             theta0=float(axes["theta0"][0]), omega0=float(axes["omega0"][0]),
@@ -1382,7 +1260,7 @@ class Explorer:
         observe = ["final", "winding"]
         steps = int(round((state.t_end - kwargs.get("t0", 0.0)) / state.dt))  # noqa: RUF046 - NumPy 1.x
         kwargs["save_every"] = max(1, math.ceil(steps / TRAJECTORY_SAMPLES))
-        if _forced(state.scene) and "forcing_frequency" not in (v.x, v.y):
+        if forced(state.scene) and "forcing_frequency" not in (v.x, v.y):
             frequency = state.scene.forcing.frequency
             if frequency > 0:
                 period = 2 * math.pi / frequency
@@ -1436,11 +1314,11 @@ class Explorer:
                 pilot: Grid | None = None, trajectory: bool = False) -> str:
         lines = ["import numpy as np", "import sweep", "from sweep import maps", "",
                  f"scene = sweep.Scene.from_dict({state.scene.to_dict()!r})"]
-        lines.append(f"grid = {_grid_text(grid)}")
+        lines.append(f"grid = {grid_text(grid)}")
         items = ", ".join(f"{k}={v!r}" for k, v in kwargs.items())
         lines.append(f"kwargs = dict({items})")
         if pilot is not None:
-            lines.append(f"home = {_grid_text(pilot)}  # the pilot's window: the home view")
+            lines.append(f"home = {grid_text(pilot)}  # the pilot's window: the home view")
             lines.append(f"kwargs['attractors'] = maps.pilot_catalogue(scene, home, "
                          f"{PILOT_POINTS}, **kwargs)")
         lines.append("ds = sweep.run(scene, grid, **kwargs)")
@@ -1456,14 +1334,14 @@ class Explorer:
         out = [f"# {comment}", "# written by sweep explore; run: sweep run THIS.toml -o OUT.nc",
                "", "[scene]"]
         for key in ("gravity", "length", "model"):
-            out.append(f"{key} = {_toml_value(spec[key])}")
+            out.append(f"{key} = {toml_value(spec[key])}")
         for name in EFFECTS:
             if name in spec:
                 out += ["", f"[scene.{name}]"]
-                out += [f"{k} = {_toml_value(v)}" for k, v in spec[name].items()]
-        grid_lines, grid = _grid_lines(axes)
-        out += ["", "[grid]", *grid_lines, "", "[run]",
-                *run_lines(kwargs, state.scene, grid, _toml_value)]
+                out += [f"{k} = {toml_value(v)}" for k, v in spec[name].items()]
+        written, grid = grid_lines(axes)
+        out += ["", "[grid]", *written, "", "[run]",
+                *run_lines(kwargs, state.scene, grid, toml_value)]
         if pilot:
             out.append(f"pilot = {PILOT_POINTS}")
         return "\n".join(out) + "\n"
@@ -1515,231 +1393,6 @@ class Explorer:
         buffer = _stdio.BytesIO()
         fig.savefig(buffer, format="png", dpi=dpi)
         return buffer.getvalue()
-
-
-def _grid_text(grid: Grid) -> str:
-    """``sweep.Grid(...)`` source giving exactly ``grid``'s floats."""
-    axes = []
-    for name, values in grid.axes.items():
-        values = np.asarray(values)
-        if values.size == 1:
-            axes.append(f"{name}=[{_fmt(values[0])}]")
-        else:
-            axes.append(f"{name}=np.linspace({_fmt(values[0])}, {_fmt(values[-1])}, "
-                        f"{values.size})")
-    return f"sweep.Grid({', '.join(axes)})"
-
-
-def _grid_lines(axes: dict) -> tuple[list[str], Grid]:
-    """A run file's ``[grid]`` lines of ``axes`` (each an array, a number or a ``{start,
-    stop, num}`` table), and the `Grid` that `sweep.toml_spec` reads back from them
-    (``np.linspace`` of a table)."""
-    lines, rows = [], {}
-    for name, value in axes.items():
-        if isinstance(value, np.ndarray):
-            value = float(value[0]) if value.size == 1 else [float(x) for x in value]
-        lines.append(f"{name} = {_toml_value(value)}")
-        rows[name] = np.linspace(value["start"], value["stop"], value["num"]) \
-            if isinstance(value, dict) else np.atleast_1d(np.asarray(value, dtype=float))
-    return lines, Grid(**rows)
-
-
-def _number(value) -> str:
-    value = float(value)
-    if not math.isfinite(value):
-        return "NaN"
-    return f"{int(value):d}" if value == int(value) and abs(value) < 1e15 else f"{value:.6g}"
-
-
-def _toml_value(value) -> str:
-    if isinstance(value, (bool, np.bool_)):
-        return "true" if value else "false"
-    if isinstance(value, (int, np.integer)):
-        return str(int(value))
-    if isinstance(value, (float, np.floating)):
-        return _fmt(value)
-    if isinstance(value, str):
-        return json.dumps(value)
-    if isinstance(value, dict):
-        return "{" + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + "}"
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    raise TypeError(f"cannot write {value!r} to a run file")
-
-
-_MOTION_TEXT = {-1: "rotation, negative sense", 0: "libration", 1: "rotation, positive sense",
-                -127: "unresolved (failed)"}
-
-
-def _legend(quantity: str, da, values: np.ndarray) -> tuple[list, np.ndarray]:
-    """``(legend, image)`` of a discrete map: the distinct values present (NaN as its own
-    entry) and each pixel's index into them."""
-    v = np.asarray(values, dtype=np.float64)
-    finite = np.isfinite(v)
-    found = np.unique(v[finite])
-    image = np.full(v.shape, np.nan)
-    image[finite] = np.searchsorted(found, v[finite])
-    legend = [(float(value), _meaning(quantity, da, float(value))) for value in found]
-    if not finite.all():
-        nan_text = {"well": "not captured by t_end (or failed)"}.get(quantity, "none")
-        image[~finite] = len(legend)
-        legend.append((math.nan, nan_text))
-    return legend, image
-
-
-def _meaning(quantity: str, da, value: float) -> str:
-    k = int(value)
-    if quantity == "well":
-        return f"well {k} (rest at theta = {k} x 2 pi)"
-    if quantity == "motion":
-        return _MOTION_TEXT.get(k, str(k))
-    if quantity == "period":
-        return "no period found" if k < 0 else f"period {k}"
-    if quantity == "inverted":
-        return "stays up" if k else "falls"
-    if quantity == "synchronized":  # a swing network (sweep.explore.networks)
-        return {1: "back in the synchronous state", 0: "not synchronous"}.get(k, "failed")
-    if quantity == "basins":
-        if k < 0:
-            return "unresolved"
-        a = da.attrs
-        try:
-            period = int(np.atleast_1d(a["attractor_period"])[k])
-            if "attractor_turns_per_period" in a:  # the pendulum
-                turns = float(np.atleast_1d(a["attractor_turns_per_period"])[k])
-                return f"attractor {k}: period {period}, {turns:+g} turns/period"
-            # a system: turns per period of each angle (sweep.maps.basins' attributes)
-            prefix = "attractor_turns_per_period_"
-            turns = ", ".join(f"{key[len(prefix):]} {float(np.atleast_1d(a[key])[k]):+g}"
-                              for key in a if key.startswith(prefix))
-            return f"attractor {k}: period {period}" + \
-                (f", turns/period {turns}" if turns else "")
-        except (KeyError, IndexError):
-            return f"attractor {k}"
-    return f"{k}"
-
-
-def label_summary(quantity: str, values: np.ndarray) -> str:
-    """What a basins or period map's labels found, in words, for the status line:
-    ``"3 attractors; 12 of 4096 starts unresolved (-1: not settled by t_end, chaotic, a
-    period over max_period, or failed)"``; "" for other maps.
-
-    Parameters
-    ----------
-    quantity : str
-        ``"basins"`` or ``"period"`` (others give "").
-    values : ndarray
-        The map's labels (`sweep.maps.basins`: attractor labels, -1 unresolved;
-        `sweep.maps.period`: periods in drive periods, -1 none found).
-    """
-    if quantity not in ("basins", "period"):
-        return ""
-    v = np.asarray(values)
-    found = np.unique(v[v >= 0]).astype(np.int64)
-    missing = int(np.count_nonzero(v < 0))
-    if quantity == "basins":
-        text = f"{found.size} attractor{'s' if found.size != 1 else ''}"
-        why = "not settled by t_end, chaotic, a period over max_period, or failed"
-        name = "unresolved"
-    else:
-        text = (f"periods {', '.join(str(int(p)) for p in found)}" if found.size else
-                "no period")
-        why = "not settled by t_end, chaotic, quasi-periodic, a longer period, or failed"
-        name = "without a period"
-    if missing:
-        text += f"; {missing} of {v.size} starts {name} ({why})"
-    return text
-
-
-# ------------------------------------------------------------------------ requests
-class Requests:
-    """Compute maps off the caller's thread: the newest request wins.
-
-    One worker thread takes the latest request (a newer one replaces a waiting one, and
-    cancels the one computing, which stops at its next band), computes its preview,
-    progressive steps and final map (`Explorer.stages`) and reports each with
-    ``on_result(request_id, result)``; then, with ``on_numbers``, the final map's numbers
-    (`Explorer.numbers`) with ``on_numbers(request_id, result, numbers)``. Errors go to
-    ``on_error(request_id, exception)``, cancellations to ``on_cancel(request_id)``.
-    Callbacks run on the worker thread.
-
-    Parameters
-    ----------
-    explorer : Explorer
-    on_result, on_error, on_cancel, on_numbers : callable
-    """
-
-    def __init__(self, explorer: Explorer, on_result, on_error=None, on_cancel=None,
-                 on_numbers=None) -> None:
-        self.explorer = explorer
-        self.on_result = on_result
-        self.on_error = on_error or (lambda request, exc: None)
-        self.on_cancel = on_cancel or (lambda request: None)
-        self.on_numbers = on_numbers
-        self._condition = threading.Condition()
-        self._pending = None
-        self._token: CancelToken | None = None
-        self._closed = False
-        self._count = 0
-        self._busy = False
-        self._thread = threading.Thread(target=self._loop, name="sweep-explore", daemon=True)
-        self._thread.start()
-
-    def submit(self, state: State) -> int:
-        """Ask for ``state``'s map; cancels the request computing. Returns its id."""
-        with self._condition:
-            if self._token is not None:
-                self._token.cancel()
-            self._count += 1
-            self._token = CancelToken()
-            self._pending = (self._count, state, self._token)
-            self._condition.notify()
-            return self._count
-
-    def idle(self, timeout: float | None = None) -> bool:
-        """Wait until nothing is pending or computing; False on timeout."""
-        end = None if timeout is None else time.monotonic() + timeout
-        with self._condition:
-            while self._pending is not None or self._busy:
-                left = None if end is None else end - time.monotonic()
-                if left is not None and left <= 0:
-                    return False
-                self._condition.wait(left)
-        return True
-
-    def close(self) -> None:
-        """Cancel what is computing and stop the worker."""
-        with self._condition:
-            self._closed = True
-            if self._token is not None:
-                self._token.cancel()
-            self._condition.notify_all()
-
-    def _loop(self) -> None:
-        while True:
-            with self._condition:
-                while self._pending is None and not self._closed:
-                    self._condition.wait()
-                if self._closed:
-                    return
-                request, state, token = self._pending
-                self._pending = None
-                self._busy = True
-            try:
-                final = self.explorer.stages(
-                    state, token,
-                    lambda result, request=request: self.on_result(request, result))
-                if self.on_numbers is not None:
-                    token.check()
-                    self.on_numbers(request, final, self.explorer.numbers(final))
-            except Cancelled:
-                self.on_cancel(request)
-            except Exception as exc:  # noqa: BLE001 - reported to the page, never raised into the loop
-                self.on_error(request, exc)
-            finally:
-                with self._condition:
-                    self._busy = False
-                    self._condition.notify_all()
 
 
 def rss_bytes() -> int:

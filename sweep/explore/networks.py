@@ -26,7 +26,8 @@ from ..grid import Grid
 from ..kernels.network import NETWORK_OBSERVABLES
 from ..physics.network import NETWORK_PARAMETERS, SwingNetwork
 from ..physics.system import System
-from .model import Control, Explorer, Quantity
+from .model import Control, Explorer
+from .quantities import Quantity
 from .systems import SystemExplorer
 
 __all__ = ["NetworkExplorer", "explorer_for", "network_quantities"]

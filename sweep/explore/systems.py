@@ -52,14 +52,12 @@ from .model import (
     Explorer,
     InvalidInput,
     MapResult,
-    Quantity,
     State,
     View,
-    _grid_lines,
-    _grid_text,
-    _toml_value,
     check_arguments,
 )
+from .quantities import Quantity
+from .texts import grid_lines, grid_text, toml_value
 
 __all__ = ["CATALOGUE_OBSERVE", "SYSTEM_PILOT_POINTS", "SYSTEM_RESOLUTION", "SYSTEM_ROUTES",
            "SystemExplorer", "SystemTrajectory", "driven_quantities",
@@ -268,12 +266,12 @@ def _system_toml(system: System) -> list[str]:
     if isinstance(system, DeclaredSystem):
         from ..toml_declared import system_lines
 
-        return system_lines(system, _toml_value)
-    out = ["[system]", f"kind = {_toml_value(type(system).__name__)}"]
-    out += [f"{k} = {_toml_value(v)}" for k, v in _constructor(system).items()]
+        return system_lines(system, toml_value)
+    out = ["[system]", f"kind = {toml_value(type(system).__name__)}"]
+    out += [f"{k} = {toml_value(v)}" for k, v in _constructor(system).items()]
     from ..toml_effects import system_effects_lines
 
-    return out + system_effects_lines(system.effects, _toml_value)
+    return out + system_effects_lines(system.effects, toml_value)
 
 
 #: Points per initial-state axis of a driven system's pilot (`sweep.maps.pilot_catalogue`
@@ -742,11 +740,11 @@ class SystemExplorer(Explorer):
         if quantity is not None and "maps." in quantity.expression:
             lines.append("from sweep import maps")
         lines += ["", *_system_python(state.scene),
-                 f"grid = {_grid_text(grid)}",
+                 f"grid = {grid_text(grid)}",
                  f"kwargs = dict({', '.join(f'{k}={v!r}' for k, v in kwargs.items())})"]
         if pilot is not None:
             p = SYSTEM_PILOT_POINTS
-            lines += [f"home = {_grid_text(pilot)}  # the pilot: {p} x {p} starts over the "
+            lines += [f"home = {grid_text(pilot)}  # the pilot: {p} x {p} starts over the "
                       "home window",
                       f"catalogue = maps.pilot_catalogue(system, home, {p}, **kwargs)",
                       f"kwargs.update(observe={CATALOGUE_OBSERVE!r}, attractors=catalogue, "
@@ -762,7 +760,7 @@ class SystemExplorer(Explorer):
     def _toml(state: State, axes: dict, kwargs: dict, *, pilot: bool, comment: str) -> str:
         out = [f"# {comment}", "# written by sweep explore; run: sweep run THIS.toml -o OUT.nc",
                "", *_system_toml(state.scene)]
-        grid_lines, grid = _grid_lines(axes)
-        out += ["", "[grid]", *grid_lines, "", "[run]",
-                *run_lines(kwargs, state.scene, grid, _toml_value)]
+        written, grid = grid_lines(axes)
+        out += ["", "[grid]", *written, "", "[run]",
+                *run_lines(kwargs, state.scene, grid, toml_value)]
         return "\n".join(out) + "\n"
