@@ -15,7 +15,7 @@ import numpy as np
 
 from .catalogue_scene import FIELD as SCENE_FIELD
 from .catalogue_scene import attributes as scene_attributes
-from .strobe_phase import FIELDS, LEGACY_FIELD
+from .strobe_phase import FIELDS, LEGACY_FIELD, OTHER_FIELD
 from .strobe_phase import attributes as drive_attributes
 
 __all__ = ["catalogue_arguments", "catalogue_attributes", "catalogue_parts", "check_catalogue",
@@ -164,7 +164,8 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
                          f"the grid varies {', '.join(varied)}; accepted: a grid that varies "
                          f"only the initial state ({', '.join(initial_axes(system))})")
     return {"theta": theta, "omega": omega, "period": period.astype(np.int64),
-            **{name: attractors[name] for name in (*FIELDS, LEGACY_FIELD, SCENE_FIELD)
+            **{name: attractors[name] for name in (*FIELDS, LEGACY_FIELD, OTHER_FIELD,
+                                                   SCENE_FIELD)
                if name in attractors}}
 
 
