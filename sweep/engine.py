@@ -542,8 +542,10 @@ def run(
         this run's drive phase ``W t + phi`` (``drive_phase`` and ``drive_frequency``,
         which `sweep.maps.attractor_catalogue` records: the same frequency, and e.g.
         the same ``forcing_phase`` phi with the pilot's ``t0 + t_transient`` and this
-        run's a whole number of forcing periods apart; `sweep.strobe_phase`), else the
-        run is refused; a catalogue without them is not checked. A run of another
+        run's a whole number of forcing periods apart; `sweep.strobe_phase`), and at
+        one of the phases its rings met of each other drive (a `PivotDrive`:
+        ``other_drive_phases``), else the run is refused; a catalogue without them is
+        not checked. A run of another
         scene than the catalogue's ``scene`` (its pilot's parameters of one value,
         `sweep.catalogue_scene`) is refused too.
     known_cells : xarray.DataArray, optional

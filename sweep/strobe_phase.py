@@ -13,8 +13,8 @@ any, are scene parameters, `sweep.catalogue_scene`). A run whose section is anot
 never meets a catalogued point, so every start would be labelled -1; `check_phase`
 refuses it before any compute. A run of another phi whose ``t0 + t_transient`` is
 shifted to the same section is accepted: its trajectories are the pilot's shifted in
-time. The single pendulum's catalogue (`sweep.engine`) and a system's
-(`sweep.system_attractors`) share this module.
+time (where no other drive's phase moves with it: below). The single pendulum's
+catalogue (`sweep.engine`) and a system's (`sweep.system_attractors`) share this module.
 
 A catalogue records, per attractor, ``drive_phase`` [rad] (``W t_s + phi mod 2 pi``) and
 ``drive_frequency`` [rad/s] (arrays of one value per ring, so that selecting attractors,
@@ -33,8 +33,9 @@ in the dataset attribute ``strobe_other_drives`` (JSON: frequency axis -> phase 
 which `dataset_drive` reads. Along a ring of period P the other drive's phase at the
 samples takes the values ``nu t_s + psi + m nu T`` (m = 0 .. P - 1, T the strobe
 period), which the pilot saw: a run whose other drive's phase at its first sample is
-one of them samples the same sections in another order (a shift of t0 by whole strobe
-periods, nu / W = p / q with q dividing every period, always is) and is accepted; any
+one of them samples the same sections in another order and is accepted (a shift of t0 +
+t_transient by whole strobe periods always is: with nu / W = p / q the drives repeat
+every q samples, and so does a ring on which both act, q dividing its period); any
 other phase is refused by `check_phase`: the single pendulum's run of another forcing
 phase phi shifted onto the strobe drive's section (t0 by a fraction of a period) moved
 its pivot's phase, and its stroboscopic points lay on another section of the pivot (no

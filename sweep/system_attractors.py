@@ -103,7 +103,8 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
         `sweep.maps.attractor_catalogue` gives them) or once for all (m), and
         ``drive_phase`` [rad] and ``drive_frequency`` [rad/s] (k values each: the
         drive phase ``W t + phi`` and frequency the rings were sampled at,
-        `sweep.strobe_phase`; an older catalogue's ``strobe_phase`` instead), and
+        `sweep.strobe_phase`; an older catalogue's ``strobe_phase`` instead),
+        ``other_drive_phases`` (its other drives' phases, `sweep.strobe_phase`), and
         ``scene``, the pilot system's parameters of one value (`sweep.catalogue_scene`).
     names : tuple of str
         The run's observables.
@@ -113,8 +114,8 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
     -------
     dict or None
         ``theta``, ``omega`` (k, m, P) float64, ``period`` (k,) int64, and the
-        catalogue's ``drive_phase`` (or ``strobe_phase``), ``drive_frequency`` and
-        ``scene`` where it has them.
+        catalogue's ``drive_phase`` (or ``strobe_phase``), ``drive_frequency``,
+        ``other_drive_phases`` and ``scene`` where it has them.
 
     Raises
     ------
@@ -191,7 +192,8 @@ def catalogue_attributes(catalogue: dict | None) -> dict:
     """The catalogue as dataset attributes (flat, netCDF-friendly): ``attractors_theta``
     and ``attractors_omega`` (k m P values, C order), ``attractors_period``,
     ``attractors_samples`` (P) and ``attractors_coordinates`` (m), and its drive
-    (``attractors_drive_phase``, ``attractors_drive_frequency``) and scene
+    (``attractors_drive_phase``, ``attractors_drive_frequency``,
+    ``attractors_other_drive_phases``) and scene
     (``attractors_scene``) where it has them."""
     if catalogue is None:
         return {}
