@@ -20,6 +20,7 @@ from ._known import check_known_cells, known_arguments, no_known_arguments
 from ._timesteps import check_sampling_period
 from ._validate import check_flag, check_positive_int
 from ._version import __version__
+from .catalogue_drives import pendulum_drives
 from .catalogue_scene import attributes as scene_attributes
 from .catalogue_scene import check_scene, grid_value, pendulum_values
 from .execution import RunContext, execute
@@ -250,7 +251,7 @@ def _prepare(scene, grid, *, t_end, dt, t0, t_transient, observe, save_every, me
     if orbits and scene.forcing is not None:  # rings of another drive phase: -1 everywhere
         frequency, phase = forcing_drive(scene, grid)
         check_phase(attractors, len(orbits), frequency, settings, "forcing_frequency",
-                    phase=phase)
+                    phase=phase, others=pendulum_drives(scene, grid))
     _check_stop_early(names, scene, grid, stop_early, save_every)
     if known_cells is not None:
         check_known_cells(known_cells, attractors=len(orbits), stop_early=stop_early,
@@ -542,8 +543,10 @@ def run(
         this run's drive phase ``W t + phi`` (``drive_phase`` and ``drive_frequency``,
         which `sweep.maps.attractor_catalogue` records: the same frequency, and e.g.
         the same ``forcing_phase`` phi with the pilot's ``t0 + t_transient`` and this
-        run's a whole number of forcing periods apart; `sweep.strobe_phase`), else the
-        run is refused; a catalogue without them is not checked. A run of another
+        run's a whole number of forcing periods apart; `sweep.strobe_phase`), and at
+        one of the phases its rings met of each other drive (a `PivotDrive`:
+        ``other_drive_phases``), else the run is refused; a catalogue without them is
+        not checked. A run of another
         scene than the catalogue's ``scene`` (its pilot's parameters of one value,
         `sweep.catalogue_scene`) is refused too.
     known_cells : xarray.DataArray, optional

@@ -14,6 +14,7 @@ import numpy as np
 import xarray as xr
 
 from . import _config
+from .catalogue_drives import system_drives
 from .catalogue_scene import ATTRIBUTE as SCENE_ATTRIBUTE
 from .catalogue_scene import check_scene, grid_value, scene_values
 from .execution import RunContext, execute
@@ -28,7 +29,7 @@ from .observables import STROBE_SAMPLES, variable_attributes
 from .physics.network import NETWORK_PARAMETERS, SwingNetwork
 from .physics.system import System, system_parameters
 from .settings import CUDA_CHUNK, _block, _check_device, default_chunk_size, validate_settings
-from .strobe_phase import check_phase, phase_axis
+from .strobe_phase import OTHER_ATTRIBUTE, check_phase, phase_axis
 from .system_attractors import catalogue_arguments, catalogue_attributes, check_catalogue
 from .system_observables import (
     SYSTEM_OBSERVABLES,
@@ -199,7 +200,8 @@ def prepare_system(system: System, grid: ParameterRows, *, t_end, dt, t0=0.0,
         frequency, phase = (grid_value(grid, axis, values.get(axis, 0.0))
                             for axis in (drive.axis, name or drive.axis))
         check_phase(attractors, len(catalogue["period"]), frequency, settings,
-                    drive.axis, phase=phase if name else 0.0)
+                    drive.axis, phase=phase if name else 0.0,
+                    others=system_drives(system, grid, drive.axis))
         check_scene(attractors, system_values(system, grid, drive.axis))
     check_flag("check_stability", check_stability)
     if stop_early and (names not in STOPPING or save_every is not None):
@@ -348,6 +350,10 @@ def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
     if "strobe" in spec.observe:  # what `sweep.maps.basins` reads of the samples
         attrs[SCENE_ATTRIBUTE] = json.dumps(system_values(
             system, grid, system.drive_frequency_parameter.axis), sort_keys=True)
+        others = system_drives(system, grid, system.drive_frequency_parameter.axis)
+        if others:  # the other drives whose phases a catalogue of it records
+            attrs[OTHER_ATTRIBUTE] = json.dumps(
+                {name: phase for name, (_, phase, _) in others.items()})
         attrs.update(strobe_samples=spec.strobe_samples,
                      strobe_frequency=system.drive_frequency_parameter.axis,
                      strobe_positions=" ".join(c.name for c in coordinates),

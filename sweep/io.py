@@ -17,6 +17,7 @@ import xarray as xr
 
 from . import _config
 from ._version import __version__
+from .catalogue_drives import pendulum_drives
 from .catalogue_scene import ATTRIBUTE as SCENE_ATTRIBUTE
 from .catalogue_scene import from_attributes as scene_from_attributes
 from .catalogue_scene import pendulum_values
@@ -24,7 +25,7 @@ from .grid import Grid, Points
 from .kernels import Status, vectors
 from .observables import OBSERVABLES, variable_attributes
 from .physics import EFFECTS, Scene, parameter_info
-from .strobe_phase import from_attributes
+from .strobe_phase import OTHER_ATTRIBUTE, from_attributes
 
 __all__ = ["device_attributes", "origin_attributes", "run_attributes", "to_dataset",
            "status_variable", "save", "load", "scene_from", "grid_from",
@@ -139,6 +140,10 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     if "strobe" in spec.observe:  # and the scene an attractor catalogue of it is of
         attrs["strobe_samples"] = spec.strobe_samples
         attrs[SCENE_ATTRIBUTE] = json.dumps(pendulum_values(scene, grid), sort_keys=True)
+        others = pendulum_drives(scene, grid)
+        if others:  # the other drives whose phases a catalogue of it records
+            attrs[OTHER_ATTRIBUTE] = json.dumps(
+                {name: phase for name, (_, phase, _) in others.items()})
     attrs.update(device_attributes(spec))
     if spec.dtype != "float64":  # its working precision, when not the default
         attrs["dtype"] = spec.dtype

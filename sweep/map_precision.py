@@ -35,6 +35,7 @@ import xarray as xr
 
 from . import engine
 from ._validate import check_count, check_real
+from .catalogue_drives import pendulum_drives
 from .grid import Grid, Points
 from .kernels.spec import DTYPES
 from .maps.fractions import _table, _unresolved_code
@@ -395,7 +396,8 @@ def map_accuracy(scene: Scene, starts, label=basins, ladder=None, *, repeats: in
             # a level of another t_transient or dt may sample another drive phase, where
             # no start could match the catalogue (sweep.run refuses it): no catalogue
             if phase_mismatch(catalogue, len(catalogue["period"]), frequency, plan[0],
-                              "forcing_frequency", phase=phase) is None:
+                              "forcing_frequency", phase=phase,
+                              others=pendulum_drives(scene, starts)) is None:
                 kwargs["attractors"] = catalogue
     labeller = _Labeller(label, func, options, forced,
                          levels[-1][3].get("tol", options.get("tol", 1e-3)))

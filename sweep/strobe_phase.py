@@ -13,13 +13,36 @@ any, are scene parameters, `sweep.catalogue_scene`). A run whose section is anot
 never meets a catalogued point, so every start would be labelled -1; `check_phase`
 refuses it before any compute. A run of another phi whose ``t0 + t_transient`` is
 shifted to the same section is accepted: its trajectories are the pilot's shifted in
-time. The single pendulum's catalogue (`sweep.engine`) and a system's
-(`sweep.system_attractors`) share this module.
+time (where no other drive's phase moves with it: below). The single pendulum's
+catalogue (`sweep.engine`) and a system's (`sweep.system_attractors`) share this module.
 
 A catalogue records, per attractor, ``drive_phase`` [rad] (``W t_s + phi mod 2 pi``) and
 ``drive_frequency`` [rad/s] (arrays of one value per ring, so that selecting attractors,
 ``catalogue[key][keep]``, keeps them). A catalogue without both (one built by hand from
 rings) is not checked.
+
+A scene may have other drives besides the strobe drive (`sweep.catalogue_drives`: the
+single pendulum's `sweep.PivotDrive` ``a cos(nu t + psi)`` beside its forcing, a
+system's `sweep.Forcing(on=...)` beside its driven pivot). The rings then lie on the
+section of every drive's phase, and a catalogue records, per attractor, also
+``other_drive_phases`` [rad]: a structured array of one row per attractor and a float64
+field per other drive, named by its frequency axis (``pivot_frequency``), holding ``nu
+t_s + psi mod 2 pi`` (nu its frequency, psi its phase constant; their values are of the
+catalogue's scene, `sweep.catalogue_scene`). A strobe run with other drives names them
+in the dataset attribute ``strobe_other_drives`` (JSON: frequency axis -> phase axis),
+which `dataset_drive` reads. Along a ring of period P the other drive's phase at the
+samples takes the values ``nu t_s + psi + m nu T`` (m = 0 .. P - 1, T the strobe
+period), which the pilot saw: a run whose other drive's phase at its first sample is
+one of them samples the same sections in another order and is accepted (a shift of t0 +
+t_transient by whole strobe periods always is: with nu / W = p / q the drives repeat
+every q samples, and so does a ring on which both act, q dividing its period); any
+other phase is refused by `check_phase`: the single pendulum's run of another forcing
+phase phi shifted onto the strobe drive's section (t0 by a fraction of a period) moved
+its pivot's phase, and its stroboscopic points lay on another section of the pivot (no
+start matched; nothing said so). A catalogue without ``other_drive_phases`` (an older
+one, one built by hand, one of a scene with one drive) is not checked for them; a drive
+only the catalogue or only the run has is not compared (its parameters are of the
+scene, which `sweep.catalogue_scene` compares).
 
 Catalogues made before the drive's phase constant was counted (netCDF attribute
 ``attractors_strobe_phase``) record ``strobe_phase``, the phase of the clock alone, ``W
@@ -34,20 +57,31 @@ Where a catalogue has both, ``drive_phase`` counts.
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 
 from ._timesteps import WHOLE_STEPS_RTOL, transient_steps
-from .catalogue_scene import one_value
+from .catalogue_scene import as_record, one_value
 
-__all__ = ["FIELDS", "LEGACY_FIELD", "PHASE_RTOL", "attributes", "check_phase",
+__all__ = ["FIELDS", "LEGACY_FIELD", "OTHER_ATTRIBUTE", "OTHER_FIELD", "PHASE_RTOL",
+           "attributes", "check_phase",
            "dataset_drive", "drive_fields", "from_attributes", "phase_axis",
            "phase_mismatch", "strobe_start"]
 
 #: The catalogue's keys of its drive: per attractor, the drive phase ``W t_s + phi`` of
 #: its samples [rad] and the drive's angular frequency [rad/s].
 FIELDS = ("drive_phase", "drive_frequency")
+
+#: The catalogue's key of its other drives' phases ``nu t_s + psi mod 2 pi`` [rad]: a
+#: structured array, a row per attractor and a float64 field per drive, named by its
+#: frequency axis.
+OTHER_FIELD = "other_drive_phases"
+
+#: The dataset attribute in which a strobe run names its other drives: JSON of each
+#: one's frequency axis -> its phase constant's axis (`sweep.catalogue_drives`).
+OTHER_ATTRIBUTE = "strobe_other_drives"
 
 #: The key of an older catalogue's phase, the clock's alone (``W t_s``; see above).
 LEGACY_FIELD = "strobe_phase"
@@ -91,13 +125,20 @@ def _phase(frequency: float, time: float, constant: float = 0.0) -> float:
 
 
 def drive_fields(frequency: float, t0: float, t_transient: float, dt: float,
-                 count: int, phase: float = 0.0) -> dict:
+                 count: int, phase: float = 0.0, others: dict | None = None) -> dict:
     """The catalogue's ``drive_phase`` and ``drive_frequency`` (``count`` values each)
     of rings sampled by a run with these settings at drive frequency ``frequency``
-    [rad/s] and phase constant ``phase`` [rad]."""
-    value = _phase(frequency, strobe_start(t0, t_transient, dt), float(phase))
-    return {"drive_phase": np.full(count, value),
-            "drive_frequency": np.full(count, float(frequency))}
+    [rad/s] and phase constant ``phase`` [rad], and ``other_drive_phases`` of its
+    ``others`` (frequency axis -> (frequency [rad/s], phase constant [rad])), where
+    given."""
+    start = strobe_start(t0, t_transient, dt)
+    fields = {"drive_phase": np.full(count, _phase(frequency, start, float(phase))),
+              "drive_frequency": np.full(count, float(frequency))}
+    if others:
+        fields[OTHER_FIELD] = as_record(
+            {name: _phase(float(nu), start, float(psi))
+             for name, (nu, psi) in sorted(others.items())}, count)
+    return fields
 
 
 def _recorded(ds, name: str):
@@ -123,7 +164,23 @@ def dataset_drive(ds, axis: str, count: int) -> dict:
     if frequency is None or phase is None \
             or not all(key in a for key in ("t0", "t_transient", "dt")):
         return {}
-    return drive_fields(frequency, a["t0"], a["t_transient"], a["dt"], count, phase)
+    return drive_fields(frequency, a["t0"], a["t_transient"], a["dt"], count, phase,
+                        _dataset_others(ds))
+
+
+def _dataset_others(ds) -> dict:
+    """The other drives the run ``ds`` names (``strobe_other_drives``) of one frequency
+    and phase constant each: frequency axis -> (frequency, phase constant); a drive of
+    several values in ``ds`` (a grid over them) is left out."""
+    others = {}
+    for name, phase_name in json.loads(ds.attrs.get(OTHER_ATTRIBUTE, "{}")).items():
+        recorded = _recorded(ds, name)
+        frequency = None if recorded is None else one_value(recorded)
+        recorded = None if phase_name is None else _recorded(ds, phase_name)
+        phase = 0.0 if recorded is None else one_value(recorded)
+        if frequency is not None and phase is not None:
+            others[name] = (frequency, phase)
+    return others
 
 
 def _parse(attractors, count: int, accepted: str):
@@ -158,12 +215,94 @@ def _parse(attractors, count: int, accepted: str):
     return phase, frequency, key == LEGACY_FIELD
 
 
+def _parse_others(attractors, count: int) -> dict | None:
+    """The catalogue's ``other_drive_phases`` as frequency axis -> its ``count`` phases
+    [rad], or None without them; refuses anything else (values not finite)."""
+    given = attractors.get(OTHER_FIELD) if hasattr(attractors, "get") else None
+    if given is None:
+        return None
+    try:
+        if isinstance(given, np.ndarray) and given.dtype.names is not None:
+            columns = {name: given[name] for name in given.dtype.names}
+        else:
+            columns = dict(given)
+        phases = {str(name): np.broadcast_to(np.asarray(value, dtype=np.float64).ravel(),
+                                             (count,))
+                  for name, value in columns.items()}
+    except (TypeError, ValueError):
+        phases = None
+    if phases is None or not all(np.all(np.isfinite(v)) for v in phases.values()):
+        raise ValueError(f"attractors: a catalogue's {OTHER_FIELD} {given!r} for {count} "
+                         "attractors; accepted: the other drives' phases nu t + psi (rad) "
+                         "as sweep.maps.attractor_catalogue records them (a structured "
+                         "array, a row per attractor and a field per drive, named by its "
+                         "frequency axis), a mapping of those names to one finite value or "
+                         f"{count}, or none (unchecked)")
+    return phases
+
+
+def _other_mismatch(attractors, count: int, frequency: float, settings, axis: str,
+                    others: dict) -> str | None:
+    """Why the catalogue's ``other_drive_phases`` cannot match the run's ``others``
+    (frequency axis -> (frequency [rad/s], phase axis or None, phase constant [rad])),
+    the strobe drive (``axis``, ``frequency``) matching; None where they can."""
+    recorded = _parse_others(attractors, count)
+    if not recorded or not others:
+        return None
+    periods = np.ones(count, dtype=np.int64)
+    if attractors.get("period") is not None:
+        periods = np.broadcast_to(np.asarray(attractors["period"], dtype=np.int64), (count,))
+    dt = float(settings.dt)
+    start = float(settings.t0) + int(settings.n_transient) * dt
+    strobe = round(2 * np.pi / (frequency * dt)) * dt  # the kernel's period [s]
+    for a in range(count):
+        for name in sorted(set(recorded) & set(others)):
+            nu, phase_name, psi = others[name]
+            nu, psi = float(nu), float(psi)
+            own = _phase(nu, start, psi)
+            ring = [float(np.mod(recorded[name][a] + nu * m * strobe, 2 * np.pi))
+                    for m in range(max(int(periods[a]), 1))]
+            # as the strobe drive's tolerance (PHASE_RTOL), over the m periods, and with
+            # the strobe drive's own tolerance in time (its phase's / W) moving this one
+            if any(abs(math.remainder(own - value, 2 * np.pi))
+                   <= PHASE_RTOL * (2 * np.pi * (1 + nu / frequency)
+                                    + nu * (abs(start) + m * strobe))
+                   for m, value in enumerate(ring)):
+                continue
+            shown = ", ".join(f"{value:.6g}" for value in ring[:4]) \
+                + (", ..." if len(ring) > 4 else "")
+            drive = f"{name} = {nu!r} rad/s"
+            if phase_name is not None:
+                drive += f", {phase_name} = {psi!r} rad"
+            names = [n for n in (phase_axis(axis), phase_name) if n]
+            constants = " and ".join(names)
+            return (f"attractors: t0 + t_transient = {float(settings.t0)!r} + "
+                    f"{float(settings.t_transient)!r} s puts this run's first stroboscopic "
+                    f"sample at t = {start:.10g} s, where its other drive ({drive}, period "
+                    f"{2 * np.pi / nu if nu > 0 else math.inf:.10g} s) is at phase "
+                    f"{'nu t + psi' if phase_name is not None else 'nu t'} = {own:.6g} rad, "
+                    f"but along the catalogue's attractor {a} (a ring of period "
+                    f"{len(ring)}) that drive's phase at the samples was {shown} rad, so "
+                    f"this run's stroboscopic points lie on another section of it and no "
+                    f"start could match it; accepted: t0 + t_transient shifted from the "
+                    f"pilot's by a whole number of periods of {axis} ("
+                    f"{2 * np.pi / frequency:.10g} s) with the pilot's "
+                    f"{constants or 'phase constants'}, or a catalogue of a pilot with this "
+                    f"run's {', '.join(['t0', 't_transient', *names][:-1])} and "
+                    f"{(['t_transient', *names])[-1]} "
+                    "(sweep.maps.pilot_catalogue)")
+    return None
+
+
 def phase_mismatch(attractors, count: int, frequency: float, settings,
-                   axis: str, accepted: str = "", phase: float = 0.0) -> str | None:
+                   axis: str, accepted: str = "", phase: float = 0.0,
+                   others: dict | None = None) -> str | None:
     """Why the catalogue ``attractors`` (``count`` rings) cannot match a run with
     ``settings`` (`sweep.settings.RunSettings`) at drive frequency ``frequency`` [rad/s]
     (grid axis ``axis``) and drive phase constant ``phase`` [rad] (its axis
-    `phase_axis`), or None where it can (or records no drive)."""
+    `phase_axis`), with other drives ``others`` (frequency axis -> (frequency [rad/s],
+    phase axis or None, phase constant [rad]), `sweep.catalogue_drives`), or None where
+    it can (or records no drive)."""
     parsed = _parse(attractors, count, accepted)
     if parsed is None:
         return None
@@ -204,37 +343,56 @@ def phase_mismatch(attractors, count: int, frequency: float, settings,
                     f"of dt){other}, or a catalogue of a pilot with this run's t0 and "
                     f"t_transient{f' and {name}' if name is not None else ''} "
                     "(sweep.maps.pilot_catalogue)")
-    return None
+    return _other_mismatch(attractors, count, frequency, settings, axis, others or {})
 
 
 def check_phase(attractors, count: int, frequency: float, settings, axis: str,
-                accepted: str = "", phase: float = 0.0) -> None:
+                accepted: str = "", phase: float = 0.0, others: dict | None = None) -> None:
     """Refuse (ValueError, before any compute) a catalogue sampled at another drive
-    phase or frequency than the run's (`phase_mismatch`)."""
-    problem = phase_mismatch(attractors, count, frequency, settings, axis, accepted, phase)
+    phase or frequency than the run's, or at another phase of one of its other drives
+    ``others`` (`phase_mismatch`)."""
+    problem = phase_mismatch(attractors, count, frequency, settings, axis, accepted, phase,
+                             others)
     if problem is not None:
         raise ValueError(problem)
 
 
 def attributes(attractors, count: int) -> dict:
     """The catalogue's drive as dataset attributes (``attractors_drive_phase``, or an
-    old catalogue's ``attractors_strobe_phase``, and ``attractors_drive_frequency``),
-    or ``{}`` where it records none."""
+    old catalogue's ``attractors_strobe_phase``, and ``attractors_drive_frequency``;
+    ``attractors_other_drive_phases``, JSON of each other drive's phases, where it has
+    them), or ``{}`` where it records none."""
     parsed = _parse(attractors, count, "")
-    if parsed is None:
-        return {}
-    phase, frequency, legacy = parsed
-    key = LEGACY_FIELD if legacy else FIELDS[0]
-    return {f"attractors_{key}": np.array(phase, dtype=np.float64),
-            f"attractors_{FIELDS[1]}": np.array(frequency, dtype=np.float64)}
+    out = {}
+    if parsed is not None:
+        phase, frequency, legacy = parsed
+        key = LEGACY_FIELD if legacy else FIELDS[0]
+        out = {f"attractors_{key}": np.array(phase, dtype=np.float64),
+               f"attractors_{FIELDS[1]}": np.array(frequency, dtype=np.float64)}
+    others = _parse_others(attractors, count)
+    if others:
+        out[f"attractors_{OTHER_FIELD}"] = json.dumps(
+            {name: values.tolist() for name, values in others.items()})
+    return out
 
 
 def from_attributes(attrs) -> dict:
     """The catalogue's drive from dataset attributes (`attributes`: ``drive_phase``, or
-    an old catalogue's ``strobe_phase``, and ``drive_frequency``), or ``{}``."""
+    an old catalogue's ``strobe_phase``, and ``drive_frequency``; ``other_drive_phases``
+    as a structured array where kept), or ``{}``."""
     key = FIELDS[0] if f"attractors_{FIELDS[0]}" in attrs else LEGACY_FIELD
     names = (key, FIELDS[1])
-    if not all(f"attractors_{name}" in attrs for name in names):
-        return {}
-    return {name: np.atleast_1d(np.asarray(attrs[f"attractors_{name}"], dtype=np.float64))
-            for name in names}
+    out = {}
+    if all(f"attractors_{name}" in attrs for name in names):
+        out = {name: np.atleast_1d(np.asarray(attrs[f"attractors_{name}"], dtype=np.float64))
+               for name in names}
+    if f"attractors_{OTHER_FIELD}" in attrs:
+        columns = {name: np.atleast_1d(np.asarray(values, dtype=np.float64))
+                   for name, values in json.loads(attrs[f"attractors_{OTHER_FIELD}"]).items()}
+        if columns:
+            record = np.zeros(max(v.size for v in columns.values()),
+                              dtype=[(name, np.float64) for name in columns])
+            for name, values in columns.items():
+                record[name] = values
+            out[OTHER_FIELD] = record
+    return out

@@ -15,7 +15,7 @@ import numpy as np
 
 from .catalogue_scene import FIELD as SCENE_FIELD
 from .catalogue_scene import attributes as scene_attributes
-from .strobe_phase import FIELDS, LEGACY_FIELD
+from .strobe_phase import FIELDS, LEGACY_FIELD, OTHER_FIELD
 from .strobe_phase import attributes as drive_attributes
 
 __all__ = ["catalogue_arguments", "catalogue_attributes", "catalogue_parts", "check_catalogue",
@@ -103,7 +103,8 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
         `sweep.maps.attractor_catalogue` gives them) or once for all (m), and
         ``drive_phase`` [rad] and ``drive_frequency`` [rad/s] (k values each: the
         drive phase ``W t + phi`` and frequency the rings were sampled at,
-        `sweep.strobe_phase`; an older catalogue's ``strobe_phase`` instead), and
+        `sweep.strobe_phase`; an older catalogue's ``strobe_phase`` instead),
+        ``other_drive_phases`` (its other drives' phases, `sweep.strobe_phase`), and
         ``scene``, the pilot system's parameters of one value (`sweep.catalogue_scene`).
     names : tuple of str
         The run's observables.
@@ -113,8 +114,8 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
     -------
     dict or None
         ``theta``, ``omega`` (k, m, P) float64, ``period`` (k,) int64, and the
-        catalogue's ``drive_phase`` (or ``strobe_phase``), ``drive_frequency`` and
-        ``scene`` where it has them.
+        catalogue's ``drive_phase`` (or ``strobe_phase``), ``drive_frequency``,
+        ``other_drive_phases`` and ``scene`` where it has them.
 
     Raises
     ------
@@ -164,7 +165,8 @@ def check_catalogue(system, attractors, names, grid) -> dict | None:
                          f"the grid varies {', '.join(varied)}; accepted: a grid that varies "
                          f"only the initial state ({', '.join(initial_axes(system))})")
     return {"theta": theta, "omega": omega, "period": period.astype(np.int64),
-            **{name: attractors[name] for name in (*FIELDS, LEGACY_FIELD, SCENE_FIELD)
+            **{name: attractors[name] for name in (*FIELDS, LEGACY_FIELD, OTHER_FIELD,
+                                                   SCENE_FIELD)
                if name in attractors}}
 
 
@@ -190,7 +192,8 @@ def catalogue_attributes(catalogue: dict | None) -> dict:
     """The catalogue as dataset attributes (flat, netCDF-friendly): ``attractors_theta``
     and ``attractors_omega`` (k m P values, C order), ``attractors_period``,
     ``attractors_samples`` (P) and ``attractors_coordinates`` (m), and its drive
-    (``attractors_drive_phase``, ``attractors_drive_frequency``) and scene
+    (``attractors_drive_phase``, ``attractors_drive_frequency``,
+    ``attractors_other_drive_phases``) and scene
     (``attractors_scene``) where it has them."""
     if catalogue is None:
         return {}

@@ -27,6 +27,7 @@ LAYERS = {
     "sweep.physics": 1, "sweep.methods": 1, "sweep.observables": 1,
     "sweep.system_observables": 1,
     "sweep.system_attractors": 1,  # a system's catalogue as arrays: numpy alone
+    "sweep.catalogue_drives": 1,  # a catalogue's other drives: sweep.physics' effects
     "sweep.kernels": 2, "sweep.grid": 2, "sweep.stability": 2,
     "sweep.execution": 3, "sweep.io": 3, "sweep.settings": 3,
     "sweep.engine": 4, "sweep.engine_systems": 4,

@@ -573,7 +573,13 @@ def attractor_catalogue(ds: xr.Dataset, labels: xr.DataArray | None = None, *,
         (`sweep.strobe_phase`; absent where the run has no one frequency and phase): a
         run that uses the catalogue must sample at that drive phase, e.g. its ``t0 +
         t_transient`` a whole number of periods from the pilot's with the same phi, or
-        it is refused; ``scene``: the run's parameters of one value (a structured
+        it is refused; ``other_drive_phases``: where the scene has other drives (a
+        `sweep.PivotDrive` beside the forcing, a `sweep.Forcing(on=...)` beside a
+        system's pivot; those the run names in ``strobe_other_drives``), their phases
+        ``nu (t0 + n_transient dt) + psi mod 2 pi`` [rad] (a structured array, a row per
+        attractor and a field per drive, named by its frequency axis); a run whose
+        first sample meets one at none of the phases the ring met is refused;
+        ``scene``: the run's parameters of one value (a structured
         array, a row per attractor; `sweep.catalogue_scene`; absent for a dataset
         without ``strobe_scene``): a run of another value is refused. Of a driven
         system with several coordinates (a run of `sweep.DoublePendulum` with a pivot
