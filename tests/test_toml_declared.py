@@ -110,7 +110,8 @@ def test_effects_on_its_coordinates_are_read_and_written_back():
     (``[system.<effect>]`` with ``on``; ``[[system.<effect>]]`` for several), and the
     explorer's run file of it (`sweep.toml_spec.system_effects_lines`) reads back the
     same system; a torque on the cart in N is the same system as in Python."""
-    from sweep.explore.systems import _system_toml, _toml_value
+    from sweep.explore.systems import _system_toml
+    from sweep.explore.texts import toml_value as _toml_value
     from sweep.toml_effects import system_effects_lines
 
     spec = copy.deepcopy(spec_of_example())
