@@ -482,7 +482,8 @@ def run(
         well of an unforced pendulum, final once its energy is below the separatrix)
         and ``strobe`` (the stroboscopic samples are periodic, the attractor found).
         Only observables with such a test may be observed; the saving is the point
-        (see the README's measurement).
+        (measured in the user guide's Maps page, docs/guide/maps.md, "Simulate only
+        what the question needs").
     estimate_error : int, optional
         Opt-in accuracy estimate: re-run this many random trajectories with half the
         step (or 100x tighter tolerances) and attach the estimated global error of the
@@ -524,11 +525,12 @@ def run(
         Working precision of the state and the step's arithmetic (fixed-step methods;
         `sweep.kernels.precision`). ``"float32"`` runs more trajectories per SIMD
         register and per GPU clock, at the cost of float32 rounding: about 6e-8
-        relative per step, which grows over a run (see the README's section on float32:
-        its speed, and where basin labels and Lyapunov exponents change and where they
-        do not). The nonlinear pendulum's angle, the drives' frequencies and phases, the
-        clock, the observables' accumulators and the outputs stay float64; the state
-        steps by ``float32(dt)``.
+        relative per step, which grows over a run (see the user guide's section on
+        float32, docs/guide/integrators.md, "Single precision": its speed, and where
+        basin labels and Lyapunov exponents change and where they do not). The
+        nonlinear pendulum's angle, the drives' frequencies and phases, the clock, the
+        observables' accumulators and the outputs stay float64; the state steps by
+        ``float32(dt)``.
     attractors : mapping, optional
         An attractor catalogue of the scene (`sweep.maps.attractor_catalogue` of a
         pilot run, e.g. a coarse grid with ``stop_early``): adds the ``attractor``

@@ -239,9 +239,13 @@ def map(da, ax=None, degrees=True, cmap=None, title=None):
 
     The first dimension runs along x and the second along y, so a ``theta0 x
     omega0`` map is a picture of the phase plane. Integer-valued data (winding
-    numbers, well indices, labels) get one colour per integer and integer ticks;
-    a diverging colormap centred on 0 is used when they take both signs. CF flag
-    variables (``status``) get their flag meanings as tick labels.
+    numbers, well indices, labels) spanning at most `MAX_DISCRETE_LEVELS` (41)
+    consecutive integers, from their smallest to their largest value, get one
+    colour per integer and integer ticks, on a diverging colormap centred on 0 when
+    they take both signs. Integer data spanning more (a forced map's winding from
+    -27 to 27) are drawn like real-valued data: a continuous colormap, by default
+    ``"viridis"`` whatever their signs. CF flag variables (``status``) get their flag
+    meanings as tick labels.
 
     Parameters
     ----------
@@ -256,7 +260,8 @@ def map(da, ax=None, degrees=True, cmap=None, title=None):
         (coordinates only; data values keep their own units).
     cmap : str or matplotlib.colors.Colormap, optional
         Matplotlib colormap (name). Default: ``"RdBu_r"`` for integer data of both
-        signs, ``"viridis"`` otherwise.
+        signs spanning at most `MAX_DISCRETE_LEVELS` integers, ``"viridis"``
+        otherwise.
     title : str, optional
         Axes title. Default: the variable name and any scalar coordinates.
 
