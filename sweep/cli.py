@@ -13,18 +13,22 @@
     sweep explore [RUN.toml] [--port N] [--host ADDRESS] [--device cpu|cuda] [--no-browser]
     sweep --version
 
-Every error is one line on stderr, ``sweep: error: ...``, and exit status 2; no
-output file is written when a command fails. ``sweep run`` stopped by Ctrl-C (SIGINT)
-exits with 130, by SIGTERM (how batch systems stop a job) with 143, after one line
-that says how to resume.
+Every error is one line on stderr, ``sweep: error: ...``, and exit status 2, those of
+the argument parser too (`_Parser`: an unknown option is named first, with the nearest
+valid one); no output file is written when a command fails. ``sweep run`` stopped by
+Ctrl-C (SIGINT) exits with 130, by SIGTERM (how batch systems stop a job) with 143,
+after one line that says how to resume. A command whose stdout is closed early
+(``sweep fractions FILE.nc | head``) ends quietly with 141, as one SIGPIPE ended.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import difflib
 import math
 import os
+import re
 import signal
 import sys
 import threading
@@ -41,6 +45,11 @@ __all__ = ["DEMO", "build_parser", "main"]
 
 #: Exit status of every error (the same as argparse's usage errors).
 EXIT_ERROR = 2
+
+#: Exit status of a command whose stdout was closed before it ended (``sweep fractions
+#: FILE.nc | head``): 128 + 13 (SIGPIPE), what a shell reports for ``cat``, ``yes`` or
+#: any tool SIGPIPE ended; quiet, as theirs (``set -o pipefail`` sees it).
+EXIT_BROKEN_PIPE = 128 + 13
 
 #: Exit status of ``sweep run`` stopped by Ctrl-C (SIGINT): 128 + 2, as a shell reports.
 EXIT_INTERRUPTED = 130
@@ -73,15 +82,34 @@ DEMO = {
 
 
 # ------------------------------------------------------------------------------ parser
+class _UsageError(Exception):
+    """An error of the command line as `_Parser` found it (``parser``: the parser of the
+    command or sub-command that found it, ``message``: argparse's words)."""
+
+    def __init__(self, parser: argparse.ArgumentParser, message: str) -> None:
+        super().__init__(message)
+        self.parser, self.message = parser, message
+
+
+class _Parser(argparse.ArgumentParser):
+    """An `argparse.ArgumentParser` whose usage errors raise `_UsageError` instead of
+    printing the usage block and exiting, so that `main` says them in one ``sweep:
+    error:`` line (`_usage_message`); ``--help`` and ``--version`` are unchanged."""
+
+    def error(self, message: str):
+        raise _UsageError(self, message)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``sweep`` command (sub-commands run, demo, plot,
     explore)."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="sweep",
         description="JIT-compiled parameter sweeps of pendulum dynamics.",
     )
     parser.add_argument("--version", action="version", version=f"sweep {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    parser.commands = commands.choices  # name -> parser, for _usage_message
 
     run = commands.add_parser("run", help="run the sweep a TOML run file describes",
                               description="Run the sweep described by a TOML run file "
@@ -96,7 +124,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--resume", action="store_true",
                      help="continue the interrupted run whose checkpoint is in DIR: finished "
                      "chunks are loaded, not recomputed, and OUT.nc is bit-identical to an "
-                     "uninterrupted run (a checkpoint of a different run is refused)")
+                     "uninterrupted run (a checkpoint of a different run is refused). With "
+                     "no checkpoint in DIR the run starts from the beginning, after a note "
+                     "on stderr, so the same command starts a batch job and resumes it")
     run.add_argument("--scheduler", metavar="ADDRESS",
                      help="run the chunks on the Dask cluster of this scheduler "
                      "(tcp://HOST:8786; overrides [run] scheduler); needs the dask extra. "
@@ -130,8 +160,9 @@ def build_parser() -> argparse.ArgumentParser:
     demo = commands.add_parser(
         "demo", help="sweep the damped pendulum over the phase plane and draw maps",
         description="Sweep a damped pendulum (c = 0.3 1/s, g/L = 9.81 1/s^2) over "
-        "theta0 in [-180, 180] deg and omega0 in [-10, 10] rad/s, then draw the "
-        "passes over the top before capture and the final potential well.")
+        "theta0 in [-180, 180] deg and omega0 in [-10, 10] rad/s, write it as demo.nc "
+        "and draw two maps: the well each start is captured in (well.png) and the time "
+        "until it is captured (capture_time.png).")
     demo.add_argument("-o", "--output", default="sweep-demo", metavar="FOLDER",
                       help="folder for demo.nc and the PNG maps (created if missing; "
                       "default: %(default)s)")
@@ -154,9 +185,10 @@ def build_parser() -> argparse.ArgumentParser:
                       help="draw the stroboscopic angles against the grid axis AXIS (needs "
                       "a run observing strobe; more samples: [run] strobe_samples)")
     plot.add_argument("--sel", action="append", default=[], metavar="DIM=VALUE",
-                      help="select the nearest grid point along DIM; VALUE in the file's "
+                      help="select the grid point VALUE along DIM; VALUE in the file's "
                       "units (rad, rad/s, ...) or in degrees with a 'deg' suffix "
-                      "(theta0=-120deg); repeat for several dimensions")
+                      "(theta0=-120deg), a value of the axis (within 1 %% of its "
+                      "spacing; another is refused); repeat for several dimensions")
     plot.add_argument("-o", "--output", required=True, metavar="OUT.png",
                       help="image file to write (its folder must exist)")
     plot.add_argument("--radians", action="store_true",
@@ -284,20 +316,109 @@ def main(argv: list[str] | None = None) -> int:
     int
         Exit status: 0 on success, 2 on any error (one line on stderr starting
         ``sweep: error:``), 130 when interrupted (Ctrl-C), 143 when ``sweep run`` is
-        stopped by SIGTERM.
+        stopped by SIGTERM, 141 (`EXIT_BROKEN_PIPE`) when stdout was closed before the
+        command ended.
     """
+    try:
+        return _main(sys.argv[1:] if argv is None else list(argv))
+    except BrokenPipeError:  # stdout closed early (sweep fractions ... | head)
+        return _stdout_closed()
+
+
+def _main(argv: list[str]) -> int:
+    """`main`, less the closed stdout."""
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
-    except SystemExit as exc:  # --help, --version, usage errors (argparse printed them)
+    except _UsageError as exc:
+        return _error(_usage_message(parser, argv, exc))
+    except SystemExit as exc:  # --help, --version (argparse printed them)
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
     try:
-        return args.handler(args)
+        status = args.handler(args)
+        sys.stdout.flush()  # a closed stdout raises here, not at the interpreter's exit
+        return status
+    except BrokenPipeError:
+        raise
     except (ValueError, TypeError, OSError) as exc:
         return _error(exc)
     except KeyboardInterrupt:
         print("sweep: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+
+
+def _stdout_closed() -> int:
+    """End quietly once stdout's reader has gone (``| head``): what Python's documentation
+    recommends (note on SIGPIPE in the `signal` module): point stdout at os.devnull, so
+    that the interpreter's last flush of what is still buffered does not fail again.
+    Returns `EXIT_BROKEN_PIPE`."""
+    with contextlib.suppress(OSError, ValueError, AttributeError):  # no file descriptor
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    return EXIT_BROKEN_PIPE
+
+
+def _usage_message(parser: argparse.ArgumentParser, argv: list[str],
+                   exc: _UsageError) -> str:
+    """The one line of an error the parser found: an option no parser knows first (it
+    also explains a missing required one: a misspelled ``--outptu``), with the nearest
+    valid option when one is close (`difflib`); else argparse's own words (an invalid
+    choice names the choices), with what is accepted where argparse does not say."""
+    commands = getattr(parser, "commands", {})
+    where = next((i for i, a in enumerate(argv) if not a.startswith("-")), len(argv))
+    command = argv[where] if where < len(argv) else None
+    scans = [(parser, argv[:where])]
+    if command in commands:
+        scans.append((commands[command], argv[where + 1:]))
+    for owner, tokens in scans:
+        unknown = _unknown_options(owner, tokens)
+        if unknown:
+            name = unknown[0].split("=", 1)[0]
+            options = sorted(o for o in owner._option_string_actions if o.startswith("--"))
+            close = difflib.get_close_matches(name, options, n=1, cutoff=0.6)
+            hint = f"; did you mean {close[0]}?" if close else ""
+            words = "option" if len(unknown) == 1 else "options"
+            prefix = "" if owner is parser else f"{owner.prog}: "
+            return (f"{prefix}unrecognized {words} {', '.join(unknown)}{hint} "
+                    f"(accepted: the options {owner.prog} --help lists)")
+    message = exc.message
+    if command is not None and command not in commands and "invalid choice" in message:
+        close = difflib.get_close_matches(command, list(commands), n=1, cutoff=0.6)
+        if close:
+            message += f"; did you mean {close[0]}?"
+    elif command is None and "required: COMMAND" in message:
+        message += f"; accepted: {', '.join(commands)}"
+    elif "invalid int value" in message:
+        message += "; accepted: an integer"
+    prog = exc.parser.prog
+    return message if prog == parser.prog else f"{prog}: {message}"
+
+
+def _unknown_options(parser: argparse.ArgumentParser, tokens: list[str]) -> list[str]:
+    """The tokens that look like options (``-x``, ``--name``, ``--name=value``) but are
+    none of ``parser``'s, nor an abbreviation of one (argparse accepts unique prefixes);
+    negative numbers and what follows ``--`` are values."""
+    known = parser._option_string_actions
+    unknown = []
+    for token in tokens:
+        if token == "--":
+            break
+        if not token.startswith("-") or token == "-" or _NUMBER.match(token):
+            continue
+        if token.startswith("--"):
+            name = token.split("=", 1)[0]
+            prefixed = [o for o in known if o.startswith("--") and o.startswith(name)]
+            if name in known or len(prefixed) == 1:
+                continue
+        elif token[:2] in known:  # -o, -oFILE
+            continue
+        unknown.append(token)
+    return unknown
+
+
+#: What argparse takes for a negative number rather than an option (``-1``, ``-0.5``).
+_NUMBER = re.compile(r"^-\d+$|^-\d*\.\d+$")
 
 
 def _error(exc: BaseException | str) -> int:
@@ -386,6 +507,7 @@ def _command_run(args: argparse.Namespace) -> int:
     from .io import check_output_path, save
     from .toml_spec import load_run
 
+    _netcdf_name("-o", args.output)
     options = {}
     scene, grid, kwargs = load_run(args.run_file, options)
     output = check_output_path(args.output)
@@ -421,18 +543,23 @@ def _command_run(args: argparse.Namespace) -> int:
     if options.get("refine"):
         return _command_refine(args, scene, grid, kwargs, options, output, folder, pilot)
     if pilot is not None:
-        from .maps.pilot import pilot_catalogue, pilot_grid
+        from .maps.pilot import pilot_catalogue
         from .physics.system import System
 
         if isinstance(scene, System):  # a driven system's: as [run] pilot (--pilot N)
             from .toml_pilot import check_system_pilot
 
             check_system_pilot(scene, grid, pilot, kwargs)
-        else:
-            pilot_grid(grid, pilot)  # refuse a bad pilot before any compute
+        else:  # refuse a bad pilot before any compute
+            from .toml_pilot import check_scene_pilot
+
+            check_scene_pilot(scene, grid, pilot, kwargs)
     elif not args.no_space_check:  # with a pilot, after it: its catalogue adds variables
         check_space(output, scene, grid, **kwargs)
     client = _client(args, options)
+    if args.resume and _no_checkpoint(folder):  # as wget -c: the same command starts it
+        print(f"sweep: note: --resume: no checkpoint in {str(folder)!r}; the run starts "
+              "from the beginning", file=sys.stderr)
     bar = "\n" if args.progress or (args.progress is None and sys.stderr.isatty()) else ""
     stop = _Stop(lambda word, what: f"{bar}sweep: {word} (the running chunk did not end "
                  f"within {TERMINATE_WAIT_S:g} s of {what} and was abandoned); "
@@ -472,6 +599,26 @@ def _command_run(args: argparse.Namespace) -> int:
         _checkpoint.remove(folder)
     print(f"wrote {output}: {_summary(ds, grid, seconds)}")
     return 0
+
+
+def _no_checkpoint(folder: Path) -> bool:
+    """Whether ``--resume`` finds nothing at all to resume in ``folder``: it does not exist
+    (its parent does) or it is an empty folder. Anything else is `sweep.run`'s to
+    resume, or to refuse in one line (a file, other files, another run's checkpoint)."""
+    if folder.is_dir():
+        return not any(folder.iterdir())
+    parent = folder.parent if str(folder.parent) else Path(".")
+    return not folder.exists() and parent.is_dir()
+
+
+def _netcdf_name(option: str, path: str) -> None:
+    """Refuse an output file of netCDF whose name does not end in ``.nc`` (any case):
+    ``-o x.csv`` would write netCDF under a name that says otherwise."""
+    suffix = Path(path).suffix
+    if suffix.lower() != ".nc":
+        ends = f"ends in {suffix!r}" if suffix else "has no suffix"
+        raise ValueError(f"{option} {str(path)!r}: the file is netCDF, and its name {ends}; "
+                         "accepted: a file name ending in .nc")
 
 
 def _command_refine(args, scene, grid, kwargs, options, output, folder, pilot) -> int:
@@ -764,6 +911,7 @@ def _command_demo(args: argparse.Namespace) -> int:
     """``sweep demo``: run the demo sweep; write demo.nc and two PNG maps (well,
     capture time)."""
     from . import plot
+    from .engine import _check_memory, prepare
     from .io import check_output_path, save
 
     scene, grid, kwargs = demo_inputs(args.size)
@@ -771,15 +919,36 @@ def _command_demo(args: argparse.Namespace) -> int:
     if folder.exists() and not folder.is_dir():
         raise ValueError(f"output folder {str(folder)!r} exists and is not a folder; "
                          "accepted: a folder path (created if missing)")
+    settings, spec, _ = prepare(scene, grid, **kwargs)  # before the folder is made
+    try:
+        _check_memory(grid.size, spec, settings)
+    except ValueError as exc:
+        raise ValueError(f"--size {args.size}: {exc}") from None
+    created = _missing_folders(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    netcdf = check_output_path(folder / "demo.nc")
-    ds, seconds = _run_quietly(scene, grid, progress=args.progress, **kwargs)
-    save(ds, netcdf)
+    try:
+        netcdf = check_output_path(folder / "demo.nc")
+        ds, seconds = _run_quietly(scene, grid, progress=args.progress, **kwargs)
+        save(ds, netcdf)
+    except BaseException:  # an error, Ctrl-C: no empty folder left behind
+        for made in created:  # deepest first; one that holds anything stays
+            with contextlib.suppress(OSError):
+                made.rmdir()
+        raise
     written = [netcdf, *_demo_maps(ds, folder, plot)]
     print(f"demo: {_summary(ds, grid, seconds)}")
     for path in written:
         print(f"wrote {path}")
     return 0
+
+
+def _missing_folders(folder: Path) -> list[Path]:
+    """The folders ``folder.mkdir(parents=True)`` would create, deepest first."""
+    missing = []
+    while not folder.exists() and folder != folder.parent:
+        missing.append(folder)
+        folder = folder.parent
+    return missing
 
 
 def _demo_maps(ds, folder: Path, plot) -> list[Path]:
@@ -822,6 +991,42 @@ def _parse_selection(items: list[str]) -> dict[str, float]:
             raise ValueError(f"--sel {name} given twice; accepted: one value per dimension")
         selection[name] = math.radians(value) if degrees else value
     return selection
+
+
+#: How far (a fraction of an axis's smallest spacing) a ``--sel`` value may lie from a
+#: value of the axis. 1 %: far above the rounding of a value typed in degrees
+#: (-120deg) or copied from a printout with 6 digits, far below the half spacing that
+#: separates two values, so that a value accepted is one value of the axis, never one
+#: between two (which the nearest one used to replace silently).
+SELECTION_TOLERANCE = 0.01
+
+
+def _check_selection(ds, selection: dict[str, float], items: list[str]) -> None:
+    """Refuse a ``--sel DIM=VALUE`` whose VALUE is not a value of the axis DIM of ``ds``
+    (within `SELECTION_TOLERANCE` of its spacing; an axis of one value: within 1e-9 of
+    it, relative, the rounding of a decimal number). Names that are not axes are left
+    to `sweep.plot.select`, which names the axes."""
+    texts = {item.partition("=")[0].strip(): item.strip() for item in items}
+    for name, value in selection.items():
+        if name not in ds.dims or name not in ds.coords or ds[name].ndim != 1 \
+                or not np.issubdtype(ds[name].dtype, np.number):
+            continue
+        values = np.unique(np.asarray(ds[name].values, dtype=float))
+        if values.size > 1:
+            tolerance = SELECTION_TOLERANCE * float(np.diff(values).min())
+        else:
+            tolerance = 1e-9 * max(1.0, abs(float(values[0])))
+        if float(np.abs(values - value).min()) <= tolerance:
+            continue
+        units = ds[name].attrs.get("units", "")
+        if values.size <= 12:
+            accepted = f"one of {', '.join(f'{v:.6g}' for v in values)} {units}"
+        else:
+            accepted = (f"one of its {values.size} values from {values[0]:.6g} to "
+                        f"{values[-1]:.6g} {units}")
+        degrees = " (or in degrees, with a 'deg' suffix)" if units == "rad" else ""
+        raise ValueError(f"--sel {texts.get(name, name)}: {value:.6g} is not a value of "
+                         f"the axis {name}; accepted: {accepted.rstrip()}{degrees}")
 
 
 def _command_fractions(args: argparse.Namespace) -> int:
@@ -903,6 +1108,8 @@ def _command_map_accuracy(args: argparse.Namespace) -> int:
     from .toml_spec import REFINE_MAPS, load_run
 
     ladder = parse_ladder(args.ladder)
+    if args.output is not None:
+        _netcdf_name("-o", args.output)
     output = check_output_path(args.output) if args.output is not None else None
     figure = check_output_path(args.figure) if args.figure is not None else None
     if output is not None and figure is not None and output.resolve() == figure.resolve():
@@ -1030,6 +1237,7 @@ def _command_plot(args: argparse.Namespace) -> int:
     output = check_output_path(args.output)
     selection = _parse_selection(args.sel)
     ds = _load(args.file)
+    _check_selection(ds, selection, args.sel)
     _use_agg()
     if args.trajectory:
         if "time" not in ds.dims:

@@ -275,17 +275,40 @@ def run_arguments(ds: xr.Dataset) -> dict:
 def check_output_path(path) -> Path:
     """Return ``path`` as a Path if its folder exists and is writable, else raise.
 
-    Called before any compute so that a run never ends in an unwritable file.
+    Called before any compute so that a run never ends in an unwritable file. Writable
+    means a file can be made there: `os.access` first, then a file created and removed
+    at once, since ``os.access`` answers yes to root whatever the mode, and on a
+    read-only file system or one such as /proc, where nothing can be created.
+
+    Raises
+    ------
+    ValueError
+        One line naming the path and its folder: a folder path, a folder that does not
+        exist or is a file, a folder that is not writable.
     """
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
     if path.is_dir():
         raise ValueError(f"output path {str(path)!r} is a folder; accepted: a file path")
+    if folder.exists() and not folder.is_dir():
+        raise ValueError(f"output path {str(path)!r}: {str(folder)!r} is a file, not a "
+                         "folder; accepted: a path in an existing folder")
     if not folder.is_dir():
         raise ValueError(f"output path {str(path)!r}: folder {str(folder)!r} does not exist; "
                          "accepted: a path in an existing folder")
-    if not os.access(folder, os.W_OK):
-        raise ValueError(f"output path {str(path)!r}: folder {str(folder)!r} is not writable")
+    reason = None if os.access(folder, os.W_OK) else "permission denied"
+    if reason is None:
+        try:
+            handle, probe = tempfile.mkstemp(prefix=".sweep-probe-", dir=folder)
+        except OSError as exc:
+            reason = exc.strerror or type(exc).__name__
+        else:
+            os.close(handle)
+            os.unlink(probe)
+    if reason is not None:
+        raise ValueError(f"output path {str(path)!r}: folder {str(folder)!r} is not "
+                         f"writable (creating a file there fails: {reason}); accepted: a "
+                         "path in a folder this user can write")
     return path
 
 

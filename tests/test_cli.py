@@ -6,6 +6,7 @@ Commands are called in-process through `sweep.cli.main` (fast); one test runs
 
 import contextlib
 import io
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -155,6 +156,38 @@ def test_demo_refuses_a_bad_size_before_creating_anything(tmp_path):
     assert not folder.exists()
 
 
+def test_demo_refuses_a_grid_too_large_before_creating_its_folder(tmp_path, monkeypatch,
+                                                                 no_compute):
+    monkeypatch.setattr(sweep.engine, "_available_memory", lambda: 2**20)  # 1 MiB
+    folder = tmp_path / "never" / "demo"
+    code, out, err = call("demo", "-o", folder, "--size", 200)
+    assert (code, out) == (2, "") and err.count("\n") == 1, err
+    assert err.startswith("sweep: error: --size 200: a grid of 40000 trajectories needs")
+    assert not (tmp_path / "never").exists()
+
+
+@pytest.mark.parametrize("existing", [False, True], ids=["new folder", "folder exists"])
+def test_demo_that_fails_later_removes_only_the_folders_it_made(existing, tmp_path,
+                                                                monkeypatch):
+    def full(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(cli, "_run_quietly", full)
+    folder = tmp_path / "a" / "b"
+    if existing:
+        folder.mkdir(parents=True)
+    code, out, err = call("demo", "-o", folder, "--size", 2)
+    assert (code, out) == (2, "") and "No space left on device" in err, err
+    assert folder.is_dir() == existing and (tmp_path / "a").is_dir() == existing
+
+
+def test_demo_help_names_the_maps_it_draws():
+    code, out, _ = call("demo", "--help")
+    text = " ".join(out.split())
+    assert code == 0 and "well.png" in text and "capture_time.png" in text, text
+    assert "passes over the top" not in text
+
+
 # ---------------------------------------------------------------------------- plot
 def test_plot_draws_a_map_of_a_variable(demo, tmp_path):
     folder, _ = demo
@@ -187,9 +220,11 @@ def test_version():
     assert code == 0 and out.strip() == f"sweep {sweep.__version__}"
 
 
-def test_usage_errors_are_argparse_errors():
-    code, _out, err = call("run")
-    assert code == 2 and "usage: sweep run" in err and "Traceback" not in err
+def test_usage_errors_are_one_line_not_argparses_usage_block():
+    code, out, err = call("run")
+    assert (code, out) == (2, "")
+    assert err == ("sweep: error: sweep run: the following arguments are required: "
+                   "RUN.toml, -o/--output\n")
 
 
 # -------------------------------------------------------------------------- errors
@@ -220,6 +255,15 @@ ERROR_CASES = {
                                            d / "out.png"], "time"),
     "not a netCDF file": (lambda d: ["plot", write(d, RUN_FILE), "--var", "winding", "-o",
                                      d / "out.png"], "netCDF"),
+    # a value that is not on the axis (its nearest value used to be drawn, silently)
+    "selection off the axis": (lambda d: ["plot", d / "data.nc", "--var", "winding", "--sel",
+                                          "theta0=99", "-o", d / "out.png"],
+                               "--sel theta0=99: 99 is not a value of the axis theta0; "
+                               "accepted: one of its 21 values from -3.14159 to 3.14159 rad"),
+    "selection between two values": (lambda d: ["plot", d / "data.nc", "--var", "winding",
+                                                "--sel", "omega0=0.1", "-o", d / "out.png"],
+                                     "--sel omega0=0.1: 0.1 is not a value of the axis "
+                                     "omega0"),
 }
 
 
@@ -237,6 +281,58 @@ def test_errors_are_one_line_with_status_2_and_write_nothing(case, demo, tmp_pat
     output = Path(argv[argv.index("-o") + 1])
     assert not output.exists()
     assert not [p for p in output.parent.glob("*.part")] if output.parent.exists() else True
+
+
+def test_a_selection_within_a_small_fraction_of_the_spacing_is_that_value(trajectory_file,
+                                                                         tmp_path):
+    # time of the file: samples 0.2 s apart; 1.001 s is 0.5 % of that from the sample
+    # 1.0 s, within SELECTION_TOLERANCE (1 %), as a value typed with fewer digits; 1.003 s
+    # (1.5 %) is not
+    output = tmp_path / "theta.png"
+    code, _, err = call("plot", trajectory_file, "--var", "theta", "--sel", "time=1.001",
+                        "-o", output)
+    assert (code, err) == (0, "")
+    assert_png(output)
+    code, _, err = call("plot", trajectory_file, "--var", "theta", "--sel", "time=1.003",
+                        "-o", tmp_path / "off.png")
+    assert code == 2 and "--sel time=1.003: 1.003 is not a value of the axis time" in err
+    assert not (tmp_path / "off.png").exists()
+
+
+def test_a_closed_stdout_ends_quietly_with_141(demo):
+    # the reader is gone before sweep writes (``| head`` that has read what it needed):
+    # no "Broken pipe" line, and 128 + SIGPIPE, as a shell reports for cat or yes
+    read, write_end = os.pipe()
+    os.close(read)
+    try:
+        result = subprocess.run([sys.executable, "-m", "sweep", "fractions",
+                                 str(demo[0] / "demo.nc"), "--label", "well"],
+                                stdout=write_end, stderr=subprocess.PIPE, text=True,
+                                timeout=120, check=False)
+    finally:
+        os.close(write_end)
+    assert (result.returncode, result.stderr) == (141, "")
+
+
+def test_resume_without_a_checkpoint_says_it_starts_from_the_beginning(tmp_path):
+    output = tmp_path / "out.nc"
+    code, out, err = call("run", write(tmp_path, RUN_FILE), "-o", output, "--resume",
+                          "--no-progress")
+    assert code == 0 and out.startswith(f"wrote {output}")
+    assert err == (f"sweep: note: --resume: no checkpoint in '{output}.checkpoint'; the run "
+                   "starts from the beginning\n")
+
+
+def test_explore_on_an_address_of_another_machine_says_change_the_host():
+    pytest.importorskip("panel")
+    # 192.0.2.1: TEST-NET-1 (RFC 5737), never an address of this machine; --port 0 given
+    code, out, err = call("explore", "--no-browser", "--port", 0, "--host", "192.0.2.1")
+    assert (code, out) == (2, "") and err.count("\n") == 1, err
+    assert err.startswith("sweep: error: cannot listen on address 192.0.2.1, port 0 (a free "
+                          "port)"), err
+    assert err.rstrip().endswith("accepted: --host an address of this machine (127.0.0.1, "
+                                 "the default; 0.0.0.0 for all of its addresses)"), err
+    assert "picks a free port" not in err and "(chosen)" not in err
 
 
 def test_python_dash_m_shows_one_line_and_no_traceback(tmp_path):

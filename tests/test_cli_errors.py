@@ -218,3 +218,109 @@ def test_an_axis_table_error_names_the_table_the_file_wrote(label, table, inline
     assert err.startswith(f"sweep: error: {path}: ") and words.format(table=table) in err, err
     if table == "points":
         assert "grid" not in err, err
+
+
+# ------------------------------------------------------------- the parser's errors
+# label -> (argv after the run file's "run FILE" or the whole argv, words the one line
+# must contain, words it must not contain)
+_PARSER_ERRORS = {
+    # a misspelled option is named, before the -o it leaves missing, with the nearest one
+    "misspelled option": (["run", "{run}", "--outptu", "{out}"],
+                          ["sweep run: unrecognized option --outptu; did you mean --output?"],
+                          ["required"]),
+    "unknown option, no near one": (["run", "{run}", "-o", "{out}", "--zzz"],
+                                    ["unrecognized option --zzz (accepted: the options "
+                                     "sweep run --help lists)"], ["did you mean"]),
+    "invalid device": (["run", "{run}", "-o", "{out}", "--device", "gpu"],
+                       ["--device", "'gpu'", "'cpu', 'cuda'"], []),
+    "invalid dtype": (["run", "{run}", "-o", "{out}", "--dtype", "float16"],
+                      ["--dtype", "'float16'", "'float64', 'float32'"], []),
+    "missing output": (["run", "{run}"], ["sweep run: the following arguments are "
+                                          "required: -o/--output"], []),
+    "size not an integer": (["demo", "--size", "1e3", "-o", "{out}"],
+                            ["--size", "'1e3'", "accepted: an integer"], []),
+    "misspelled command": (["rnu", "{run}"], ["'rnu'", "did you mean run?"], []),
+    "no command": ([], ["required: COMMAND; accepted: run, demo, plot"], []),
+}
+
+
+@pytest.mark.parametrize("label", list(_PARSER_ERRORS))
+def test_the_parsers_errors_are_one_line_naming_the_option(label, tmp_path, no_compute):
+    argv, words, absent = _PARSER_ERRORS[label]
+    run, out = _run_file(tmp_path, GOOD), tmp_path / "out.nc"
+    code, stdout, err = _call(*(a.format(run=run, out=out) for a in argv))
+    assert (code, stdout) == (2, ""), err
+    assert err.count("\n") == 1 and err.startswith("sweep: error: "), err
+    assert "usage:" not in err and "sweep run: error" not in err, err
+    for word in words:
+        assert word in err, err
+    for word in absent:
+        assert word not in err, err
+    assert not out.exists()
+
+
+def test_help_is_still_argparses(capsys):
+    with pytest.raises(SystemExit) as info:  # argparse's --help exits; main returns it
+        cli.build_parser().parse_args(["run", "--help"])
+    assert info.value.code == 0
+    assert capsys.readouterr().out.startswith("usage: sweep run [-h] -o OUT.nc")
+    code, out, err = _call("run", "--help")
+    assert (code, err) == (0, "") and out.startswith("usage: sweep run [-h] -o OUT.nc")
+
+
+# ------------------------------------------------------------- the output path
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs Linux's /proc")
+def test_an_unwritable_output_folder_is_named_not_taken_for_a_full_disk(tmp_path,
+                                                                         no_compute):
+    # root writes whatever the mode bits say (os.access agrees), so the folder is /proc,
+    # where nobody creates a file
+    code, out, err = _call("run", _run_file(tmp_path, GOOD), "-o", "/proc/out.nc")
+    assert (code, out) == (2, "") and err.count("\n") == 1, err
+    assert err.startswith("sweep: error: output path '/proc/out.nc': folder '/proc' is not "
+                          "writable"), err
+    assert "disk space" not in err
+
+
+def test_an_output_under_a_file_is_named(tmp_path, no_compute):
+    (tmp_path / "notes").write_text("mine")
+    code, out, err = _call("run", _run_file(tmp_path, GOOD), "-o", tmp_path / "notes" / "o.nc")
+    assert (code, out) == (2, "") and err.count("\n") == 1, err
+    assert f"'{tmp_path / 'notes'}' is a file, not a folder" in err, err
+
+
+@pytest.mark.parametrize("name", ["out.csv", "out", "out.nc.tmp"])
+@pytest.mark.parametrize("command", ["run", "map-accuracy"])
+def test_a_netcdf_output_must_end_in_nc(command, name, tmp_path, no_compute):
+    extra = ["--ladder", "dt=0.1,0.05"] if command == "map-accuracy" else []
+    output = tmp_path / name
+    code, out, err = _call(command, _run_file(tmp_path, GOOD), "-o", output, *extra)
+    assert (code, out) == (2, "") and err.count("\n") == 1, err
+    assert err.startswith(f"sweep: error: -o '{output}': the file is netCDF"), err
+    assert err.rstrip().endswith("accepted: a file name ending in .nc"), err
+    assert not output.exists()
+
+
+# ------------------------------------------------------------- the pilot
+FORCED = _edit("[grid]", "[scene.forcing]\namplitude = 1.66\nfrequency = 1.0\n\n[grid]") \
+    .replace("t_end = 2.0\ndt = 0.05", "t_end = { periods = 4 }\ndt = { per_period = 20 }")
+
+
+@pytest.mark.parametrize("observe, argv, words", [
+    ('["final"]', [], ["pilot = 5 finds the attractors of a forced map from the "
+                       "stroboscopic points", "observe is ['final']",
+                       'accepted: observe = ["strobe"] with stop_early = true']),
+    ('["final"]', ["--pilot", "7"], ["pilot = 7 finds the attractors", "['final']"]),
+    ('["strobe", "final"]', [], ["pilot = 5: the pilot runs 5 x 5 starts with stop_early "
+                                 "= true, and that run is refused", "'final'"]),
+])
+def test_a_pilot_without_strobe_is_refused_naming_the_pilot(observe, argv, words, tmp_path,
+                                                             no_compute):
+    text = FORCED.replace('observe = ["final", "winding", "energy"]',
+                          f"observe = {observe}\npilot = 5")
+    assert "pilot = 5" in text
+    output = tmp_path / "out.nc"
+    code, out, err = _call("run", _run_file(tmp_path, text), "-o", output, *argv)
+    assert (code, out) == (2, "") and err.count("\n") == 1, err
+    for word in words:
+        assert word in err, err
+    assert not output.exists()

@@ -344,6 +344,8 @@ def test_a_write_that_fails_says_why_and_keeps_the_checkpoint(failure, tmp_path,
     monkeypatch.setattr(shutil, "disk_usage", lambda p: real(p)._replace(free=free))
     monkeypatch.setattr(xr.Dataset, "to_netcdf", full)
     code, stdout, stderr = call("run", run_file, "-o", out, "--resume")
+    note, stderr = stderr.split("\n", 1)  # no checkpoint yet: the run started afresh
+    assert note.startswith("sweep: note: --resume: no checkpoint in"), note
     cause = {"ENOSPC": "[Errno 28] cannot write '{}': No space left on device; ",
              "HDF error, full": "[Errno 28] cannot write '{}': No space left on device "
                                 "(netCDF4 reported 'NetCDF: HDF error' with 0 bytes free in",

@@ -279,6 +279,9 @@ def test_cli_ctrl_c_exits_130_with_a_resume_hint_then_resume_completes(tmp_path,
     code, stdout, stderr = call("run", run_file, "-o", out, "--resume", "--no-progress")
     monkeypatch.undo()
     assert code == 130
+    note, stderr = stderr.split("\n", 1)  # no checkpoint yet: the run started afresh
+    assert note == (f"sweep: note: --resume: no checkpoint in '{folder}'; the run starts "
+                    "from the beginning")
     assert stderr.count("\n") == 1 and stderr.startswith("sweep: interrupted; 3 finished "
                                                          "chunks are checkpointed in")
     assert f"resume with: sweep run {run_file} -o {out} --resume" in stderr

@@ -26,6 +26,7 @@ import socket
 import sys
 import threading
 import time
+import urllib.parse
 import warnings
 import weakref
 from collections import OrderedDict, deque
@@ -118,7 +119,8 @@ class AddressUnavailable(OSError):
         hint = why.get(getattr(reason, "errno", None), "")
         if isinstance(reason, socket.gaierror):
             hint = f" ({host} is not an address or a host name this machine resolves)"
-        super().__init__(f"cannot listen on address {host}, port {port}: {reason}{hint}; "
+        where = f"port {port}" if port else "port 0 (a free port)"
+        super().__init__(f"cannot listen on address {host}, {where}: {reason}{hint}; "
                          f"{way_out}")
         self.errno = getattr(reason, "errno", None)
 
@@ -960,6 +962,20 @@ class ExplorerApp:
             self.server = None
 
 
+def _way_out(exc: AddressUnavailable, port: int) -> str:
+    """The end of ``sweep explore``'s one line when it cannot listen: the option to
+    change. An address that is not this machine's (or no address at all) is the
+    host's fault, whatever the port; a busy or privileged port is the port's, and
+    ``--port 0`` is the way out unless it was given."""
+    if isinstance(exc.reason, socket.gaierror) or exc.errno == errno.EADDRNOTAVAIL:
+        return ("accepted: --host an address of this machine (127.0.0.1, the default; "
+                "0.0.0.0 for all of its addresses)")
+    if port:
+        return "--port 0 picks a free port"
+    return ("accepted: another --host, or run again (--port 0: other programs took the "
+            "free ports it picked first)")
+
+
 def main_serve(app: ExplorerApp, *, port: int, host: str, open_browser: bool,
                stop: threading.Event | None = None) -> int:
     """``sweep explore``: bind, print the URL, warm up (saying so), serve until Ctrl-C.
@@ -984,17 +1000,18 @@ def main_serve(app: ExplorerApp, *, port: int, host: str, open_browser: bool,
     Raises
     ------
     AddressUnavailable
-        The address or the port cannot be bound (the message suggests ``--port 0``).
+        The address or the port cannot be bound; the message says what to change
+        (`_way_out`: ``--host`` or ``--port``).
     """
-    if host not in ("127.0.0.1", "localhost", "::1"):
-        print(f"sweep: warning: --host {host}: anyone who can reach port {port or '(chosen)'} "
-              "on this address can use this machine's cores through the explorer",
-              file=sys.stderr)
     try:
         app.serve(port=port, host=host, show=open_browser, threaded=True, warm=False)
     except AddressUnavailable as exc:
         raise AddressUnavailable(exc.host, exc.port, exc.reason,
-                                 way_out="--port 0 picks a free port") from None
+                                 way_out=_way_out(exc, port)) from None
+    if host not in ("127.0.0.1", "localhost", "::1"):  # once it listens: the port is known
+        print(f"sweep: warning: --host {host}: anyone who can reach port "
+              f"{urllib.parse.urlsplit(app.url).port} on this address can use this "
+              "machine's cores through the explorer", file=sys.stderr)
     stop = stop or threading.Event()
     try:
         print(f"sweep explore: serving {app.url} (Ctrl-C stops)", flush=True)
