@@ -829,7 +829,8 @@ def _command_fractions(args: argparse.Namespace) -> int:
     standard error (`sweep.maps.fractions`), optionally write them as CSV."""
     from . import maps
     from .io import check_output_path
-    from .maps.fractions import GRID
+    from .maps.fractions import GRID, label_text
+    from .maps.requirements import file_labels
     from .toml_spec import REFINE_MAPS
 
     output = check_output_path(args.output) if args.output is not None else None
@@ -843,14 +844,14 @@ def _command_fractions(args: argparse.Namespace) -> int:
             else ds[args.label]
         table = maps.fractions(labels, convergence=args.convergence)
     except ValueError as error:  # name the labels that work on this file
-        working = _working_labels(ds, args.label)
+        working = file_labels(ds, args.label)
         hint = (f"; labels that work on {args.file!r}: "
                 + ", ".join(f"--label {n}" for n in working)) if working else ""
         raise ValueError(f"--label {args.label}: {error}{hint}") from None
     frame = table.to_dataframe()
     frame.index = frame.index.set_levels(
-        [_label_text(v) for v in frame.index.levels[-1]], level=-1) \
-        if frame.index.nlevels > 1 else [_label_text(v) for v in frame.index]
+        [label_text(v) for v in frame.index.levels[-1]], level=-1) \
+        if frame.index.nlevels > 1 else [label_text(v) for v in frame.index]
     frame.index.names = table.fraction.dims
     method = table.attrs["standard_error_method"]
     errors = ("a grid: no standard errors, its cells are not a random sample"
@@ -864,46 +865,6 @@ def _command_fractions(args: argparse.Namespace) -> int:
         tmp.replace(output)  # never a half-written table
         print(f"wrote {output}")
     return 0
-
-
-def _working_labels(ds, tried: str) -> list[str]:
-    """The ``--label`` names of `sweep fractions` that label ``ds``: the maps that
-    accept it, and its variables of whole numbers (NaN: no label) on the
-    trajectories' dimensions, ``status`` aside; ``tried`` left out."""
-    import numpy as np
-
-    from . import maps
-    from .toml_spec import REFINE_MAPS
-
-    working = []
-    for name in REFINE_MAPS:
-        try:
-            if name != tried:
-                getattr(maps, name)(ds)
-                working.append(name)
-        except (ValueError, KeyError):
-            pass
-    dims = set(ds["status"].dims) if "status" in ds else None
-    for name, variable in ds.data_vars.items():
-        values = np.asarray(variable.values)
-        if name in (tried, "status") or (dims is not None and set(variable.dims) != dims) \
-                or values.dtype.kind not in "biuf" or values.size == 0:
-            continue
-        finite = values[np.isfinite(values)] if values.dtype.kind == "f" else values
-        if finite.size and np.array_equal(finite, np.round(finite)) \
-                and str(name) not in working:
-            working.append(str(name))
-    return working
-
-
-def _label_text(value) -> str:
-    """A label as printed: whole numbers as integers (``1``, not ``1.0``), NaN as
-    ``nan``."""
-    import math
-
-    number = float(value)
-    return "nan" if math.isnan(number) else str(int(number)) \
-        if number == int(number) else repr(number)
 
 
 def parse_ladder(items: list[str]) -> dict:

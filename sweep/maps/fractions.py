@@ -9,7 +9,7 @@ import xarray as xr
 
 from .._validate import check_flag
 
-__all__ = ["fractions"]
+__all__ = ["fractions", "label_text"]
 
 #: The dimension `fractions` reads as independent replicates (R runs of
 #: ``sweep.sample(..., seed=s)`` with R seeds, stacked along it).
@@ -28,6 +28,15 @@ GRID = ("none: the labels are a grid's cells, not a random sample (a grid's erro
         "that of its resolution, not binomial; for one, sample the box: sweep.sample)")
 SPREAD = ("spread of R independent replicates (randomised QMC): sample standard "
           "deviation of the R fractions / sqrt(R)")
+
+
+def label_text(value) -> str:
+    """A label as printed: whole numbers as integers (``1``, not ``1.0``), NaN as
+    ``nan``, any other number as Python writes it."""
+    number = float(value)
+    if np.isnan(number):
+        return "nan"
+    return str(int(number)) if number == int(number) else repr(number)
 
 
 def _unresolved_code(labels, unresolved):

@@ -12,7 +12,10 @@ whether the map is for unforced scenes only. ``basins`` of an unforced scene and
 
 from __future__ import annotations
 
-__all__ = ["NEEDS", "STOP_EARLY_OBSERVABLES", "label_refusal", "working_labels"]
+import numpy as np
+
+__all__ = ["NEEDS", "STOP_EARLY_OBSERVABLES", "file_labels", "label_refusal",
+           "working_labels"]
 
 #: Map name -> (observables, any one of which the run needs (empty: none), for forced
 #: scenes only: the same; unforced scenes only).
@@ -87,3 +90,45 @@ def label_refusal(name: str, observe, forced: bool, where: str,
                 f"without stop_early{alternative}")
     return (f"--label {name}{scene} needs observe = [{wanted}] in [run], which {where} "
             f"does not observe; accepted: that observable{alternative}")
+
+
+def file_labels(ds, tried: str | None = None) -> list[str]:
+    """What labels a run's dataset (a file): the maps of `sweep.maps` that accept it
+    (`sweep.toml_spec.REFINE_MAPS`, in that order), then its variables of whole numbers
+    (NaN: no label) on the trajectories' dimensions, ``status`` aside; ``tried`` left
+    out. What ``sweep fractions`` names when a label fails.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A run's dataset (`sweep.load`).
+    tried : str, optional
+        The label that failed, not named again.
+
+    Returns
+    -------
+    list of str
+    """
+    from .. import maps
+    from ..toml_spec import REFINE_MAPS
+
+    working = []
+    for name in REFINE_MAPS:
+        if name == tried:
+            continue
+        try:
+            getattr(maps, name)(ds)
+        except (ValueError, KeyError):
+            continue
+        working.append(name)
+    dims = set(ds["status"].dims) if "status" in ds else None
+    for name, variable in ds.data_vars.items():
+        values = np.asarray(variable.values)
+        if name in (tried, "status") or (dims is not None and set(variable.dims) != dims) \
+                or values.dtype.kind not in "biuf" or values.size == 0:
+            continue
+        finite = values[np.isfinite(values)] if values.dtype.kind == "f" else values
+        if finite.size and np.array_equal(finite, np.round(finite)) \
+                and str(name) not in working:
+            working.append(str(name))
+    return working
