@@ -1010,7 +1010,8 @@ def _command_boundary(args: argparse.Namespace) -> int:
                             stop_early=bool(kwargs.get("stop_early")))
     if refusal is not None:  # before anything runs, naming what would work
         raise ValueError(refusal)
-    forced = args.label == "basins" and has_forcing
+    # a forcing, or a drive sampled stroboscopically (a pivot alone): a catalogue's basins
+    forced = args.label == "basins" and (has_forcing or "strobe" in observe)
     if args.label == "basins" and not forced:  # the wells, numbered alike in every run
         label = maps.well
     if label is maps.well and "capture" not in observe \

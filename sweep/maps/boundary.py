@@ -105,9 +105,9 @@ class BoundaryReport:
                        f"{f.smooth_low:.4f}-{f.smooth_high:.4f})")
             if f.multi_label_balls >= MULTI_LABEL_SHARE * f.n_balls:
                 out[-1] += (f"; but {f.multi_label_balls} of its {f.n_balls} boundary "
-                            "balls hold three labels or more, where the two-basin smooth "
-                            "reference does not hold (they raise Sbb: basins narrower "
-                            "than the ball read fractal)")
+                            "balls hold three labels or more, which the smooth reference "
+                            "(two basins cut by a line) does not cover: smooth bands "
+                            "narrower than the ball raise Sbb too")
         else:
             out.append(f"fractality test: not computed ({self.fractality_note})")
         if self.uncertainty is not None:

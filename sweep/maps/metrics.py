@@ -861,7 +861,8 @@ def fractality_test(
     sigmas: float = 2.0,
 ) -> FractalityTest:
     """Whether a map's basin boundary is fractal at the scale ``radius``, by the
-    boundary basin entropy of random balls (Puy et al. 2021); works with two basins.
+    boundary basin entropy of random balls (Puy et al. 2021), whose smooth reference is
+    a boundary between two basins (``multi_label_balls`` counts the balls holding more).
 
     Parameters
     ----------
@@ -923,8 +924,11 @@ def fractality_test(
     standard errors wide by default, so that a smooth boundary is called fractal about
     5 % of the time rather than about 16 %. Boundaries between three or more basins
     meeting at points, and curved smooth boundaries at a radius near their curvature
-    radius, shift ``sbb`` a little; choose ``radius`` well below the features of the
-    map.
+    radius, shift ``sbb`` a little; bands of basins narrower than the ball shift it a
+    lot (a ball holding three labels has up to log 3 = 1.1 nats: the damped pendulum's
+    wells, smooth, read fractal at 10 radii per axis, where most boundary balls hold
+    three wells; ``multi_label_balls`` counts such balls). Choose ``radius`` well below
+    the features of the map (at least about 40 radii per axis).
 
     References
     ----------
