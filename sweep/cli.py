@@ -1034,22 +1034,35 @@ def _command_fractions(args: argparse.Namespace) -> int:
     standard error (`sweep.maps.fractions`), optionally write them as CSV."""
     from . import maps
     from .io import check_output_path
+    from .maps.fractions import GRID, label_text
+    from .maps.requirements import file_labels
     from .toml_spec import REFINE_MAPS
 
     output = check_output_path(args.output) if args.output is not None else None
     ds = _load(args.file)
-    if args.label in REFINE_MAPS:
-        labels = getattr(maps, args.label)(ds)
-    elif args.label in ds.data_vars:
-        labels = ds[args.label]
-    else:
+    if args.label not in REFINE_MAPS and args.label not in ds.data_vars:
         raise ValueError(f"--label {args.label!r} is neither a map nor a variable of "
                          f"{args.file!r}; accepted: {', '.join(REFINE_MAPS)}, or one of "
                          f"{', '.join(map(str, ds.data_vars))}")
-    table = maps.fractions(labels, convergence=args.convergence)
+    try:
+        labels = getattr(maps, args.label)(ds) if args.label in REFINE_MAPS \
+            else ds[args.label]
+        table = maps.fractions(labels, convergence=args.convergence)
+    except ValueError as error:  # name the labels that work on this file
+        working = file_labels(ds, args.label)
+        hint = (f"; labels that work on {args.file!r}: "
+                + ", ".join(f"--label {n}" for n in working)) if working else ""
+        raise ValueError(f"--label {args.label}: {error}{hint}") from None
     frame = table.to_dataframe()
+    frame.index = frame.index.set_levels(
+        [label_text(v) for v in frame.index.levels[-1]], level=-1) \
+        if frame.index.nlevels > 1 else [label_text(v) for v in frame.index]
+    frame.index.names = table.fraction.dims
+    method = table.attrs["standard_error_method"]
+    errors = ("a grid: no standard errors, its cells are not a random sample"
+              if method == GRID else method.split(":")[0])
     print(f"{args.file}: {int(table.attrs['samples'])} trajectories, {args.label} "
-          f"({table.attrs['standard_error_method'].split(':')[0]})")
+          f"({errors})")
     print(frame.to_string())
     if output is not None:
         tmp = output.with_name(output.name + ".tmp")
@@ -1167,6 +1180,7 @@ def _command_boundary(args: argparse.Namespace) -> int:
     from .grid import Grid
     from .io import check_output_path
     from .maps.boundary import describe_boundary, label_grid
+    from .maps.requirements import label_refusal
     from .toml_spec import REFINE_MAPS, load_run
 
     output = check_output_path(args.output) if args.output is not None else None
@@ -1197,18 +1211,28 @@ def _command_boundary(args: argparse.Namespace) -> int:
         raise ValueError(f"sweep boundary maps theta0 x omega0 of one scene; put "
                          f"{', '.join(fixed)} in [scene], not in [grid]")
     label = getattr(maps, args.label)
-    forced = args.label == "basins" and "strobe" in (kwargs.get("observe") or ())
+    observe = tuple(kwargs.get("observe") or ())
+    has_forcing = any(type(e).declaration.name == "forcing" for e in scene.effects)
+    refusal = label_refusal(args.label, observe, has_forcing, repr(args.run_file),
+                            stop_early=bool(kwargs.get("stop_early")))
+    if refusal is not None:  # before anything runs, naming what would work
+        raise ValueError(refusal)
+    # a forcing, or a drive sampled stroboscopically (a pivot alone): a catalogue's basins
+    forced = args.label == "basins" and (has_forcing or "strobe" in observe)
+    if args.label == "basins" and not forced:  # the wells, numbered alike in every run
+        label = maps.well
+    if label is maps.well and "capture" not in observe \
+            and not {"final", "energy"} <= set(observe):
+        # the well is observed (capture, which stop_early allows) or read from the
+        # final angle and energy
+        kwargs["observe"] = observe + (("capture",) if kwargs.get("stop_early") else
+                                       tuple(n for n in ("final", "energy")
+                                             if n not in observe))
     start = time.perf_counter()
     with _warnings_as_lines():
         if forced:
             pilot = args.pilot if args.pilot is not None else options.get("pilot", 41)
             kwargs["attractors"] = maps.pilot_catalogue(scene, grid, pilot, **kwargs)
-        elif args.label == "basins":  # unforced: the wells, numbered alike in every run
-            label = maps.well
-        if label is maps.well:  # the well reads the final angle and the capture energy
-            observe = tuple(kwargs.get("observe") or ())
-            kwargs["observe"] = observe + tuple(n for n in ("final", "energy")
-                                                if n not in observe)
         labels_of = maps.scene_labels(scene, label, **kwargs)
         x, y = grid.axes["theta0"], grid.axes["omega0"]
         labels = label_grid(labels_of, x, y)

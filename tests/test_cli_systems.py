@@ -256,3 +256,14 @@ def test_a_sample_of_a_driven_system_takes_a_pilot_and_gives_fractions(tmp_path)
     code, out, err = call("fractions", output, "--label", "attractor")
     assert (code, err) == (0, ""), err
     assert "300 trajectories, attractor" in out and "standard_error" in out
+    # the default label (basins) needs stroboscopic samples, which a run on a catalogue
+    # does not keep: the error names its labels, 'attractor' (it asked for a pivot
+    # drive, which the run has)
+    code, out, err = call("fractions", output)
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "it was run on an attractor catalogue" in err and "pivot_amplitude" not in err
+    assert err.endswith(f"labels that work on {str(output)!r}: --label attractor\n"), err
+    # the attractor indices are whole floats: printed as integers, 0 not 0.0
+    rows = [line.split()[0] for line in call("fractions", output, "--label",
+                                             "attractor")[1].splitlines()[3:]]
+    assert rows and all(row.isdigit() or row == "nan" for row in rows), rows

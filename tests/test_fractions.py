@@ -148,6 +148,40 @@ def test_unresolved_labels_keep_a_row_of_their_own():
     assert float(well.fraction.sum()) == 1.0
 
 
+def test_a_grid_gets_no_binomial_error():
+    """A grid's cells are not a random sample: no standard error (NaN), as
+    map_accuracy.md says of a grid; a run of points (along ``point``) and a plain array
+    keep the binomial error, and sampled= says it either way."""
+    values = np.array([[0, 0, 1], [1, 1, 0]], dtype=np.int32)
+    grid = xr.DataArray(values, dims=("theta0", "omega0"), name="basins")
+    table = maps.fractions(grid)
+    assert np.isnan(table.standard_error.values).all()
+    assert table.attrs["standard_error_method"].startswith("none: the labels are a grid")
+    assert table.fraction.values.tolist() == [0.5, 0.5]
+    points = maps.fractions(grid.stack(point=("theta0", "omega0")).drop_vars(
+        ["point", "theta0", "omega0"]))
+    binomial = np.sqrt(0.5 * 0.5 / 6)
+    np.testing.assert_allclose(points.standard_error, binomial, rtol=1e-15)
+    np.testing.assert_allclose(maps.fractions(values).standard_error, binomial, rtol=1e-15)
+    np.testing.assert_allclose(maps.fractions(grid, sampled=True).standard_error, binomial,
+                               rtol=1e-15)
+    assert np.isnan(maps.fractions(values, sampled=False).standard_error).all()
+
+
+def test_labels_must_be_whole_numbers_and_whole_floats_are_integers():
+    """A float such as an amplitude is no label (it gave a row of count 1 per value);
+    whole floats (the catalogued 'attractor') are labelled as integers, NaN aside."""
+    amplitude = xr.DataArray(np.array([0.25, 1.0, 0.5]), dims="point", name="amplitude")
+    with pytest.raises(ValueError, match=r"variable 'amplitude' holds 0\.25, which is "
+                                         r"not a label; accepted: whole numbers"):
+        maps.fractions(amplitude)
+    with pytest.raises(ValueError, match="labels holds inf"):
+        maps.fractions(np.array([1.0, np.inf]))
+    attractor = maps.fractions(np.array([1.0, 0.0, 1.0]))
+    assert attractor.label.dtype == np.int64 and attractor.label.values.tolist() == [0, 1]
+    assert maps.fractions(np.array([1.0, np.nan])).label.dtype == np.float64
+
+
 def test_convergence_table_over_prefixes():
     labels = np.random.default_rng(4).integers(0, 3, 1000)
     table = maps.fractions(labels, convergence=True)

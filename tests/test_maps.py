@@ -116,12 +116,23 @@ def test_basins_catalogue_and_rest_position(damped):
 def test_well_needs_energy_and_refuses_forced_scenes():
     ds = sweep.run(sweep.Scene(effects=(sweep.Damping(0.4),)), sweep.Grid(theta0=[1.0]),
                    t_end=1.0, dt=0.01, observe=("final",))
-    with pytest.raises(ValueError, match=r"needs the variable 'energy_final'.*'energy'"):
+    # capture, the documented way (with stop_early too), is what the hint names; it
+    # named 'energy' alone
+    with pytest.raises(ValueError, match=r"needs the variable 'well' \(observe 'capture'\) "
+                       r"or both 'theta_final' and 'energy_final'.*lacks 'energy_final'; "
+                       r"accepted: a dataset from sweep.run\(\.\.\., observe=\(\.\.\., "
+                       r"'capture'\)\)"):
         maps.well(ds)
+    # motion named the one variable theta_final, then asked for omega_mean
+    with pytest.raises(ValueError, match=r"motion needs one of the variables 'omega_mean', "
+                       r"'winding' or 'theta_final', and this dataset has none"):
+        maps.motion(ds.drop_vars("theta_final"))
     forced = sweep.run(sweep.Scene(effects=(sweep.Forcing(1.0, 1.0),)),
                        sweep.Grid(theta0=[1.0]), t_end=1.0, dt=0.01,
                        observe=("final", "energy"))
-    with pytest.raises(ValueError, match=r"well is for unforced scenes"):
+    with pytest.raises(ValueError, match=r"well is for unforced scenes.*accepted: for a "
+                       r"forced scene, sweep.maps.basins of a run observing 'strobe', or "
+                       r"sweep.maps.motion"):
         maps.well(forced)
 
 

@@ -89,3 +89,33 @@ def test_sweep_fractions_prints_and_writes_what_the_api_gives(tmp_path):
     assert code == 2 and out == ""
     assert err.count("\n") == 1 and err.startswith("sweep: error: --label 'winding' is "
                                                    "neither a map nor a variable")
+
+
+GRID = """
+[grid]
+theta0 = { start = -3.0, stop = 3.0, num = 12 }
+omega0 = { start = -9.0, stop = 9.0, num = 10 }
+damping = 0.5
+"""
+
+
+def test_sweep_fractions_of_a_grid(tmp_path):
+    """A grid of the same run: no standard errors (its cells are not a random sample),
+    whole-number labels printed as integers (the well variable is float: 0, not 0.0),
+    and a variable of other floats refused in one line that names the labels that
+    work (it printed a row of count 1 per value)."""
+    code, out, err = call("run", str(write(tmp_path, SCENE + GRID + RUN)), "-o",
+                          str(tmp_path / "g.nc"))
+    assert code == 0, err
+    code, out, err = call("fractions", str(tmp_path / "g.nc"), "--label", "well")
+    assert (code, err) == (0, ""), err
+    assert "120 trajectories, well (a grid: no standard errors" in out
+    rows = [line.split() for line in out.splitlines()[3:]]
+    assert [row[0] for row in rows] == ["-2", "-1", "0", "1", "2"], out  # all captured
+    assert all(row[2] == "NaN" for row in rows)
+    code, out, err = call("fractions", str(tmp_path / "g.nc"), "--label", "capture_time")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert err.startswith("sweep: error: --label capture_time: variable 'capture_time' "
+                          "holds ") and "which is not a label" in err
+    assert err.endswith("labels that work on " + repr(str(tmp_path / "g.nc"))
+                        + ": --label basins, --label well\n")

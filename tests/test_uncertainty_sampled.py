@@ -146,16 +146,20 @@ def test_forced_wada_scene_is_fractal(wada_catalogue):
 
 def test_scene_labels_is_one_run_of_points():
     """scene_labels runs the starts as sweep.Points and labels them: the same labels as
-    the run of a grid through the same starts, NaN (an uncaptured start) as -1."""
+    the run of a grid through the same starts, NaN (an uncaptured start) as NAN_LABEL,
+    which ``labels_of.unresolved`` names (not -1: well -1 is a well)."""
     theta = np.linspace(-3.0, 3.0, 9)
     omega = np.array([-3.0, 0.0, 3.0])
     grid = sweep.Grid(theta0=theta, omega0=omega)
     starts = np.column_stack([np.repeat(theta, 3), np.tile(omega, 9)])
     short = dict(WELLS_RUN, t_end=2.0)  # too short for some starts to be captured
-    labels = maps.scene_labels(DAMPED, maps.well, **short)(starts)
+    labels_of = maps.scene_labels(DAMPED, maps.well, **short)
+    labels = labels_of(starts)
     expected = maps.well(sweep.run(DAMPED, grid, progress=False, **short)).values.ravel()
     assert np.isnan(expected).any() and labels.dtype == np.int64
-    np.testing.assert_array_equal(labels, np.where(np.isnan(expected), -1, expected))
+    np.testing.assert_array_equal(labels, np.where(np.isnan(expected), maps.NAN_LABEL,
+                                                   expected))
+    assert labels_of.unresolved == maps.NAN_LABEL
 
 
 def test_levels_without_uncertain_pairs_are_left_out():

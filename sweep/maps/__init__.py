@@ -27,10 +27,10 @@ from .networks import basin_stability, synchronized
 from .period import NO_PERIOD, period
 from .pilot import pilot_catalogue, pilot_grid
 from .refine import refine
-from .uncertainty import SampledUncertainty, scene_labels, uncertainty_sampled
+from .uncertainty import NAN_LABEL, SampledUncertainty, scene_labels, uncertainty_sampled
 from .wada import Wada, WadaMerging, wada, wada_merging
 
-__all__ = ["NO_PERIOD", "UNRESOLVED", "BoundaryReport", "SampledUncertainty", "Wada",
+__all__ = ["NAN_LABEL", "NO_PERIOD", "UNRESOLVED", "BoundaryReport", "SampledUncertainty", "Wada",
            "WadaMerging", "amplitude", "attractor_catalogue", "basin_stability", "basins",
            "continuation",
            "describe_boundary", "fractions", "identify_attractors", "inverted", "motion",

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._validate import check_count
+from .labels import UNRESOLVED
 from .metrics import (
     BasinEntropy,
     FractalityTest,
@@ -23,7 +24,18 @@ from .metrics import (
 from .uncertainty import SampledUncertainty, uncertainty_sampled
 from .wada import Wada, wada
 
-__all__ = ["BoundaryReport", "SAMPLED_EPS", "describe_boundary", "label_grid"]
+__all__ = ["BoundaryReport", "RADII_PER_AXIS", "SAMPLED_EPS", "describe_boundary",
+           "label_grid"]
+
+#: The fractality test's ball: this many radii per axis of the map at least (Puy et
+#: al.'s advice; Attractors.jl warns below 50), 3 cells at least, 20 at most.
+RADII_PER_AXIS = 40
+
+#: `BoundaryReport.lines` qualifies the fractality verdict when this share of its
+#: boundary balls hold three labels or more: each raises Sbb by up to about 0.4 nats
+#: (log 3 against the smooth 0.44), so 2 % of them shift it by about one standard
+#: error of 1000 balls (0.006-0.009).
+MULTI_LABEL_SHARE = 0.02
 
 #: The perturbations of the sampled uncertainty exponent, as fractions of the box's
 #: side: eight decades from 1e-9 (far below any grid) to 1e-2.
@@ -39,12 +51,14 @@ class BoundaryReport:
     shape : tuple of int
         The map's cells (n_x, n_y).
     fractions : dict of int to float
-        Each label's share of the cells (negative labels, unresolved or failed, count).
+        Each label's share of the cells, the unresolved label's (``unresolved``)
+        included.
     entropy : BasinEntropy
         Sb and Sbb [nats] over 5 x 5 boxes, with the log-2 criterion.
     fractality : FractalityTest or None
-        Puy et al.'s test at ``fractality_radius`` cells; None where the map has one
-        label or too little boundary for it (``fractality_note`` says why).
+        Puy et al.'s test with balls of ``max(3, min(20, min(shape) // 40))`` cells
+        (`RADII_PER_AXIS`); None where the map has one basin or too little boundary
+        for it (``fractality_note`` says why).
     fractality_note : str
     uncertainty : UncertaintyExponent or None
         alpha at the grid's scale (radii of 1, 2, 4, ... cells); None on a map smaller
@@ -64,12 +78,20 @@ class BoundaryReport:
     uncertainty: UncertaintyExponent | None
     sampled: SampledUncertainty | None = None
     wada: Wada | None = None
+    unresolved: int | None = None
+
+    @property
+    def basins(self) -> int:
+        """The basins of the map: its labels but ``unresolved``."""
+        return sum(1 for k in self.fractions if k != self.unresolved)
+
+    def _name(self, label) -> str:
+        return "unresolved" if label == self.unresolved else str(label)
 
     def lines(self) -> list[str]:
         """The report as lines of text (what ``sweep boundary`` prints)."""
-        out = [f"map: {self.shape[0]} x {self.shape[1]} cells, "
-               f"{sum(1 for k in self.fractions if k >= 0)} basins"]
-        out.append("fractions: " + ", ".join(f"{k}: {v:.4f}"
+        out = [f"map: {self.shape[0]} x {self.shape[1]} cells, {self.basins} basins"]
+        out.append("fractions: " + ", ".join(f"{self._name(k)}: {v:.4f}"
                                               for k, v in sorted(self.fractions.items())))
         e = self.entropy
         out.append(f"basin entropy: Sb = {e.sb:.4f}, Sbb = {e.sbb:.4f} nats "
@@ -81,6 +103,11 @@ class BoundaryReport:
                        f"{'fractal' if f.fractal else 'smooth'} "
                        f"(Sbb {f.sbb:.4f} +- {f.sbb_error:.4f} against smooth "
                        f"{f.smooth_low:.4f}-{f.smooth_high:.4f})")
+            if f.multi_label_balls >= MULTI_LABEL_SHARE * f.n_balls:
+                out[-1] += (f"; but {f.multi_label_balls} of its {f.n_balls} boundary "
+                            "balls hold three labels or more, which the smooth reference "
+                            "(two basins cut by a line) does not cover: smooth bands "
+                            "narrower than the ball raise Sbb too")
         else:
             out.append(f"fractality test: not computed ({self.fractality_note})")
         if self.uncertainty is not None:
@@ -108,13 +135,15 @@ class BoundaryReport:
         """The numbers as plain JSON-able values."""
         e = self.entropy
         out = {"shape": list(self.shape),
-               "fractions": {str(k): float(v) for k, v in self.fractions.items()},
+               "basins": self.basins,
+               "fractions": {self._name(k): float(v) for k, v in self.fractions.items()},
                "sb": e.sb, "sbb": e.sbb, "log2_criterion": bool(e.fractal_boundary)}
         if self.fractality is not None:
             f = self.fractality
             out["fractality"] = {"fractal": bool(f.fractal), "sbb": f.sbb,
                                  "sbb_error": f.sbb_error, "smooth_low": f.smooth_low,
-                                 "smooth_high": f.smooth_high, "radius": int(f.radius)}
+                                 "smooth_high": f.smooth_high, "radius": int(f.radius),
+                                 "multi_label_balls": int(f.multi_label_balls)}
         if self.uncertainty is not None:
             out["alpha_grid"] = float(self.uncertainty.alpha)
         if self.sampled is not None:
@@ -151,15 +180,16 @@ def label_grid(labels_of, x, y) -> np.ndarray:
 
 
 def describe_boundary(labels, x, y, labels_of=None, *, sampled: int = 0,
-                      wada_steps: int = 0, seed: int = 0) -> BoundaryReport:
+                      wada_steps: int = 0, seed: int = 0,
+                      unresolved: int | None = None) -> BoundaryReport:
     """Measure a 2-D label map's boundary: fractions, basin entropy, fractality, the
     uncertainty exponent, and on request the sampled exponent and the Wada test.
 
     Parameters
     ----------
     labels : array_like of int, shape (n_x, n_y)
-        The map, ``labels[i, j]`` the label of the start ``(x[i], y[j])``; negative
-        labels are unresolved or failed starts.
+        The map, ``labels[i, j]`` the label of the start ``(x[i], y[j])``; every label
+        is a basin but ``unresolved``.
     x, y : array_like of float, shapes (n_x,), (n_y,)
         The grid's coordinates along each axis (increasing).
     labels_of : callable, optional
@@ -173,6 +203,11 @@ def describe_boundary(labels, x, y, labels_of=None, *, sampled: int = 0,
         three basins).
     seed : int, default 0
         Seed of every random draw (the fractality test's balls, the sampled pairs).
+    unresolved : int, optional
+        The label of unresolved or failed starts (not a basin), the map's own: -1 for
+        `sweep.maps.basins` and ``period``, -127 for ``motion``, ``NAN_LABEL`` for
+        `well`'s NaN. Default: ``labels_of.unresolved`` (`sweep.maps.scene_labels`
+        says it), else -1 (`sweep.maps.UNRESOLVED`).
 
     Returns
     -------
@@ -207,11 +242,13 @@ def describe_boundary(labels, x, y, labels_of=None, *, sampled: int = 0,
     if sampled and sampled < 100:
         raise ValueError(f"sampled must be 0 or >= 100 pairs per eps level, got "
                          f"{sampled!r}; accepted: 0 or an int >= 100")
+    if unresolved is None:
+        unresolved = getattr(labels_of, "unresolved", UNRESOLVED)
     fractions = basin_fractions(labels)
-    basins = sum(1 for k in fractions if k >= 0)
+    basins = sum(1 for k in fractions if k != unresolved)
     entropy = basin_entropy(labels, box_size=min(5, *labels.shape))
     fractality, note = None, ""
-    radius = max(3, min(20, min(labels.shape) // 10))
+    radius = max(3, min(20, min(labels.shape) // RADII_PER_AXIS))
     if basins < 2:
         note = "one basin"
     elif 2 * radius + 1 > min(labels.shape):
@@ -228,7 +265,22 @@ def describe_boundary(labels, x, y, labels_of=None, *, sampled: int = 0,
         found = uncertainty_sampled(labels_of, box, eps=SAMPLED_EPS, n=sampled, seed=seed)
     tested = None
     if wada_steps and basins >= 3:
-        tested = wada(labels, labels_of, x, y, max_steps=wada_steps)
+        if any(k < 0 for k in fractions if k != unresolved) or unresolved != UNRESOLVED:
+            tested = wada(_wada_codes(labels, unresolved),
+                          lambda starts: _wada_codes(np.asarray(labels_of(starts)),
+                                                     unresolved),
+                          x, y, max_steps=wada_steps)
+        else:
+            tested = wada(labels, labels_of, x, y, max_steps=wada_steps)
     return BoundaryReport(shape=tuple(int(n) for n in labels.shape), fractions=fractions,
                           entropy=entropy, fractality=fractality, fractality_note=note,
-                          uncertainty=uncertainty, sampled=found, wada=tested)
+                          uncertainty=uncertainty, sampled=found, wada=tested,
+                          unresolved=int(unresolved))
+
+
+def _wada_codes(labels: np.ndarray, unresolved: int) -> np.ndarray:
+    """Labels as `wada` reads them: ``unresolved`` -1, every other label a code >= 0,
+    one per label (k >= 0: 2 k, k < 0: -2 k - 1), the same in every call."""
+    labels = np.asarray(labels, dtype=np.int64)
+    codes = np.where(labels >= 0, 2 * labels, -2 * labels - 1)
+    return np.where(labels == unresolved, -1, codes)

@@ -9,7 +9,7 @@ import xarray as xr
 
 from .._validate import check_flag
 
-__all__ = ["fractions"]
+__all__ = ["fractions", "label_text"]
 
 #: The dimension `fractions` reads as independent replicates (R runs of
 #: ``sweep.sample(..., seed=s)`` with R seeds, stacked along it).
@@ -24,8 +24,19 @@ BINOMIAL = ("binomial sqrt(p (1 - p) / n): exact for independent uniform samples
             "discontinuous, so scrambling gains less than on smooth integrands, but it "
             "gains); an unbiased estimate: R independent seeds along a 'replicate' "
             "dimension")
+GRID = ("none: the labels are a grid's cells, not a random sample (a grid's error is "
+        "that of its resolution, not binomial; for one, sample the box: sweep.sample)")
 SPREAD = ("spread of R independent replicates (randomised QMC): sample standard "
           "deviation of the R fractions / sqrt(R)")
+
+
+def label_text(value) -> str:
+    """A label as printed: whole numbers as integers (``1``, not ``1.0``), NaN as
+    ``nan``, any other number as Python writes it."""
+    number = float(value)
+    if np.isnan(number):
+        return "nan"
+    return str(int(number)) if number == int(number) else repr(number)
 
 
 def _unresolved_code(labels, unresolved):
@@ -43,6 +54,36 @@ def _unresolved_code(labels, unresolved):
     if "unresolved" in meanings and "flag_values" in attrs:
         return np.asarray(attrs["flag_values"])[meanings.index("unresolved")]
     return None
+
+
+def _sampled(labels, sampled) -> bool:
+    """Whether ``labels`` are a random sample: ``sampled`` if given, else False for a
+    DataArray on grid dimensions (any but ``point`` and ``replicate``), True otherwise
+    (`sweep.Points` runs, plain arrays)."""
+    if sampled is not None:
+        return check_flag("sampled", sampled)
+    if isinstance(labels, xr.DataArray):
+        return set(labels.dims) - {REPLICATE} <= {"point"}
+    return True
+
+
+def _check_whole(values: np.ndarray, labels) -> np.ndarray:
+    """Float labels that are whole numbers (or NaN, no label), as int64 when none is
+    NaN; refuses any other float, naming the variable."""
+    if values.dtype.kind != "f":
+        return values
+    finite = values[np.isfinite(values)]
+    bad = finite != np.round(finite)
+    if bad.any() or np.isinf(values).any():
+        name = getattr(labels, "name", None)
+        what = f"variable {str(name)!r}" if name else "labels"
+        value = float(finite[bad][0]) if bad.any() else float(values[np.isinf(values)][0])
+        raise ValueError(f"{what} holds {value!r}, which is not a label; accepted: whole "
+                         "numbers, one per trajectory (NaN: no label), such as a map of "
+                         "sweep.maps (basins, motion, well, period) or an integer variable")
+    if finite.size == values.size:
+        return values.astype(np.int64)
+    return values
 
 
 def _table(values: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -71,7 +112,8 @@ def _estimate(values: np.ndarray, codes, nan: bool):
     return p.mean(axis=0), p.std(axis=0, ddof=1) / np.sqrt(r), counts.sum(axis=0)
 
 
-def fractions(labels, *, convergence: bool = False, unresolved=None) -> xr.Dataset:
+def fractions(labels, *, convergence: bool = False, unresolved=None,
+              sampled: bool | None = None) -> xr.Dataset:
     """The fraction of the samples each label takes, with its standard error.
 
     Parameters
@@ -93,22 +135,31 @@ def fractions(labels, *, convergence: bool = False, unresolved=None) -> xr.Datas
         dropped: it keeps a row of its own, flagged by the coordinate ``unresolved``, so
         the fractions of all rows sum to 1 and the resolved ones can be renormalised
         (divide by ``1 - fraction`` of the unresolved row) if that is what is wanted.
+    sampled : bool, optional
+        Whether the labels are a random sample of starts, which the binomial standard
+        error assumes. Default: False for a DataArray on grid dimensions (a run of a
+        `sweep.Grid`: its cells are not a random sample, and ``standard_error`` is NaN),
+        True for one along ``point`` (`sweep.sample`, `sweep.Points`) and for a plain
+        array. Replicates (``replicate``) always give their spread.
 
     Returns
     -------
     xarray.Dataset
-        Dimension ``label`` (each label present, sorted; NaN last), and ``n`` with
+        Dimension ``label`` (each label present, sorted; NaN last; int64 for whole
+        float labels without NaN, e.g. ``attractor``), and ``n`` with
         ``convergence``. Variables ``fraction`` (count / n, or the replicates' mean),
         ``standard_error`` (one standard deviation of the fraction: ``sqrt(p (1 - p) /
         n)`` for one sample, the binomial error, exact for independent random samples;
-        std over replicates / sqrt(R) with a ``replicate`` dimension) and ``count``
+        NaN for a grid; std over replicates / sqrt(R) with a ``replicate`` dimension)
+        and ``count``
         (over all replicates); coordinate ``unresolved`` (bool per label); attributes
         ``samples`` (n per replicate), ``replicates`` and ``standard_error_method``.
 
     Raises
     ------
     ValueError
-        For no labels, a single replicate, or labels that are not numbers.
+        For no labels, a single replicate, or labels that are not numbers or not whole
+        numbers (a float such as 0.37 is no label: ``amplitude``, ``energy_final``).
 
     Notes
     -----
@@ -133,6 +184,7 @@ def fractions(labels, *, convergence: bool = False, unresolved=None) -> xr.Datas
     ([0.167, 0.333, 0.5], [True, False, False])
     """
     convergence = check_flag("convergence", convergence)
+    sampled = _sampled(labels, sampled)
     code = _unresolved_code(labels, unresolved)
     if isinstance(labels, xr.DataArray) and REPLICATE in labels.dims:
         other = [d for d in labels.dims if d != REPLICATE]
@@ -149,6 +201,7 @@ def fractions(labels, *, convergence: bool = False, unresolved=None) -> xr.Datas
                          f"{values.dtype}")
     if values.shape[1] == 0:
         raise ValueError("labels are empty; accepted: at least one labelled sample")
+    values = _check_whole(values, labels)
     codes, nan = _table(values)
     flagged = np.isnan(codes) if codes.dtype.kind == "f" else np.zeros(codes.size, bool)
     if code is not None:
@@ -160,10 +213,12 @@ def fractions(labels, *, convergence: bool = False, unresolved=None) -> xr.Datas
                     if 1 << k < n] + [n]
     estimates = [_estimate(values[:, :m], codes, nan) for m in prefixes]
     p, se, counts = (np.array(column) for column in zip(*estimates))
+    r = values.shape[0]
+    if r == 1 and not sampled:
+        se = np.full(se.shape, np.nan)
     dims = ("n", "label") if convergence else ("label",)
     if not convergence:
         p, se, counts = p[0], se[0], counts[0]
-    r = values.shape[0]
     ds = xr.Dataset(
         {"fraction": (dims, p, {"long_name": "fraction of the samples", "units": "1"}),
          "standard_error": (dims, se, {"long_name": "standard error of the fraction "
@@ -174,7 +229,7 @@ def fractions(labels, *, convergence: bool = False, unresolved=None) -> xr.Datas
                 "unresolved": ("label", flagged, {"long_name": "the label means no label "
                                                                "(failed, chaotic, unmatched)"})},
         attrs={"samples": n, "replicates": r,
-               "standard_error_method": BINOMIAL if r == 1 else SPREAD})
+               "standard_error_method": SPREAD if r > 1 else BINOMIAL if sampled else GRID})
     if convergence:
         ds = ds.assign_coords(n=("n", np.array(prefixes, dtype=np.int64),
                                  {"long_name": "samples used (the first n)"}))

@@ -125,7 +125,11 @@ def motion(ds: xr.Dataset, *, min_turns: float = 1.0) -> xr.DataArray:
         turns = ds["winding"]
         source = "winding over the whole run"
     else:
-        _require(ds, ("theta_final",), "omega_mean", "motion")
+        if "theta_final" not in ds:
+            raise ValueError("motion needs one of the variables 'omega_mean', 'winding' "
+                             "or 'theta_final', and this dataset has none; accepted: a "
+                             "dataset from sweep.run(..., observe=(..., 'omega_mean')), "
+                             "or with 'winding' or 'final' (none works with stop_early)")
         theta0 = ds["theta0"] if "theta0" in ds.coords else 0.0
         # the winding observable's wells crossed (np.round: half to even, as the kernel)
         turns = np.round(ds["theta_final"] / (2 * np.pi)) - np.round(theta0 / (2 * np.pi))
@@ -184,7 +188,9 @@ def _captured(ds: xr.Dataset) -> xr.DataArray:
 def _check_unforced(ds: xr.Dataset, what: str) -> None:
     if "forcing" in str(ds.attrs.get("effects", "")).split():
         raise ValueError(f"{what} is for unforced scenes (an unforced damped pendulum "
-                         "settles in a well); this dataset's scene has forcing")
+                         "settles in a well); this dataset's scene has forcing; accepted: "
+                         "for a forced scene, sweep.maps.basins of a run observing "
+                         "'strobe', or sweep.maps.motion")
 
 
 def well(ds: xr.Dataset) -> xr.DataArray:
@@ -207,7 +213,13 @@ def well(ds: xr.Dataset) -> xr.DataArray:
     if "well" in ds:  # observed directly ("capture", possibly with stop_early)
         index = ds["well"].where(_ok(ds))
     else:
-        _require(ds, ("theta_final",), "final or capture", "well")
+        missing = [v for v in ("theta_final", "energy_final") if v not in ds]
+        if missing:
+            raise ValueError(f"well needs the variable 'well' (observe 'capture') or both "
+                             f"'theta_final' and 'energy_final' (observe 'final' and "
+                             f"'energy'), and this dataset lacks {missing[0]!r}; accepted: "
+                             "a dataset from sweep.run(..., observe=(..., 'capture')), "
+                             "which stop_early=True also allows")
         index = np.round(ds["theta_final"] / (2 * np.pi))
         index = index.where(_captured(ds) & _ok(ds))
     index.attrs = {"long_name": "final potential well k (rest at theta = 2 pi k)",
@@ -233,8 +245,9 @@ def basins(ds: xr.Dataset, *, rest_position: bool = False, max_period: int = 8,
     Parameters
     ----------
     ds : xarray.Dataset
-        An unforced run observing ``final`` and ``energy``, or a forced run (of the
-        pendulum or of a system) observing ``strobe``.
+        An unforced run observing ``capture`` (with or without ``stop_early``), or
+        ``final`` and ``energy``; or a forced run (of the pendulum or of a system)
+        observing ``strobe``.
     rest_position : bool, default False
         Unforced scenes: identify wells modulo 2 pi.
     max_period, tol
@@ -287,6 +300,12 @@ def refuse_system_without_strobe(ds: xr.Dataset, what: str) -> None:
     the single pendulum's variables."""
     if isinstance(ds, xr.Dataset) and "system_name" in ds.attrs \
             and "strobe_positions" not in ds.attrs:
+        if "attractor" in ds.data_vars:  # a run on a catalogue: its labels are there
+            raise ValueError(f"sweep.maps.{what} needs a system's stroboscopic samples, "
+                             f"and this run of {ds.attrs['system_name']} has none: it was "
+                             "run on an attractor catalogue, and its variable 'attractor' "
+                             "is each start's attractor (NaN: none); accepted: those "
+                             "labels, ds['attractor'], or a run observing 'strobe'")
         raise ValueError(f"sweep.maps.{what} needs a system's stroboscopic samples, and "
                          f"this run of {ds.attrs['system_name']} has none; accepted: a "
                          "dataset from sweep.run(driven_system, ..., observe=(..., "

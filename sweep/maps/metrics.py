@@ -749,6 +749,11 @@ class FractalityTest:
         Balls drawn to find them (the others held one label).
     sigmas : float
         Width of the smooth interval in standard errors.
+    multi_label_balls : int
+        Of the ``n_balls`` boundary balls, those holding three labels or more: the
+        smooth reference is a cut between two, so where many balls hold more (basins
+        narrower than the ball, or several meeting), ``sbb`` rises above it whatever
+        the boundary (a smooth one reads fractal at too large a radius).
     """
 
     fractal: bool
@@ -761,17 +766,20 @@ class FractalityTest:
     n_balls: int
     n_draws: int
     sigmas: float
+    multi_label_balls: int = 0
 
 
-def _entropy_of_rows(cells: np.ndarray) -> np.ndarray:
-    """Gibbs entropy [nats] of the labels of each row of ``cells``."""
+def _entropy_of_rows(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Gibbs entropy [nats] of the labels of each row of ``cells``, and the number of
+    labels each row holds."""
     rows, n = cells.shape
     cells = np.sort(cells, axis=1)
     starts_run = np.ones(cells.shape, dtype=bool)
     starts_run[:, 1:] = cells[:, 1:] != cells[:, :-1]
     starts = np.flatnonzero(starts_run)
     p = np.diff(np.append(starts, cells.size)) / n
-    return np.bincount(starts // n, weights=-p * np.log(p), minlength=rows)
+    return (np.bincount(starts // n, weights=-p * np.log(p), minlength=rows),
+            starts_run.sum(axis=1))
 
 
 def _binary_entropy(p: np.ndarray) -> np.ndarray:
@@ -853,7 +861,8 @@ def fractality_test(
     sigmas: float = 2.0,
 ) -> FractalityTest:
     """Whether a map's basin boundary is fractal at the scale ``radius``, by the
-    boundary basin entropy of random balls (Puy et al. 2021); works with two basins.
+    boundary basin entropy of random balls (Puy et al. 2021), whose smooth reference is
+    a boundary between two basins (``multi_label_balls`` counts the balls holding more).
 
     Parameters
     ----------
@@ -915,8 +924,11 @@ def fractality_test(
     standard errors wide by default, so that a smooth boundary is called fractal about
     5 % of the time rather than about 16 %. Boundaries between three or more basins
     meeting at points, and curved smooth boundaries at a radius near their curvature
-    radius, shift ``sbb`` a little; choose ``radius`` well below the features of the
-    map.
+    radius, shift ``sbb`` a little; bands of basins narrower than the ball shift it a
+    lot (a ball holding three labels has up to log 3 = 1.1 nats: the damped pendulum's
+    wells, smooth, read fractal at 10 radii per axis, where most boundary balls hold
+    three wells; ``multi_label_balls`` counts such balls). Choose ``radius`` well below
+    the features of the map (at least about 40 radii per axis).
 
     References
     ----------
@@ -959,13 +971,13 @@ def fractality_test(
     flat = array.ravel()
     batch = max(n_balls, 2_000_000 // offsets.shape[0])
     found, draws = [], 0
-    count = 0
+    count = multi = 0
     limit = 1000 * n_balls
     while count < n_balls and draws < limit:
         size = min(batch, limit - draws)
         centres = np.stack([generator.integers(radius, n - radius, size)
                             for n in array.shape])
-        entropy = _entropy_of_rows(flat[np.ravel_multi_index(centres, array.shape)[:, None]
+        entropy, held = _entropy_of_rows(flat[np.ravel_multi_index(centres, array.shape)[:, None]
                                         + flat_offsets[None, :]])
         boundary = np.flatnonzero(entropy > 0)
         if count + boundary.size >= n_balls:  # keep the first n_balls, in draw order
@@ -974,6 +986,7 @@ def fractality_test(
         else:
             draws += size
         found.append(entropy[boundary])
+        multi += int(np.count_nonzero(held[boundary] > 2))
         count += boundary.size
     if count < n_balls:
         raise ValueError(f"only {count} of {draws} random balls of radius {radius} held "
@@ -989,4 +1002,5 @@ def fractality_test(
     fractal = bool(sbb < low - sigmas * error or sbb > high + sigmas * error)
     return FractalityTest(fractal=fractal, sbb=sbb, sbb_error=error, smooth_sbb=smooth,
                           smooth_low=low, smooth_high=high, radius=radius,
-                          n_balls=n_balls, n_draws=draws, sigmas=float(sigmas))
+                          n_balls=n_balls, n_draws=draws, sigmas=float(sigmas),
+                          multi_label_balls=multi)

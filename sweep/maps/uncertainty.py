@@ -27,7 +27,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["SampledUncertainty", "scene_labels", "uncertainty_sampled"]
+__all__ = ["NAN_LABEL", "SampledUncertainty", "scene_labels", "uncertainty_sampled"]
+
+#: `scene_labels`' label of a NaN label without an unresolved value of its own
+#: (`sweep.maps.well`'s uncaptured starts): the smallest int64, no well's index.
+NAN_LABEL = int(np.iinfo(np.int64).min)
+
+#: The unresolved label of the maps `scene_labels` knows, by name, before any call.
+_KNOWN_UNRESOLVED = {"basins": -1, "period": -1, "motion": -127, "well": NAN_LABEL}
 
 #: The smallest perturbation accepted, as a fraction of the box's side: below it a
 #: perturbed start of a box far from 0 may round to the start itself in float64.
@@ -328,7 +335,9 @@ def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega
     label : callable, default `sweep.maps.basins`
         ``label(ds) -> DataArray`` of one label per start (``sweep.maps.basins``,
         ``well``, ``motion``, ``period`` or a function of the dataset); NaN labels
-        (``well``'s uncaptured starts) become -1.
+        (``well``'s uncaptured starts) become the label's own unresolved value where
+        it has one (an ``unresolved`` attribute or flag), else `NAN_LABEL` (not -1:
+        a well of ``well`` is -1).
     axes : pair of str, default ("theta0", "omega0")
         The `sweep.Points` columns the two coordinates of a start set (a box's
         ``(lo0, hi0)`` is the range of ``axes[0]``): initial conditions [rad, rad/s]
@@ -345,7 +354,10 @@ def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega
     -------
     callable
         ``labels_of(starts)``: one `sweep.run` of ``sweep.Points`` over the rows of
-        ``starts``, then ``label``, as an int64 array.
+        ``starts``, then ``label``, as an int64 array. Its attribute ``unresolved`` is
+        the label of unresolved starts (-1 for ``basins`` and ``period``, -127 for
+        ``motion``, `NAN_LABEL` for ``well``; after a call, the labels' own), which
+        `describe_boundary` reads.
 
     Raises
     ------
@@ -368,7 +380,8 @@ def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega
     from ..grid import Points
     from ..physics import parameter_names
     from ..physics.scene import check_pendulum_scene
-    from .labels import basins
+    from .fractions import _unresolved_code
+    from .labels import UNRESOLVED, basins
 
     check_pendulum_scene("sweep.maps.scene_labels", scene)
     if label is None:
@@ -403,7 +416,12 @@ def scene_labels(scene, label: Callable | None = None, *, axes=("theta0", "omega
         ds = engine.run(scene, Points(**{axes[0]: starts[:, 0], axes[1]: starts[:, 1]},
                                       **columns), **run_kwargs)
         found = ds["attractor"] if catalogued else label(ds)
+        own = UNRESOLVED if catalogued else _unresolved_code(found, None)
+        if own is not None and np.isfinite(own):
+            labels_of.unresolved = int(own)
         values = np.asarray(found, dtype=np.float64).ravel()
-        return np.where(np.isfinite(values), values, -1).astype(np.int64)
+        return np.where(np.isfinite(values), values, labels_of.unresolved).astype(np.int64)
 
+    labels_of.unresolved = UNRESOLVED if catalogued else _KNOWN_UNRESOLVED.get(
+        getattr(label, "__name__", None), NAN_LABEL)
     return labels_of
