@@ -1063,7 +1063,8 @@ def _command_fractions(args: argparse.Namespace) -> int:
               if method == GRID else method.split(":")[0])
     print(f"{args.file}: {int(table.attrs['samples'])} trajectories, {args.label} "
           f"({errors})")
-    print(frame.to_string())
+    shown = frame.drop(columns="standard_error") if method == GRID else frame
+    print(shown.to_string())  # a grid's column of NaN errors is not printed (the CSV has it)
     if output is not None:
         tmp = output.with_name(output.name + ".tmp")
         frame.to_csv(tmp)

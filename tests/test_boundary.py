@@ -275,3 +275,17 @@ def test_a_system_run_file_is_refused_in_one_line(no_compute):
     assert err == (f"sweep: error: sweep boundary supports single-pendulum run files only; "
                    f"{run_file!r} has a [system] table (DoublePendulum); accepted: a run "
                    "file with a [scene] table, or with neither (the default pendulum)\n")
+
+
+def test_a_map_too_small_for_the_fractality_test_is_not_tested():
+    """An 8 x 8 map of two smooth half planes: a ball of 3 cells is more than a third of
+    the map, so the test would judge the map's edges, not its boundary (before, such a
+    map of smooth wells read "fractal"); it is not run, and the report says why."""
+    x = np.linspace(-1.0, 1.0, 8)
+    labels = (x[:, None] + 0.3 * x[None, :] > 0).astype(np.int64)
+    report = describe_boundary(labels, x, x)
+    assert report.fractality is None
+    assert report.fractality_note.startswith("the map is too small for it: 8 cells")
+    wide = np.linspace(-1.0, 1.0, 30)  # 10 radii of 3 cells: tested
+    plane = (wide[:, None] + 0.3 * wide[None, :] > 0).astype(np.int64)
+    assert describe_boundary(plane, wide, wide).fractality is not None

@@ -144,14 +144,20 @@ def _grid_uncertainty(result: Any, explorer: Any) -> str:
 
 def _fractality(result: Any, explorer: Any) -> str:
     """Puy et al.'s fractality test (`sweep.maps.metrics.fractality_test`) of the view's
-    labels, through balls of a tenth of the map's side (3 to 20 pixels; a fixed seed):
-    unlike Sbb > log 2 it decides with two basins too."""
+    labels, through balls of the radius `sweep.maps.describe_boundary` takes (a
+    `RADII_PER_AXIS`-th of the map's side, 3 to 20 pixels; not run on a view of fewer
+    than `MIN_RADII` radii a side; a fixed seed): unlike Sbb > log 2 it decides with
+    two basins too."""
+    from ..maps.boundary import MIN_RADII, RADII_PER_AXIS
+
     labels = np.asarray(result.image).astype(np.int64)
-    radius = max(3, min(20, min(labels.shape) // 10))
+    side = min(labels.shape)
+    radius = max(3, min(20, side // RADII_PER_AXIS))
     if np.unique(labels).size < 2:
         return "**fractality test**: one label in the view, no boundary"
-    if 2 * radius + 1 > min(labels.shape):
-        return "**fractality test**: the view is too small (fewer than 7 pixels a side)"
+    if side < MIN_RADII * radius:
+        return (f"**fractality test**: the view is too small ({side} pixels a side, "
+                f"fewer than {MIN_RADII} radii of the smallest ball, {radius} pixels)")
     out = fractality_test(labels, radius=radius, n_balls=1000, rng=0)
     return (f"**fractality test** (balls of radius {out.radius} pixels): "
             f"{'fractal' if out.fractal else 'smooth'} boundary (Sbb of the balls "
@@ -213,8 +219,8 @@ def _below_grid(result: Any, explorer: Any) -> str:
     lines = [line for line in report.lines()
              if line.startswith(("uncertainty exponent below", "Wada test"))]
     if report.wada is None:
-        lines.append(f"Wada test: not run ({sum(1 for k in report.fractions if k >= 0)} "
-                     "basins in the window; it needs three or more)")
+        lines.append(f"Wada test: not run ({report.basins} basins in the window; it "
+                     "needs three or more)")
     return "\n\n".join([f"**below the grid's scale** (a {side} x {side} map of the "
                          "window labelled afresh):"] + lines)
 

@@ -31,6 +31,12 @@ __all__ = ["BoundaryReport", "RADII_PER_AXIS", "SAMPLED_EPS", "describe_boundary
 #: al.'s advice; Attractors.jl warns below 50), 3 cells at least, 20 at most.
 RADII_PER_AXIS = 40
 
+#: Below this many radii per axis the test is not run: through balls a fifth of the map
+#: wide or more every boundary of an 8 x 8 map read "fractal" (a smooth damped
+#: pendulum's wells, Sbb 0.25 against the smooth 0.44-0.50); from 101 cells per axis at
+#: radius 3 (34 radii) it read smooth (`tests/test_boundary.py`).
+MIN_RADII = 10
+
 #: `BoundaryReport.lines` qualifies the fractality verdict when this share of its
 #: boundary balls hold three labels or more: each raises Sbb by up to about 0.4 nats
 #: (log 3 against the smooth 0.44), so 2 % of them shift it by about one standard
@@ -251,8 +257,10 @@ def describe_boundary(labels, x, y, labels_of=None, *, sampled: int = 0,
     radius = max(3, min(20, min(labels.shape) // RADII_PER_AXIS))
     if basins < 2:
         note = "one basin"
-    elif 2 * radius + 1 > min(labels.shape):
-        note = f"the map is smaller than a ball of radius {radius} cells"
+    elif min(labels.shape) < MIN_RADII * radius:
+        note = (f"the map is too small for it: {min(labels.shape)} cells on its shorter "
+                f"axis, fewer than {MIN_RADII} radii of the smallest ball ({radius} cells); "
+                f"a finer grid ({MIN_RADII * radius} cells per axis or more) would allow it")
     else:
         try:
             fractality = fractality_test(labels, radius=radius, n_balls=1000, rng=seed)
