@@ -13,6 +13,7 @@ from test_explore_browser import (  # the browser fixture and the page scripts
     _click,
     _missing,
     _wait,
+    check_layout,
     driver,  # noqa: F401 - a fixture
 )
 
@@ -62,6 +63,7 @@ def test_double_pendulum_in_a_real_browser(system_app, driver):  # noqa: F811 - 
     assert abs(traj["theta2"] - (y1 - fy * (y1 - y0))) <= 2 * pixel[1]
     info = [text for text in driver.execute_script(_TEXTS, "omega2_0") if "status" in text]
     assert len(info) == 1 and "ok" in info[0]  # the info pane: every start value, status
+    check_layout(driver, "flip_time")  # fits 1400 px; the bar's title; no warning
 
     set_value = ("for (const m of Bokeh.documents[0].all_models) {"
                  " if (m.title === arguments[0]) { m.value = arguments[1]; return true; } }"
@@ -112,5 +114,6 @@ def test_a_driven_double_pendulums_basins_in_a_real_browser(driver, tmp_path):  
         assert all(label.startswith("attractor ") for label in colours["labels"][1:])
         assert "#000000" not in colours["palette"][1:]
         driver.save_screenshot(str(tmp_path / "driven-basins.png"))
+        check_layout(driver, "basins")
     finally:
         app.stop()

@@ -47,6 +47,7 @@ try:
         LegendItem,
         LinearColorMapper,
         Range1d,
+        Title,
     )
     from bokeh.palettes import Category10_10, Category20_20, Viridis256
     from bokeh.plotting import figure
@@ -69,6 +70,15 @@ TIMELINE_SIZE = 256
 
 #: Sessions an app keeps a weak reference to (`ExplorerApp.sessions`).
 SESSIONS_KEPT = 8
+
+#: Width of the trajectory panels beside the map [px]: with the controls and the map
+#: (its colour bar's longest names included) the page fits a 1400 px wide window
+#: with 20 px to spare (460 until 2026-11-28: 1455 px, a horizontal scroll bar).
+SIDE_WIDTH = 380
+
+#: Width of a character of the colour bar's title [px] (12 px sans-serif; a little
+#: more than the mean, so that the room kept for it is never short).
+TITLE_CHAR_PX = 7
 
 #: Colours of discrete maps.
 _MOTION_COLOURS = {-1.0: "#2166ac", 0.0: "#f0f0f0", 1.0: "#b2182b"}
@@ -199,6 +209,26 @@ def wire_image(result: MapResult) -> np.ndarray:
     return np.ascontiguousarray(result.image, dtype=np.float32)
 
 
+def _fit(fig, xs, ys, padding: float = 0.05) -> None:
+    """Set ``fig``'s ranges (and what its reset tool returns to) to the finite values of
+    the arrays ``xs`` and ``ys``, widened by ``padding`` of their span on each side (a
+    single value: +-1 around it; none: 0 to 1).
+
+    The trajectory panels use fixed ranges set here, not Bokeh's data ranges: a data
+    range over no data (before the first click) has NaN ends, and BokehJS warned
+    "could not set initial ranges" in the browser's console on every redraw."""
+    for rng, arrays in ((fig.x_range, xs), (fig.y_range, ys)):
+        values = np.concatenate([np.ravel(np.asarray(a, dtype=np.float64)) for a in arrays]
+                                or [np.empty(0)])
+        values = values[np.isfinite(values)]
+        low, high = (float(values.min()), float(values.max())) if values.size else (0.0, 1.0)
+        if high > low:
+            low, high = low - padding * (high - low), high + padding * (high - low)
+        else:
+            low, high = low - 1.0, high + 1.0
+        rng.update(start=low, end=high, reset_start=low, reset_end=high)
+
+
 def _legend_above(fig, items) -> Legend:
     """A horizontal legend of ``items`` (label, renderers) above ``fig``'s plotting area
     (between the title and the frame: it never covers a curve); a click hides a curve."""
@@ -318,10 +348,18 @@ class _Session:
         self.clicked = ColumnDataSource({"x": [], "y": []})
         self.map.scatter("x", "y", source=self.clicked, size=12, marker="x", line_width=3,
                          color="white")
-        self.colorbar = ColorBar(color_mapper=self.mapper, title="", width=16,
-                                 ticker=self.ticker, title_text_font_size="12px",
+        self.colorbar = ColorBar(color_mapper=self.mapper, width=16, ticker=self.ticker,
                                  major_label_text_font_size="11px")
         self.map.add_layout(self.colorbar, "right")
+        # the colour bar's title, horizontal above the bar: BokehJS (3.9) draws a
+        # vertical colour bar's own title rotated in a strip on its left, where a short
+        # one sat under the bar's foot ("basins") and a long one was cut; ``offset``
+        # from the frame's left edge puts it over the bar
+        self.colour_title = Title(name="colour_title", text="", align="left",
+                                  offset=n + self.colorbar.padding,
+                                  text_font_size="12px", text_font_style="normal",
+                                  standoff=0)
+        self.map.add_layout(self.colour_title, "above")
         for r in (self.map.x_range, self.map.y_range):
             r.on_change("start", self._range_changed)
             r.on_change("end", self._range_changed)
@@ -329,17 +367,25 @@ class _Session:
 
         self.traj_source = ColumnDataSource({"t": [], "theta": [], "omega": []})
         self.strobe_source = ColumnDataSource({"theta": [], "omega": []})
-        self.trajectory = figure(name="trajectory", width=460, height=260,
+        # fixed ranges, fitted to each trajectory (`_fit`): no data range over no data
+        self.trajectory = figure(name="trajectory", width=SIDE_WIDTH, height=260,
+                                 x_range=Range1d(0, 1), y_range=Range1d(0, 1),
                                  x_axis_label="t [s]", y_axis_label="theta [rad], omega [rad/s]",
                                  title="trajectory: click a start on the map",
-                                 tools="box_zoom,wheel_zoom,pan,reset,save")
+                                 tools="box_zoom,wheel_zoom,pan,reset,save",
+                                 toolbar_location="above")
+        # a start's coordinates in the title: 12 px, over the frame's whole width
+        self.trajectory.title.text_font_size = "12px"
         lines = [self.trajectory.line("t", name, source=self.traj_source, color=colour)
                  for name, colour in (("theta", "#1f77b4"), ("omega", "#ff7f0e"))]
         _legend_above(self.trajectory, [("theta [rad]", lines[:1]),
                                         ("omega [rad/s]", lines[1:])])
-        self.phase = figure(name="phase", width=460, height=280, x_axis_label="theta [rad]",
+        self.phase = figure(name="phase", width=SIDE_WIDTH, height=280,
+                            x_range=Range1d(0, 1), y_range=Range1d(0, 1),
+                            x_axis_label="theta [rad]",
                             y_axis_label="omega [rad/s]", title="phase portrait",
-                            tools="box_zoom,wheel_zoom,pan,reset,save")
+                            tools="box_zoom,wheel_zoom,pan,reset,save",
+                            toolbar_location="above")
         path = self.phase.line("theta", "omega", source=self.traj_source, color="#1f77b4")
         # stroboscopic points only where the scene is forced (a legend entry of an
         # unforced scene's always-empty set would only hide the curve)
@@ -375,7 +421,7 @@ class _Session:
         self.status = pn.pane.Markdown("starting…", width=560, name="status")
         self.caption = pn.pane.Markdown("", width=560)
         self.info = pn.pane.Markdown("**Click a start on the map** to see its trajectory.",
-                                     width=460, name="info")
+                                     width=SIDE_WIDTH, name="info")
         self.numbers = pn.pane.Markdown("", width=560, name="numbers")
         self.on_request = _labelled(pn.widgets.Select, "on request",
                                     options=list(ON_REQUEST), width=300,
@@ -578,7 +624,7 @@ class _Session:
             ticks = list(range(0, len(palette), step))
             self.ticker.ticks = ticks
             self.colorbar.update(major_label_overrides={
-                k: result.legend[k][1] for k in ticks}, title=result.title)
+                k: result.legend[k][1] for k in ticks})
         else:
             finite = result.image[np.isfinite(result.image)]
             low, high = (float(finite.min()), float(finite.max())) if finite.size else (0, 1)
@@ -591,8 +637,13 @@ class _Session:
             self.ticker.ticks = ticks
             # each tick's own text, not no overrides: BokehJS (3.9) kept drawing a label
             # map's names ("attractor 0" at 0) once the overrides were emptied
-            self.colorbar.update(major_label_overrides={t: _tick_text(t) for t in ticks},
-                                 title=result.title)
+            self.colorbar.update(major_label_overrides={t: _tick_text(t) for t in ticks})
+        if self.colour_title.text != result.title:
+            self.colour_title.text = result.title
+            # room for it right of the frame, where the bar's labels are narrower (a
+            # continuous map's numbers): ~7 px a character at 12 px
+            self.map.min_border_right = (self.colorbar.padding
+                                         + TITLE_CHAR_PX * len(result.title) + 5)
 
     def _show_numbers(self, request: int, result: MapResult, numbers) -> None:
         """The numbers of the final map under it (None: a map of continuous values)."""
@@ -655,6 +706,8 @@ class _Session:
         self.clicked.data = {"x": [traj.point[v.x]], "y": [traj.point[v.y]]}
         self.traj_source.data = {"t": traj.t, "theta": traj.theta, "omega": traj.omega}
         self.strobe_source.data = {"theta": traj.strobe_theta, "omega": traj.strobe_omega}
+        _fit(self.trajectory, [traj.t], [traj.theta, traj.omega])
+        _fit(self.phase, [traj.theta, traj.strobe_theta], [traj.omega, traj.strobe_omega])
         strobed = traj.strobe_theta.size > 0
         if self.strobe is not None:  # a forced scene: its entry only with points to show
             self.strobe.visible = strobed

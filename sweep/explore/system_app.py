@@ -9,7 +9,7 @@ from __future__ import annotations
 from bokeh.models import ColumnDataSource
 from bokeh.palettes import Category10_10
 
-from .app import ExplorerApp, _Session
+from .app import ExplorerApp, _fit, _Session
 from .networks import NetworkExplorer
 from .systems import SystemExplorer, SystemTrajectory
 
@@ -71,6 +71,10 @@ class _SystemSession(_Session):
         v = self.explorer.state.view
         self.clicked.data = {"x": [traj.point[v.x]], "y": [traj.point[v.y]]}
         self.series_source.data = {"t": traj.t, **traj.series}
+        positions, velocities = self.explorer.series_names()
+        _fit(self.trajectory, [traj.t], list(traj.series.values()))
+        _fit(self.phase, [traj.series[n] for n in positions],
+             [traj.series[n] for n in velocities])
         where = ", ".join(f"{k} = {val:.6g}" for k, val in traj.point.items())
         self.trajectory.title.text = f"trajectory from {where}"
         start = ", ".join(f"{k} = {val:.6g}" for k, val in traj.start.items())
