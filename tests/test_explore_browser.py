@@ -219,6 +219,44 @@ for (const r of m.right) {
 return null;
 """
 
+#: The map's axes as drawn: each one's label, its ticks (in the values the explorer
+#: computes with: rad on an angle axis) and the texts drawn at them.
+_AXES = """
+const m = Bokeh.documents[0].get_model_by_name('map');
+const view = Bokeh.index.find_one(m);
+const out = [];
+for (const axis of [m.below[0], m.left[0]]) {
+  const av = view.views.find_one(axis);
+  if (!av || !av.tick_coords) return null;
+  const drawn = Array.from(av.tick_coords.major[av.dimension]);
+  const boxes = av.compute_labels(drawn);
+  out.push({label: axis.axis_label, ticks: drawn,
+            texts: Array.from(boxes.items || boxes).map((box) => box.text)});
+}
+return out;
+"""
+
+
+def _number(text: str) -> float:
+    return float(text.replace("\u2212", "-"))  # Bokeh's minus sign
+
+
+def check_degree_axes(driver, labels) -> None:
+    """The map's angle axes are labelled ``labels`` (in deg, deg/s), as ``sweep plot``
+    draws them, with ticks on round degrees: the texts
+    drawn are the ticks (in rad) in degrees, multiples of 15 deg where they are 15 deg
+    apart or more."""
+    axes = _wait(driver, _AXES, lambda a: all(len(x["ticks"]) >= 3 for x in a))
+    assert [a["label"] for a in axes] == list(labels), axes
+    for axis in axes:
+        degrees = [_number(text) for text in axis["texts"]]
+        # the texts are 10 significant digits of the tick in degrees
+        assert degrees == pytest.approx(np.degrees(axis["ticks"]), rel=1e-9, abs=1e-9), axis
+        step = degrees[1] - degrees[0]
+        if step >= 15:
+            assert all(d % 15 == 0 for d in degrees), axis
+
+
 #: Every text shown by a Panel Markdown/Alert model containing a word.
 _TEXTS = """
 const word = arguments[0];
@@ -282,6 +320,7 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
     driver.save_screenshot(str(tmp_path / "1-home.png"))
     assert home["shape"] == [400, 400]
     check_layout(driver, "well")  # fits 1400 px; the bar's title above it; no warning
+    check_degree_axes(driver, ("theta0 [deg]", "omega0 [deg/s]"))
     # the numbers of the view under the map: each well's share, Sb, Sbb and the verdict
     numbers = _wait(driver, _TEXTS, lambda texts: len(texts) == 1, 30, "Sbb")[0]
     assert "share of the view" in numbers and "well 0" in numbers
@@ -317,6 +356,7 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
     ranged = _wait(driver, _MAP, lambda s: _recomputed_for(s, window) and
                    s["sum"] != zoomed["sum"])
     assert ranged["shape"] == [400, 400]
+    check_degree_axes(driver, ("theta0 [deg]", "omega0 [deg/s]"))  # round degrees in any window
     driver.save_screenshot(str(tmp_path / "3-ranges.png"))
 
     # click a pixel: the trajectory panel shows that start
@@ -335,6 +375,9 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
     info = driver.execute_script(_TEXTS, "status&lt;/strong&gt;")  # Markdown as HTML
     assert len(info) == 1 and "ok" in info[0] and "well" in info[0]
     assert f"{traj['theta0']:.6g}" in info[0] and f"{traj['omega0']:.6g}" in info[0]
+    # and in degrees, the map's axes' units
+    assert f"({np.degrees(traj['theta0']):.4g} deg)" in info[0]
+    assert f"({np.degrees(traj['omega0']):.4g} deg/s)" in info[0]
     assert "stroboscopic" not in info[0]  # an unforced scene has none
     driver.save_screenshot(str(tmp_path / "4-trajectory.png"))
     # the panels' ranges fit the curves (they were 0 to 1 before the click)
@@ -394,6 +437,14 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
     bar = _wait(driver, _COLOUR_BAR,
                 lambda b: b["labels"] and all("well" in x for x in b["labels"]))
     assert bar["drawn"] == bar["ticks"] == list(range(len(bar["ticks"]))), bar
+
+    # an axis that is not an angle: its own units and values, no conversion
+    assert driver.execute_script(set_value, "x axis", "damping")
+    axes = _wait(driver, _AXES, lambda a: a[0]["label"] == "damping [1/s]"
+                 and len(a[0]["ticks"]) >= 3)
+    assert [_number(text) for text in axes[0]["texts"]] == pytest.approx(
+        axes[0]["ticks"], rel=1e-9, abs=1e-12)  # 10 significant digits of each tick
+    assert axes[1]["label"] == "omega0 [deg/s]"
 
     for shot in sorted(tmp_path.glob("*.png")):
         assert shot.stat().st_size > 20_000, shot  # a rendered page, not a blank one

@@ -13,6 +13,7 @@ from test_explore_browser import (  # the browser fixture and the page scripts
     _click,
     _missing,
     _wait,
+    check_degree_axes,
     check_layout,
     driver,  # noqa: F401 - a fixture
 )
@@ -64,6 +65,7 @@ def test_double_pendulum_in_a_real_browser(system_app, driver):  # noqa: F811 - 
     info = [text for text in driver.execute_script(_TEXTS, "omega2_0") if "status" in text]
     assert len(info) == 1 and "ok" in info[0]  # the info pane: every start value, status
     check_layout(driver, "flip_time")  # fits 1400 px; the bar's title; no warning
+    check_degree_axes(driver, ("theta1_0 [deg]", "theta2_0 [deg]"))  # as `sweep plot`
 
     set_value = ("for (const m of Bokeh.documents[0].all_models) {"
                  " if (m.title === arguments[0]) { m.value = arguments[1]; return true; } }"

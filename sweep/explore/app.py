@@ -42,6 +42,8 @@ try:
     from bokeh.models import (
         ColorBar,
         ColumnDataSource,
+        CustomJSTicker,
+        CustomJSTickFormatter,
         FixedTicker,
         Legend,
         LegendItem,
@@ -150,6 +152,56 @@ def _axis_label(name: str) -> str:
         if p.axis == name:
             return f"{name} [{p.unit_text}]"
     return name
+
+
+def degrees_label(label: str, name: str) -> tuple[str, float]:
+    """The map's axis label of axis ``name`` and the factor from its values to the
+    numbers its ticks show: an angle axis (`sweep.plot.angle_axis`: theta0, omega0, a
+    system's theta1_0, ...) labelled in rad or rad/s is shown in deg or deg/s (factor
+    180/pi), as ``sweep plot`` draws it; any other is left as it is (factor 1).
+
+    Parameters
+    ----------
+    label : str
+        ``"name [units]"`` in the units the explorer computes in.
+    name : str
+        The axis.
+    """
+    from ..plot import angle_axis
+
+    head, _, units = label.partition(" [")
+    if units.startswith("rad") and angle_axis(name):
+        return f"{head} [deg{units[len('rad'):]}", 180.0 / math.pi
+    return label, 1.0
+
+
+#: Ticks of the map's axes, on round numbers of what they show (``scale`` times the
+#: value: degrees on an angle axis, the value itself on the others): 1, 2, 2.5, 5 times
+#: a power of ten, and on degrees 15, 30, 45, 90 and their multiples of ten. JavaScript
+#: (`bokeh.models.CustomJSTicker`); ``minor`` says which ticks it returns.
+_TICKS_JS = """
+const lo = Math.min(cb_data.start, cb_data.end) * scale;
+const hi = Math.max(cb_data.start, cb_data.end) * scale;
+const span = hi - lo;
+if (!(span > 0) || !Number.isFinite(span)) return [];
+const raw = span / 6;
+const mag = Math.pow(10, Math.floor(Math.log10(raw)));
+const steps = scale !== 1 && mag >= 10 ? [1, 1.5, 3, 4.5, 9, 10] : [1, 2, 2.5, 5, 10];
+let step = 10 * mag;
+for (const m of steps) { if (m * mag >= raw) { step = m * mag; break; } }
+if (minor) step /= 5;
+const out = [];
+for (let k = Math.ceil(lo / step); k * step <= hi && out.length < 1000; k++)
+  out.push(k * step / scale);
+return out;
+"""
+
+#: The tick texts of the map's axes: ``scale`` times the tick, to 10 digits (no
+#: rounding noise such as 45.00000000000001), with a minus sign as Bokeh draws it.
+_TICK_TEXT_JS = """
+const v = Number((tick * scale).toPrecision(10)) || 0;
+return String(v).replace("-", "\u2212");
+"""
 
 
 def _nice_ticks(low: float, high: float, count: int = 6) -> list[float]:
@@ -341,10 +393,18 @@ class _Session:
                           x_range=Range1d(*v.x_range), y_range=Range1d(*v.y_range),
                           tools="box_zoom,wheel_zoom,pan,tap,reset", active_scroll="wheel_zoom",
                           active_drag="box_zoom", toolbar_location="above",
-                          x_axis_label=_axis_label(v.x), y_axis_label=_axis_label(v.y),
                           title="")
         self.map.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.source,
                        color_mapper=self.mapper)
+        # ticks in the units the axes show (degrees on an angle axis: `degrees_label`);
+        # one ticker and formatter per axis, their ``scale`` changed with the axis
+        for axis in (self.map.xaxis[0], self.map.yaxis[0]):
+            axis.ticker = CustomJSTicker(args={"scale": 1.0, "minor": False},
+                                         major_code=_TICKS_JS,
+                                         minor_code=_TICKS_JS.replace("if (minor)",
+                                                                      "if (true)"))
+            axis.formatter = CustomJSTickFormatter(args={"scale": 1.0}, code=_TICK_TEXT_JS)
+        self._label_axes()
         self.clicked = ColumnDataSource({"x": [], "y": []})
         self.map.scatter("x", "y", source=self.clicked, size=12, marker="x", line_width=3,
                          color="white")
@@ -550,12 +610,25 @@ class _Session:
         v = self.explorer.state.view
         self.map.x_range.update(start=v.x_range[0], end=v.x_range[1])
         self.map.y_range.update(start=v.y_range[0], end=v.y_range[1])
-        self.map.xaxis.axis_label = _axis_label(v.x)
-        self.map.yaxis.axis_label = _axis_label(v.y)
+        self._label_axes()
         for widget, value in ((self.x_axis, v.x), (self.y_axis, v.y)):
             if widget.value != value:
                 with widget.param.discard_events(widget):
                     widget.value = value
+
+    def _axis_text(self, name: str) -> str:
+        """Axis ``name``'s label in the units the explorer computes in."""
+        return _axis_label(name)
+
+    def _label_axes(self) -> None:
+        """The map's axis labels and tick units for the view's axes (`degrees_label`)."""
+        v = self.explorer.state.view
+        for axis, name in ((self.map.xaxis[0], v.x), (self.map.yaxis[0], v.y)):
+            label, scale = degrees_label(self._axis_text(name), name)
+            axis.axis_label = label
+            if axis.ticker.args["scale"] != scale:
+                axis.ticker.args = {"scale": scale, "minor": False}
+                axis.formatter.args = {"scale": scale}
 
     def _submit(self) -> None:
         e = self.explorer
@@ -714,7 +787,9 @@ class _Session:
             self.strobe_item.visible = strobed
         where = ", ".join(f"{k} = {val:.6g}" for k, val in traj.point.items())
         self.trajectory.title.text = f"trajectory from {where}"
-        lines = [f"**start** theta0 = {traj.theta0:.6g} rad, omega0 = {traj.omega0:.6g} rad/s",
+        lines = [f"**start** theta0 = {traj.theta0:.6g} rad "
+                 f"({math.degrees(traj.theta0):.4g} deg), omega0 = {traj.omega0:.6g} rad/s "
+                 f"({math.degrees(traj.omega0):.4g} deg/s)",
                  f"**status** {traj.status}", f"**label** {traj.label}"]
         if self.strobe is not None:
             lines.append(f"**stroboscopic points** {traj.strobe_theta.size}"

@@ -41,7 +41,6 @@ class _SystemSession(_Session):
             self.phase.line(position, velocity, source=self.series_source,
                             legend_label=f"({position}, {velocity})",
                             color=Category10_10[k % 10])
-        self._label_axes()
 
     def _units(self) -> tuple[str, str]:
         """The coordinates' units and the velocities' (each distinct one, in order)."""
@@ -55,17 +54,10 @@ class _SystemSession(_Session):
                                              for c in coordinates))
                      for key in ("units", "velocity_units"))
 
-    def _label_axes(self) -> None:
+    def _axis_text(self, name: str) -> str:
         from ..plot import units_text
 
-        v = self.explorer.state.view
-        units = self.explorer.axis_units()
-        self.map.xaxis.axis_label = f"{v.x} [{units_text(units.get(v.x, '1'))}]"
-        self.map.yaxis.axis_label = f"{v.y} [{units_text(units.get(v.y, '1'))}]"
-
-    def _apply_view(self) -> None:
-        super()._apply_view()
-        self._label_axes()
+        return f"{name} [{units_text(self.explorer.axis_units().get(name, '1'))}]"
 
     def show_trajectory(self, traj: SystemTrajectory) -> None:
         v = self.explorer.state.view
