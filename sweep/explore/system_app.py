@@ -9,7 +9,7 @@ from __future__ import annotations
 from bokeh.models import ColumnDataSource
 from bokeh.palettes import Category10_10
 
-from .app import ExplorerApp, _fit, _Session
+from .app import ExplorerApp, _fit, _legend_above, _Session, degrees_label
 from .networks import NetworkExplorer
 from .systems import SystemExplorer, SystemTrajectory
 
@@ -35,6 +35,8 @@ class _SystemSession(_Session):
             self.trajectory.line("t", name, source=self.series_source, legend_label=name,
                                  color=Category10_10[k % 10],
                                  line_dash="solid" if k < len(positions) else "dashed")
+        if not self.phase.legend:  # an unforced system: the curves' legend above them too
+            _legend_above(self.phase, [])
         self.phase.xaxis.axis_label = f"coordinate [{position_units}]"
         self.phase.yaxis.axis_label = f"velocity [{velocity_units}]"
         for k, (position, velocity) in enumerate(zip(positions, velocities, strict=True)):
@@ -59,6 +61,16 @@ class _SystemSession(_Session):
 
         return f"{name} [{units_text(self.explorer.axis_units().get(name, '1'))}]"
 
+    def _start_text(self, name: str, value: float) -> str:
+        """``name = value units``, and in degrees too for an angle axis (the map's)."""
+        text = self._axis_text(name)
+        units = text.partition(" [")[2].rstrip("]")
+        shown = f"{name} = {value:.6g}" + (f" {units}" if units else "")
+        label, scale = degrees_label(text, name)
+        if scale != 1.0:
+            shown += f" ({value * scale:.4g} {label.partition(' [')[2].rstrip(']')})"
+        return shown
+
     def show_trajectory(self, traj: SystemTrajectory) -> None:
         v = self.explorer.state.view
         self.clicked.data = {"x": [traj.point[v.x]], "y": [traj.point[v.y]]}
@@ -69,7 +81,7 @@ class _SystemSession(_Session):
              [traj.series[n] for n in velocities])
         where = ", ".join(f"{k} = {val:.6g}" for k, val in traj.point.items())
         self.trajectory.title.text = f"trajectory from {where}"
-        start = ", ".join(f"{k} = {val:.6g}" for k, val in traj.start.items())
+        start = ", ".join(self._start_text(k, val) for k, val in traj.start.items())
         self.info.object = (f"**start** {start}  \n**status** {traj.status}  \n"
                             f"**label** {traj.label}")
         self.traj_python.object = f"```python\n{traj.python}```"
