@@ -6,9 +6,11 @@ dataset loaded from disk (`sweep.load`): plotting never re-runs the integrator.
 
 Conventions
 -----------
-- Angle-like coordinates (``theta0`` [rad], ``omega0`` [rad/s], ``forcing_phase``
-  [rad]) are shown in degrees (deg, deg/s) when ``degrees=True``; data values are
-  always shown in the units stored with them.
+- Angle-like coordinates are shown in degrees (deg, deg/s) when ``degrees=True``:
+  the axes a run file accepts in degrees (`angle_axis`: ``theta0`` [rad], ``omega0``
+  [rad/s], ``forcing_phase``, ``pivot_phase``, and a system's initial angles and
+  angular velocities, ``theta1_0``, ``omega1_0``, ...); data values are always shown
+  in the units stored with them.
 - Axis and colour-bar labels come from the ``long_name`` and ``units`` attributes
   that `sweep.run` writes; UDUNITS strings are shown in the usual notation
   (``"rad s-1"`` as ``rad/s``).
@@ -27,10 +29,11 @@ import numpy as np
 
 from ._validate import check_quantity
 
-__all__ = ["basin_fractions", "basins", "map", "orbit_diagram", "period_map", "save_figure",
-           "select", "trajectory"]
+__all__ = ["angle_axis", "basin_fractions", "basins", "map", "orbit_diagram", "period_map",
+           "save_figure", "select", "trajectory"]
 
-#: Coordinates converted to degrees (and deg/s) when ``degrees=True``.
+#: The single pendulum's coordinates converted to degrees (and deg/s) when
+#: ``degrees=True``; `angle_axis` adds every other axis declared as an angle.
 ANGLE_COORDS = ("theta0", "omega0", "forcing_phase")
 
 #: Integer-valued maps with at most this many distinct levels get a discrete colormap.
@@ -91,12 +94,38 @@ def _label(long_name: str, symbol: str | None, units: str) -> str:
     return f"{text} [{shown}]" if shown else text
 
 
+def angle_axis(name: str) -> bool:
+    """Whether grid axis ``name`` is an angle or an angular velocity, shown in degrees
+    (deg/s) with ``degrees=True``: the axes a run file accepts with ``units = "deg"``
+    (`sweep.toml_spec`), the single pendulum's (`ANGLE_COORDS`, ``pivot_phase``) and a
+    registered system's (``theta1_0`` [rad], ``omega1_0`` [rad/s], ...). An angular
+    frequency (``forcing_frequency`` [rad/s]) is not an angle axis.
+
+    Parameters
+    ----------
+    name : str
+        A coordinate's name.
+
+    Returns
+    -------
+    bool
+    """
+    if name in ANGLE_COORDS:
+        return True
+    from .physics import parameters
+    from .physics.system import system_axis
+
+    found = {p.axis: p for p in parameters()}.get(name) or system_axis(name)
+    return found is not None and bool(found.angle)
+
+
 def _coordinate(da, name: str, degrees: bool) -> tuple[np.ndarray, str]:
-    """Values and axis label of coordinate ``name`` (converted to degrees if asked)."""
+    """Values and axis label of coordinate ``name`` (converted to degrees if asked and
+    it is an `angle_axis` stored in rad or rad/s)."""
     coord = da[name]
     values = np.asarray(coord.values, dtype=np.float64)
     units = str(coord.attrs.get("units", ""))
-    if degrees and name in ANGLE_COORDS and units.split()[:1] == ["rad"]:
+    if degrees and units.split()[:1] == ["rad"] and angle_axis(name):
         values = np.rad2deg(values)
         units = "deg" + units[len("rad"):]
     long_name = str(coord.attrs.get("long_name", name))

@@ -52,6 +52,58 @@ def app():
     explorer.stop()
 
 
+#: The browser window [px]: a laptop's (the page must fit its width).
+WINDOW = (1400, 1000)
+
+
+def console_warnings(driver) -> list[str]:
+    """BokehJS's warnings in the browser's console since the last call (the log is
+    drained as it is read); "could not set initial ranges" was logged ~30 times per page
+    when the trajectory panels had data ranges over no data."""
+    return [entry["message"].split(" ", 2)[-1] for entry in driver.get_log("browser")
+            if "[bokeh" in entry["message"] and entry["level"] in ("WARNING", "SEVERE")]
+
+
+#: The page's width against the window's: what it scrolls over, what it shows (the
+#: window less a vertical scroll bar) and the window.
+_WIDTH = """
+const e = document.documentElement;
+return {scroll: e.scrollWidth, client: e.clientWidth, inner: window.innerWidth};
+"""
+
+#: The map's colour-bar title as drawn: its text, where the text starts and ends on the
+#: canvas (its width measured in its font), the bar's left edge, the canvas width, and
+#: the ColorBar's own (rotated) title, which must be empty.
+_COLOUR_TITLE = """
+const m = Bokeh.documents[0].get_model_by_name('map');
+const view = Bokeh.index.find_one(m);
+const title = m.above.find((r) => r.name === 'colour_title');
+const bar = m.right.find((r) => r.color_mapper !== undefined);
+if (!title || !bar) return null;
+const ctx = document.createElement('canvas').getContext('2d');
+ctx.font = `${title.text_font_style} ${title.text_font_size} ${title.text_font}`;
+const left = view.frame.bbox.left + title.offset;
+return {text: title.text, left: left, right: left + ctx.measureText(title.text).width,
+        bar_left: view.views.find_one(bar).bbox.left + bar.padding,
+        canvas: view.canvas_view.bbox.width, bar_title: bar.title || ""};
+"""
+
+
+def check_layout(driver, title_word: str) -> None:
+    """The page fits the window's width (no horizontal scroll bar), the colour bar's
+    title (containing ``title_word``) is horizontal above the bar and inside the canvas,
+    and BokehJS logged no warning."""
+    width = driver.execute_script(_WIDTH)
+    assert width["inner"] == WINDOW[0] and width["scroll"] <= width["client"], width
+    drawn = _wait(driver, _COLOUR_TITLE, lambda t: title_word in t["text"])
+    assert drawn["bar_title"] == "", drawn  # no rotated title beside the bar
+    # over the bar (to the pixel: both are placed from the frame's right edge and the
+    # bar's padding) and wholly on the canvas
+    assert abs(drawn["left"] - drawn["bar_left"]) <= 1 and drawn["right"] <= drawn["canvas"], \
+        drawn
+    assert console_warnings(driver) == []
+
+
 def _fresh_driver():
     """A new headless chromium (its own process and empty cache)."""
     try:
@@ -66,9 +118,10 @@ def _fresh_driver():
     options = Options()
     options.binary_location = browser
     for argument in ("--headless=new", "--no-sandbox", "--disable-gpu",
-                     "--disable-dev-shm-usage", "--window-size=1500,1250",
+                     "--disable-dev-shm-usage", f"--window-size={WINDOW[0]},{WINDOW[1]}",
                      "--force-device-scale-factor=1"):
         options.add_argument(argument)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})  # `console_warnings`
     return webdriver.Chrome(service=Service(chromedriver), options=options)
 
 
@@ -166,6 +219,44 @@ for (const r of m.right) {
 return null;
 """
 
+#: The map's axes as drawn: each one's label, its ticks (in the values the explorer
+#: computes with: rad on an angle axis) and the texts drawn at them.
+_AXES = """
+const m = Bokeh.documents[0].get_model_by_name('map');
+const view = Bokeh.index.find_one(m);
+const out = [];
+for (const axis of [m.below[0], m.left[0]]) {
+  const av = view.views.find_one(axis);
+  if (!av || !av.tick_coords) return null;
+  const drawn = Array.from(av.tick_coords.major[av.dimension]);
+  const boxes = av.compute_labels(drawn);
+  out.push({label: axis.axis_label, ticks: drawn,
+            texts: Array.from(boxes.items || boxes).map((box) => box.text)});
+}
+return out;
+"""
+
+
+def _number(text: str) -> float:
+    return float(text.replace("\u2212", "-"))  # Bokeh's minus sign
+
+
+def check_degree_axes(driver, labels) -> None:
+    """The map's angle axes are labelled ``labels`` (in deg, deg/s), as ``sweep plot``
+    draws them, with ticks on round degrees: the texts
+    drawn are the ticks (in rad) in degrees, multiples of 15 deg where they are 15 deg
+    apart or more."""
+    axes = _wait(driver, _AXES, lambda a: all(len(x["ticks"]) >= 3 for x in a))
+    assert [a["label"] for a in axes] == list(labels), axes
+    for axis in axes:
+        degrees = [_number(text) for text in axis["texts"]]
+        # the texts are 10 significant digits of the tick in degrees
+        assert degrees == pytest.approx(np.degrees(axis["ticks"]), rel=1e-9, abs=1e-9), axis
+        step = degrees[1] - degrees[0]
+        if step >= 15:
+            assert all(d % 15 == 0 for d in degrees), axis
+
+
 #: Every text shown by a Panel Markdown/Alert model containing a word.
 _TEXTS = """
 const word = arguments[0];
@@ -228,6 +319,8 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
                  and "well" in s["title"], 60)
     driver.save_screenshot(str(tmp_path / "1-home.png"))
     assert home["shape"] == [400, 400]
+    check_layout(driver, "well")  # fits 1400 px; the bar's title above it; no warning
+    check_degree_axes(driver, ("theta0 [deg]", "omega0 [deg/s]"))
     # the numbers of the view under the map: each well's share, Sb, Sbb and the verdict
     numbers = _wait(driver, _TEXTS, lambda texts: len(texts) == 1, 30, "Sbb")[0]
     assert "share of the view" in numbers and "well 0" in numbers
@@ -263,6 +356,7 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
     ranged = _wait(driver, _MAP, lambda s: _recomputed_for(s, window) and
                    s["sum"] != zoomed["sum"])
     assert ranged["shape"] == [400, 400]
+    check_degree_axes(driver, ("theta0 [deg]", "omega0 [deg/s]"))  # round degrees in any window
     driver.save_screenshot(str(tmp_path / "3-ranges.png"))
 
     # click a pixel: the trajectory panel shows that start
@@ -281,8 +375,18 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
     info = driver.execute_script(_TEXTS, "status&lt;/strong&gt;")  # Markdown as HTML
     assert len(info) == 1 and "ok" in info[0] and "well" in info[0]
     assert f"{traj['theta0']:.6g}" in info[0] and f"{traj['omega0']:.6g}" in info[0]
+    # and in degrees, the map's axes' units
+    assert f"({np.degrees(traj['theta0']):.4g} deg)" in info[0]
+    assert f"({np.degrees(traj['omega0']):.4g} deg/s)" in info[0]
     assert "stroboscopic" not in info[0]  # an unforced scene has none
     driver.save_screenshot(str(tmp_path / "4-trajectory.png"))
+    # the panels' ranges fit the curves (they were 0 to 1 before the click)
+    ranges = driver.execute_script(
+        "const t = Bokeh.documents[0].get_model_by_name('trajectory');"
+        "return [t.x_range.start, t.x_range.end];")
+    # t from 0 to the demo's t_end = 40 s, widened by 5 % each side (rel: rounding only)
+    assert ranges == pytest.approx([-0.05 * 40.0, 1.05 * 40.0], rel=1e-9), ranges
+    assert console_warnings(driver) == []
     # the legends as drawn: beside the curves, never over them; no stroboscopic entry
     legends = driver.execute_script(_LEGENDS)
     assert [g["labels"] for g in legends["trajectory"]["legends"]] == [
@@ -327,11 +431,20 @@ def test_explorer_in_a_real_browser(app, driver, tmp_path):
     assert not any("well" in text for text in bar["texts"]), bar  # numbers, not names
     assert [float(text) for text in bar["texts"]] == bar["drawn"], bar
     driver.save_screenshot(str(tmp_path / "7-values.png"))
+    check_layout(driver, "theta_final [rad]")  # a longer title than the bar's numbers
     assert driver.execute_script(set_value, "quantity", home_quantity)
     _wait(driver, _MAP, lambda s: s["stage"] == "final" and "well" in s["title"])
     bar = _wait(driver, _COLOUR_BAR,
                 lambda b: b["labels"] and all("well" in x for x in b["labels"]))
     assert bar["drawn"] == bar["ticks"] == list(range(len(bar["ticks"]))), bar
+
+    # an axis that is not an angle: its own units and values, no conversion
+    assert driver.execute_script(set_value, "x axis", "damping")
+    axes = _wait(driver, _AXES, lambda a: a[0]["label"] == "damping [1/s]"
+                 and len(a[0]["ticks"]) >= 3)
+    assert [_number(text) for text in axes[0]["texts"]] == pytest.approx(
+        axes[0]["ticks"], rel=1e-9, abs=1e-12)  # 10 significant digits of each tick
+    assert axes[1]["label"] == "omega0 [deg/s]"
 
     for shot in sorted(tmp_path.glob("*.png")):
         assert shot.stat().st_size > 20_000, shot  # a rendered page, not a blank one

@@ -8,11 +8,14 @@ import numpy as np
 import pytest
 from test_explore_browser import (  # the browser fixture and the page scripts
     _FRAME,
+    _LEGENDS,
     _MAP,
     _TEXTS,
     _click,
     _missing,
     _wait,
+    check_degree_axes,
+    check_layout,
     driver,  # noqa: F401 - a fixture
 )
 
@@ -62,6 +65,17 @@ def test_double_pendulum_in_a_real_browser(system_app, driver):  # noqa: F811 - 
     assert abs(traj["theta2"] - (y1 - fy * (y1 - y0))) <= 2 * pixel[1]
     info = [text for text in driver.execute_script(_TEXTS, "omega2_0") if "status" in text]
     assert len(info) == 1 and "ok" in info[0]  # the info pane: every start value, status
+    # with units, and the angles in degrees too (the map's axes' units)
+    assert f"theta1_0 = {traj['theta1']:.6g} rad ({np.degrees(traj['theta1']):.4g} deg)" \
+        in info[0]
+    assert "omega2_0 = 0 rad/s (0 deg/s)" in info[0]
+    check_layout(driver, "flip_time")  # fits 1400 px; the bar's title; no warning
+    check_degree_axes(driver, ("theta1_0 [deg]", "theta2_0 [deg]"))  # as `sweep plot`
+    legends = driver.execute_script(_LEGENDS)  # above the curves, never over them
+    assert [g["labels"] for g in legends["phase"]["legends"]] == [
+        ["(theta1, omega1)", "(theta2, omega2)"]]
+    for name in ("trajectory", "phase"):
+        assert not any(g["overlap"] for g in legends[name]["legends"]), legends
 
     set_value = ("for (const m of Bokeh.documents[0].all_models) {"
                  " if (m.title === arguments[0]) { m.value = arguments[1]; return true; } }"
@@ -112,5 +126,6 @@ def test_a_driven_double_pendulums_basins_in_a_real_browser(driver, tmp_path):  
         assert all(label.startswith("attractor ") for label in colours["labels"][1:])
         assert "#000000" not in colours["palette"][1:]
         driver.save_screenshot(str(tmp_path / "driven-basins.png"))
+        check_layout(driver, "basins")
     finally:
         app.stop()

@@ -110,6 +110,33 @@ def test_map_in_radians(maps):
     assert ax.get_title() == "Final angle"
 
 
+def test_a_systems_angle_axes_follow_the_pendulums_rule():
+    """A double pendulum's initial angles and angular velocities are in degrees as the
+    pendulum's theta0 and omega0 are (they were left in rad), or all in rad with
+    ``degrees=False``; a length stays in metres."""
+    theta1_0 = np.linspace(-np.pi / 2, np.pi / 2, 5)
+    omega2_0 = np.linspace(-1.0, 1.0, 3)
+    length1 = np.array([0.5, 1.0])
+    flip = np.zeros((5, 3, 2))
+    ds = xr.Dataset(
+        {"flip_time": (("theta1_0", "omega2_0", "length1"), flip, {"units": "s"})},
+        coords={"theta1_0": coordinate("theta1_0", theta1_0, "rad", "initial theta1"),
+                "omega2_0": coordinate("omega2_0", omega2_0, "rad s-1", "initial omega2"),
+                "length1": coordinate("length1", length1, "m", "length1")})
+    ax = plot.map(ds.flip_time.isel(length1=0)).axes[0]
+    assert ax.get_xlabel() == "initial theta1 [deg]"
+    assert ax.get_ylabel() == "initial omega2 [deg/s]"
+    # cell edges: -90 to 90 deg in 45 deg cells, -1 to 1 rad/s in 1 rad/s cells
+    assert ax.get_xlim() == pytest.approx((-112.5, 112.5))
+    assert ax.get_ylim() == pytest.approx(np.degrees([-1.5, 1.5]))
+    ax = plot.map(ds.flip_time.isel(length1=0), degrees=False).axes[0]
+    assert ax.get_xlabel().endswith("[rad]") and ax.get_ylabel().endswith("[rad/s]")
+    ax = plot.map(ds.flip_time.isel(omega2_0=0)).axes[0]
+    assert ax.get_xlabel().endswith("[deg]") and ax.get_ylabel() == "length1 [m]"
+    assert plot.angle_axis("pivot_phase") and plot.angle_axis("omega1_0")
+    assert not plot.angle_axis("forcing_frequency")  # rad/s, but a frequency
+
+
 def test_integer_map_gets_one_colour_per_integer(maps):
     fig = plot.map(maps.winding)
     mesh = fig.axes[0].collections[0]

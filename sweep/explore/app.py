@@ -43,11 +43,14 @@ try:
     from bokeh.models import (
         ColorBar,
         ColumnDataSource,
+        CustomJSTicker,
+        CustomJSTickFormatter,
         FixedTicker,
         Legend,
         LegendItem,
         LinearColorMapper,
         Range1d,
+        Title,
     )
     from bokeh.palettes import Category10_10, Category20_20, Viridis256
     from bokeh.plotting import figure
@@ -70,6 +73,15 @@ TIMELINE_SIZE = 256
 
 #: Sessions an app keeps a weak reference to (`ExplorerApp.sessions`).
 SESSIONS_KEPT = 8
+
+#: Width of the trajectory panels beside the map [px]: with the controls and the map
+#: (its colour bar's longest names included) the page fits a 1400 px wide window
+#: with 20 px to spare (460 until 2026-11-28: 1455 px, a horizontal scroll bar).
+SIDE_WIDTH = 380
+
+#: Width of a character of the colour bar's title [px] (12 px sans-serif; a little
+#: more than the mean, so that the room kept for it is never short).
+TITLE_CHAR_PX = 7
 
 #: Colours of discrete maps.
 _MOTION_COLOURS = {-1.0: "#2166ac", 0.0: "#f0f0f0", 1.0: "#b2182b"}
@@ -144,6 +156,56 @@ def _axis_label(name: str) -> str:
     return name
 
 
+def degrees_label(label: str, name: str) -> tuple[str, float]:
+    """The map's axis label of axis ``name`` and the factor from its values to the
+    numbers its ticks show: an angle axis (`sweep.plot.angle_axis`: theta0, omega0, a
+    system's theta1_0, ...) labelled in rad or rad/s is shown in deg or deg/s (factor
+    180/pi), as ``sweep plot`` draws it; any other is left as it is (factor 1).
+
+    Parameters
+    ----------
+    label : str
+        ``"name [units]"`` in the units the explorer computes in.
+    name : str
+        The axis.
+    """
+    from ..plot import angle_axis
+
+    head, _, units = label.partition(" [")
+    if units.startswith("rad") and angle_axis(name):
+        return f"{head} [deg{units[len('rad'):]}", 180.0 / math.pi
+    return label, 1.0
+
+
+#: Ticks of the map's axes, on round numbers of what they show (``scale`` times the
+#: value: degrees on an angle axis, the value itself on the others): 1, 2, 2.5, 5 times
+#: a power of ten, and on degrees 15, 30, 45, 90 and their multiples of ten. JavaScript
+#: (`bokeh.models.CustomJSTicker`); ``minor`` says which ticks it returns.
+_TICKS_JS = """
+const lo = Math.min(cb_data.start, cb_data.end) * scale;
+const hi = Math.max(cb_data.start, cb_data.end) * scale;
+const span = hi - lo;
+if (!(span > 0) || !Number.isFinite(span)) return [];
+const raw = span / 6;
+const mag = Math.pow(10, Math.floor(Math.log10(raw)));
+const steps = scale !== 1 && mag >= 10 ? [1, 1.5, 3, 4.5, 9, 10] : [1, 2, 2.5, 5, 10];
+let step = 10 * mag;
+for (const m of steps) { if (m * mag >= raw) { step = m * mag; break; } }
+if (minor) step /= 5;
+const out = [];
+for (let k = Math.ceil(lo / step); k * step <= hi && out.length < 1000; k++)
+  out.push(k * step / scale);
+return out;
+"""
+
+#: The tick texts of the map's axes: ``scale`` times the tick, to 10 digits (no
+#: rounding noise such as 45.00000000000001), with a minus sign as Bokeh draws it.
+_TICK_TEXT_JS = """
+const v = Number((tick * scale).toPrecision(10)) || 0;
+return String(v).replace("-", "\u2212");
+"""
+
+
 def _nice_ticks(low: float, high: float, count: int = 6) -> list[float]:
     """About ``count`` round tick values in [low, high] for a continuous colour bar
     (matplotlib's `~matplotlib.ticker.MaxNLocator`: steps of 1, 2, 2.5, 5 times a power
@@ -199,6 +261,26 @@ def wire_image(result: MapResult) -> np.ndarray:
         dtype = np.uint8 if len(result.legend) <= 256 else np.uint16
         return np.ascontiguousarray(result.image, dtype=dtype)
     return np.ascontiguousarray(result.image, dtype=np.float32)
+
+
+def _fit(fig, xs, ys, padding: float = 0.05) -> None:
+    """Set ``fig``'s ranges (and what its reset tool returns to) to the finite values of
+    the arrays ``xs`` and ``ys``, widened by ``padding`` of their span on each side (a
+    single value: +-1 around it; none: 0 to 1).
+
+    The trajectory panels use fixed ranges set here, not Bokeh's data ranges: a data
+    range over no data (before the first click) has NaN ends, and BokehJS warned
+    "could not set initial ranges" in the browser's console on every redraw."""
+    for rng, arrays in ((fig.x_range, xs), (fig.y_range, ys)):
+        values = np.concatenate([np.ravel(np.asarray(a, dtype=np.float64)) for a in arrays]
+                                or [np.empty(0)])
+        values = values[np.isfinite(values)]
+        low, high = (float(values.min()), float(values.max())) if values.size else (0.0, 1.0)
+        if high > low:
+            low, high = low - padding * (high - low), high + padding * (high - low)
+        else:
+            low, high = low - 1.0, high + 1.0
+        rng.update(start=low, end=high, reset_start=low, reset_end=high)
 
 
 def _legend_above(fig, items) -> Legend:
@@ -313,17 +395,33 @@ class _Session:
                           x_range=Range1d(*v.x_range), y_range=Range1d(*v.y_range),
                           tools="box_zoom,wheel_zoom,pan,tap,reset", active_scroll="wheel_zoom",
                           active_drag="box_zoom", toolbar_location="above",
-                          x_axis_label=_axis_label(v.x), y_axis_label=_axis_label(v.y),
                           title="")
         self.map.image(image="image", x="x", y="y", dw="dw", dh="dh", source=self.source,
                        color_mapper=self.mapper)
+        # ticks in the units the axes show (degrees on an angle axis: `degrees_label`);
+        # one ticker and formatter per axis, their ``scale`` changed with the axis
+        for axis in (self.map.xaxis[0], self.map.yaxis[0]):
+            axis.ticker = CustomJSTicker(args={"scale": 1.0, "minor": False},
+                                         major_code=_TICKS_JS,
+                                         minor_code=_TICKS_JS.replace("if (minor)",
+                                                                      "if (true)"))
+            axis.formatter = CustomJSTickFormatter(args={"scale": 1.0}, code=_TICK_TEXT_JS)
+        self._label_axes()
         self.clicked = ColumnDataSource({"x": [], "y": []})
         self.map.scatter("x", "y", source=self.clicked, size=12, marker="x", line_width=3,
                          color="white")
-        self.colorbar = ColorBar(color_mapper=self.mapper, title="", width=16,
-                                 ticker=self.ticker, title_text_font_size="12px",
+        self.colorbar = ColorBar(color_mapper=self.mapper, width=16, ticker=self.ticker,
                                  major_label_text_font_size="11px")
         self.map.add_layout(self.colorbar, "right")
+        # the colour bar's title, horizontal above the bar: BokehJS (3.9) draws a
+        # vertical colour bar's own title rotated in a strip on its left, where a short
+        # one sat under the bar's foot ("basins") and a long one was cut; ``offset``
+        # from the frame's left edge puts it over the bar
+        self.colour_title = Title(name="colour_title", text="", align="left",
+                                  offset=n + self.colorbar.padding,
+                                  text_font_size="12px", text_font_style="normal",
+                                  standoff=0)
+        self.map.add_layout(self.colour_title, "above")
         for r in (self.map.x_range, self.map.y_range):
             r.on_change("start", self._range_changed)
             r.on_change("end", self._range_changed)
@@ -331,17 +429,25 @@ class _Session:
 
         self.traj_source = ColumnDataSource({"t": [], "theta": [], "omega": []})
         self.strobe_source = ColumnDataSource({"theta": [], "omega": []})
-        self.trajectory = figure(name="trajectory", width=460, height=260,
+        # fixed ranges, fitted to each trajectory (`_fit`): no data range over no data
+        self.trajectory = figure(name="trajectory", width=SIDE_WIDTH, height=260,
+                                 x_range=Range1d(0, 1), y_range=Range1d(0, 1),
                                  x_axis_label="t [s]", y_axis_label="theta [rad], omega [rad/s]",
                                  title="trajectory: click a start on the map",
-                                 tools="box_zoom,wheel_zoom,pan,reset,save")
+                                 tools="box_zoom,wheel_zoom,pan,reset,save",
+                                 toolbar_location="above")
+        # a start's coordinates in the title: 12 px, over the frame's whole width
+        self.trajectory.title.text_font_size = "12px"
         lines = [self.trajectory.line("t", name, source=self.traj_source, color=colour)
                  for name, colour in (("theta", "#1f77b4"), ("omega", "#ff7f0e"))]
         _legend_above(self.trajectory, [("theta [rad]", lines[:1]),
                                         ("omega [rad/s]", lines[1:])])
-        self.phase = figure(name="phase", width=460, height=280, x_axis_label="theta [rad]",
+        self.phase = figure(name="phase", width=SIDE_WIDTH, height=280,
+                            x_range=Range1d(0, 1), y_range=Range1d(0, 1),
+                            x_axis_label="theta [rad]",
                             y_axis_label="omega [rad/s]", title="phase portrait",
-                            tools="box_zoom,wheel_zoom,pan,reset,save")
+                            tools="box_zoom,wheel_zoom,pan,reset,save",
+                            toolbar_location="above")
         path = self.phase.line("theta", "omega", source=self.traj_source, color="#1f77b4")
         # stroboscopic points only where the scene is forced (a legend entry of an
         # unforced scene's always-empty set would only hide the curve)
@@ -377,7 +483,7 @@ class _Session:
         self.status = pn.pane.Markdown("starting…", width=560, name="status")
         self.caption = pn.pane.Markdown("", width=560)
         self.info = pn.pane.Markdown("**Click a start on the map** to see its trajectory.",
-                                     width=460, name="info")
+                                     width=SIDE_WIDTH, name="info")
         self.numbers = pn.pane.Markdown("", width=560, name="numbers")
         self.on_request = _labelled(pn.widgets.Select, "on request",
                                     options=list(ON_REQUEST), width=300,
@@ -506,12 +612,25 @@ class _Session:
         v = self.explorer.state.view
         self.map.x_range.update(start=v.x_range[0], end=v.x_range[1])
         self.map.y_range.update(start=v.y_range[0], end=v.y_range[1])
-        self.map.xaxis.axis_label = _axis_label(v.x)
-        self.map.yaxis.axis_label = _axis_label(v.y)
+        self._label_axes()
         for widget, value in ((self.x_axis, v.x), (self.y_axis, v.y)):
             if widget.value != value:
                 with widget.param.discard_events(widget):
                     widget.value = value
+
+    def _axis_text(self, name: str) -> str:
+        """Axis ``name``'s label in the units the explorer computes in."""
+        return _axis_label(name)
+
+    def _label_axes(self) -> None:
+        """The map's axis labels and tick units for the view's axes (`degrees_label`)."""
+        v = self.explorer.state.view
+        for axis, name in ((self.map.xaxis[0], v.x), (self.map.yaxis[0], v.y)):
+            label, scale = degrees_label(self._axis_text(name), name)
+            axis.axis_label = label
+            if axis.ticker.args["scale"] != scale:
+                axis.ticker.args = {"scale": scale, "minor": False}
+                axis.formatter.args = {"scale": scale}
 
     def _submit(self) -> None:
         e = self.explorer
@@ -580,7 +699,7 @@ class _Session:
             ticks = list(range(0, len(palette), step))
             self.ticker.ticks = ticks
             self.colorbar.update(major_label_overrides={
-                k: result.legend[k][1] for k in ticks}, title=result.title)
+                k: result.legend[k][1] for k in ticks})
         else:
             finite = result.image[np.isfinite(result.image)]
             low, high = (float(finite.min()), float(finite.max())) if finite.size else (0, 1)
@@ -593,8 +712,13 @@ class _Session:
             self.ticker.ticks = ticks
             # each tick's own text, not no overrides: BokehJS (3.9) kept drawing a label
             # map's names ("attractor 0" at 0) once the overrides were emptied
-            self.colorbar.update(major_label_overrides={t: _tick_text(t) for t in ticks},
-                                 title=result.title)
+            self.colorbar.update(major_label_overrides={t: _tick_text(t) for t in ticks})
+        if self.colour_title.text != result.title:
+            self.colour_title.text = result.title
+            # room for it right of the frame, where the bar's labels are narrower (a
+            # continuous map's numbers): ~7 px a character at 12 px
+            self.map.min_border_right = (self.colorbar.padding
+                                         + TITLE_CHAR_PX * len(result.title) + 5)
 
     def _show_numbers(self, request: int, result: MapResult, numbers) -> None:
         """The numbers of the final map under it (None: a map of continuous values)."""
@@ -657,13 +781,17 @@ class _Session:
         self.clicked.data = {"x": [traj.point[v.x]], "y": [traj.point[v.y]]}
         self.traj_source.data = {"t": traj.t, "theta": traj.theta, "omega": traj.omega}
         self.strobe_source.data = {"theta": traj.strobe_theta, "omega": traj.strobe_omega}
+        _fit(self.trajectory, [traj.t], [traj.theta, traj.omega])
+        _fit(self.phase, [traj.theta, traj.strobe_theta], [traj.omega, traj.strobe_omega])
         strobed = traj.strobe_theta.size > 0
         if self.strobe is not None:  # a forced scene: its entry only with points to show
             self.strobe.visible = strobed
             self.strobe_item.visible = strobed
         where = ", ".join(f"{k} = {val:.6g}" for k, val in traj.point.items())
         self.trajectory.title.text = f"trajectory from {where}"
-        lines = [f"**start** theta0 = {traj.theta0:.6g} rad, omega0 = {traj.omega0:.6g} rad/s",
+        lines = [f"**start** theta0 = {traj.theta0:.6g} rad "
+                 f"({math.degrees(traj.theta0):.4g} deg), omega0 = {traj.omega0:.6g} rad/s "
+                 f"({math.degrees(traj.omega0):.4g} deg/s)",
                  f"**status** {traj.status}", f"**label** {traj.label}"]
         if self.strobe is not None:
             lines.append(f"**stroboscopic points** {traj.strobe_theta.size}"

@@ -9,7 +9,7 @@ from __future__ import annotations
 from bokeh.models import ColumnDataSource
 from bokeh.palettes import Category10_10
 
-from .app import ExplorerApp, _Session
+from .app import ExplorerApp, _fit, _legend_above, _Session, degrees_label
 from .networks import NetworkExplorer
 from .systems import SystemExplorer, SystemTrajectory
 
@@ -35,13 +35,14 @@ class _SystemSession(_Session):
             self.trajectory.line("t", name, source=self.series_source, legend_label=name,
                                  color=Category10_10[k % 10],
                                  line_dash="solid" if k < len(positions) else "dashed")
+        if not self.phase.legend:  # an unforced system: the curves' legend above them too
+            _legend_above(self.phase, [])
         self.phase.xaxis.axis_label = f"coordinate [{position_units}]"
         self.phase.yaxis.axis_label = f"velocity [{velocity_units}]"
         for k, (position, velocity) in enumerate(zip(positions, velocities, strict=True)):
             self.phase.line(position, velocity, source=self.series_source,
                             legend_label=f"({position}, {velocity})",
                             color=Category10_10[k % 10])
-        self._label_axes()
 
     def _units(self) -> tuple[str, str]:
         """The coordinates' units and the velocities' (each distinct one, in order)."""
@@ -55,25 +56,32 @@ class _SystemSession(_Session):
                                              for c in coordinates))
                      for key in ("units", "velocity_units"))
 
-    def _label_axes(self) -> None:
+    def _axis_text(self, name: str) -> str:
         from ..plot import units_text
 
-        v = self.explorer.state.view
-        units = self.explorer.axis_units()
-        self.map.xaxis.axis_label = f"{v.x} [{units_text(units.get(v.x, '1'))}]"
-        self.map.yaxis.axis_label = f"{v.y} [{units_text(units.get(v.y, '1'))}]"
+        return f"{name} [{units_text(self.explorer.axis_units().get(name, '1'))}]"
 
-    def _apply_view(self) -> None:
-        super()._apply_view()
-        self._label_axes()
+    def _start_text(self, name: str, value: float) -> str:
+        """``name = value units``, and in degrees too for an angle axis (the map's)."""
+        text = self._axis_text(name)
+        units = text.partition(" [")[2].rstrip("]")
+        shown = f"{name} = {value:.6g}" + (f" {units}" if units else "")
+        label, scale = degrees_label(text, name)
+        if scale != 1.0:
+            shown += f" ({value * scale:.4g} {label.partition(' [')[2].rstrip(']')})"
+        return shown
 
     def show_trajectory(self, traj: SystemTrajectory) -> None:
         v = self.explorer.state.view
         self.clicked.data = {"x": [traj.point[v.x]], "y": [traj.point[v.y]]}
         self.series_source.data = {"t": traj.t, **traj.series}
+        positions, velocities = self.explorer.series_names()
+        _fit(self.trajectory, [traj.t], list(traj.series.values()))
+        _fit(self.phase, [traj.series[n] for n in positions],
+             [traj.series[n] for n in velocities])
         where = ", ".join(f"{k} = {val:.6g}" for k, val in traj.point.items())
         self.trajectory.title.text = f"trajectory from {where}"
-        start = ", ".join(f"{k} = {val:.6g}" for k, val in traj.start.items())
+        start = ", ".join(self._start_text(k, val) for k, val in traj.start.items())
         self.info.object = (f"**start** {start}  \n**status** {traj.status}  \n"
                             f"**label** {traj.label}")
         self.traj_python.object = f"```python\n{traj.python}```"
