@@ -192,7 +192,9 @@ def build_parser() -> argparse.ArgumentParser:
     plot.add_argument("-o", "--output", required=True, metavar="OUT.png",
                       help="image file to write (its folder must exist)")
     plot.add_argument("--radians", action="store_true",
-                      help="label theta0/omega0 axes in rad and rad/s instead of degrees")
+                      help="draw the angle axes (theta0 and omega0, a system's angles and "
+                      "angular velocities, pivot_phase: sweep.plot.angle_axis) in rad and "
+                      "rad/s instead of degrees")
     plot.add_argument("--cmap", metavar="NAME", help="matplotlib colormap")
     plot.set_defaults(handler=_command_plot)
 

@@ -676,9 +676,14 @@ def test_netcdf_export_has_the_provenance_and_the_map(tmp_path):
 
 
 def test_png_export():
+    """The PNG download draws the angle axes in degrees, as the page does (it drew rad)."""
     e = explorer()
-    data = e.png_bytes(e.compute())
+    result = e.compute()
+    data = e.png_bytes(result)
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
+    ax = e.png_figure(result).axes[0]
+    assert "deg" in ax.get_xlabel() and "deg/s" in ax.get_ylabel(), (ax.get_xlabel(),
+                                                                      ax.get_ylabel())
 
 
 # ------------------------------------------------------------------ command line

@@ -1370,8 +1370,15 @@ class Explorer:
             return path.read_bytes()
 
     def png_bytes(self, result: MapResult, dpi: int = 120) -> bytes:
-        """The map drawn by `sweep.plot` (basins: `plot.basins`; others: `plot.map`), as
-        PNG (matplotlib's Agg canvas; no pyplot, so no GUI backend is touched)."""
+        """The map drawn by `sweep.plot` (`png_figure`), as PNG."""
+        buffer = _stdio.BytesIO()
+        self.png_figure(result).savefig(buffer, format="png", dpi=dpi)
+        return buffer.getvalue()
+
+    def png_figure(self, result: MapResult):
+        """The map drawn by `sweep.plot` (basins: `plot.basins`; others: `plot.map`) on
+        matplotlib's Agg canvas (no pyplot, so no GUI backend is touched), its angle
+        axes in degrees as the page shows them (`sweep.plot.angle_axis`)."""
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 
@@ -1383,16 +1390,14 @@ class Explorer:
         ax = fig.add_subplot()
         da = result.da.transpose(v.x, v.y)
         title = f"{self.quantity_info(result.state.quantity).label}"
-        degrees = False
+        degrees = True  # as the page and `sweep plot` draw them
         if result.state.quantity == "basins":
             plot.basins(da, ax=ax, degrees=degrees, title=title)
         else:
             if da.dtype == bool:
                 da = da.astype(np.int8)
             plot.map(da, ax=ax, degrees=degrees, title=title)
-        buffer = _stdio.BytesIO()
-        fig.savefig(buffer, format="png", dpi=dpi)
-        return buffer.getvalue()
+        return fig
 
 
 def rss_bytes() -> int:
