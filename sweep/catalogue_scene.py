@@ -37,7 +37,7 @@ import numpy as np
 
 __all__ = ["ATTRIBUTE", "FIELD", "PENDULUM_DRIVE", "PENDULUM_INITIAL", "SCENE_RTOL",
            "as_record", "attributes", "check_scene", "dataset_scene", "from_attributes",
-           "grid_value", "one_value", "pendulum_values", "scene_values"]
+           "grid_value", "one_value", "pendulum_values", "record_columns", "scene_values"]
 
 #: The catalogue's key of its scene: a dict of parameter name to value.
 FIELD = "scene"
@@ -117,22 +117,31 @@ def as_record(values: dict, count: int) -> np.ndarray:
     return np.array([tuple(float(v) for v in values.values())] * count, dtype=dtype)
 
 
+def record_columns(given) -> dict | None:
+    """A catalogue's record of named values (a structured array of a field per name, or
+    a mapping of names to values) as a dict of name to its float64 values (1-D), or
+    None where it is neither or holds a value that is not finite (the caller refuses
+    it, naming its field)."""
+    try:
+        if isinstance(given, np.ndarray) and given.dtype.names is not None:
+            columns = {name: np.asarray(given[name], dtype=np.float64).ravel()
+                       for name in given.dtype.names}
+        else:
+            columns = {str(name): np.atleast_1d(np.asarray(value, dtype=np.float64)).ravel()
+                       for name, value in dict(given).items()}
+    except (TypeError, ValueError):
+        return None
+    return columns if all(np.all(np.isfinite(v)) for v in columns.values()) else None
+
+
 def _recorded(attractors) -> dict | None:
     """The catalogue's scene as a dict of parameter name to its float64 values (one per
     attractor, or one), or None without one; refuses anything else (not finite)."""
     given = attractors.get(FIELD) if hasattr(attractors, "get") else None
     if given is None:
         return None
-    try:
-        if isinstance(given, np.ndarray) and given.dtype.names is not None:
-            scene = {name: np.asarray(given[name], dtype=np.float64).ravel()
-                     for name in given.dtype.names}
-        else:
-            scene = {str(name): np.atleast_1d(np.asarray(value, dtype=np.float64)).ravel()
-                     for name, value in dict(given).items()}
-    except (TypeError, ValueError):
-        scene = None
-    if scene is None or not all(np.all(np.isfinite(v)) for v in scene.values()):
+    scene = record_columns(given)
+    if scene is None:
         raise ValueError(f"attractors: a catalogue's {FIELD} {given!r}; accepted: the "
                          "parameters' values as sweep.maps.attractor_catalogue records "
                          "them (a structured array, a field per parameter), a mapping of "

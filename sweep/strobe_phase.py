@@ -63,7 +63,7 @@ import math
 import numpy as np
 
 from ._timesteps import WHOLE_STEPS_RTOL, transient_steps
-from .catalogue_scene import as_record, one_value
+from .catalogue_scene import as_record, one_value, record_columns
 
 __all__ = ["FIELDS", "LEGACY_FIELD", "OTHER_ATTRIBUTE", "OTHER_FIELD", "PHASE_RTOL",
            "attributes", "check_phase",
@@ -221,17 +221,13 @@ def _parse_others(attractors, count: int) -> dict | None:
     given = attractors.get(OTHER_FIELD) if hasattr(attractors, "get") else None
     if given is None:
         return None
+    columns = record_columns(given)
     try:
-        if isinstance(given, np.ndarray) and given.dtype.names is not None:
-            columns = {name: given[name] for name in given.dtype.names}
-        else:
-            columns = dict(given)
-        phases = {str(name): np.broadcast_to(np.asarray(value, dtype=np.float64).ravel(),
-                                             (count,))
-                  for name, value in columns.items()}
-    except (TypeError, ValueError):
+        phases = None if columns is None else {
+            name: np.broadcast_to(value, (count,)) for name, value in columns.items()}
+    except ValueError:  # neither one value nor one per attractor
         phases = None
-    if phases is None or not all(np.all(np.isfinite(v)) for v in phases.values()):
+    if phases is None:
         raise ValueError(f"attractors: a catalogue's {OTHER_FIELD} {given!r} for {count} "
                          "attractors; accepted: the other drives' phases nu t + psi (rad) "
                          "as sweep.maps.attractor_catalogue records them (a structured "
