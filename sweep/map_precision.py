@@ -237,9 +237,9 @@ class MapAccuracy:
         differs from the reference's) with ``differing_error`` (its binomial standard
         error ``sqrt(p (1 - p) / n)`` for sampled starts, `sweep.Points`; NaN for a
         `sweep.Grid`, whose cells are not a random sample), ``fraction`` and
-        ``fraction_error`` (level x label), ``fraction_shift`` (fraction minus the
-        reference's) with ``fraction_shift_error`` (the standard error of a paired
-        difference), ``max_shift`` (largest ``|fraction_shift|`` of a resolved label),
+        ``fraction_error`` (level x label; binomial, NaN for a grid), ``fraction_shift``
+        (fraction minus the reference's) with ``fraction_shift_error`` (the standard
+        error of a paired difference; NaN for a grid), ``max_shift`` (largest ``|fraction_shift|`` of a resolved label),
         ``unresolved_fraction``, ``wall_time`` [s] (best of ``repeats``, compilation
         excluded) and ``trajectory_steps`` (steps of all trajectories; with
         ``stop_early``, the most they could take), and ``labels``
@@ -448,11 +448,13 @@ def _dataset(scene, starts, label, levels, plans, values, unresolved, wall, step
     codes, _ = _table(values)
     member = np.stack([_same(values, c) for c in codes], axis=-1)  # level x start x label
     fraction = member.mean(axis=1)
-    fraction_error = np.sqrt(fraction * (1 - fraction)) / root_n
+    fraction_error = np.sqrt(fraction * (1 - fraction)) / root_n if sampled else \
+        np.full(fraction.shape, np.nan)  # a grid: as `sweep.maps.fractions`
     into = (member & ~member[-1][None]).mean(axis=1)  # label here, not in the reference
     out_of = (~member & member[-1][None]).mean(axis=1)
     shift = fraction - fraction[-1]
-    shift_error = np.sqrt(np.maximum(into + out_of - (into - out_of) ** 2, 0.0)) / root_n
+    shift_error = np.sqrt(np.maximum(into + out_of - (into - out_of) ** 2, 0.0)) / root_n \
+        if sampled else np.full(shift.shape, np.nan)
     flagged = np.isnan(codes)
     if unresolved is not None:
         flagged |= codes == unresolved
@@ -497,12 +499,13 @@ def _dataset(scene, starts, label, levels, plans, values, unresolved, wall, step
         "fraction": (("level", "label"), fraction, {"units": "1",
                                                     "long_name": "fraction of the starts"}),
         "fraction_error": (("level", "label"), fraction_error, {
-            "units": "1", "long_name": "binomial standard error of the fraction"}),
+            "units": "1", "long_name": f"standard error of the fraction: {se_note}"}),
         "fraction_shift": (("level", "label"), shift, {"units": "1", "long_name":
                                               "fraction minus the reference's"}),
         "fraction_shift_error": (("level", "label"), shift_error, {
             "units": "1", "long_name": "standard error of the shift (paired starts: "
-                                       "sqrt(p_in + p_out - (p_in - p_out)^2) / sqrt(n))"}),
+                                       "sqrt(p_in + p_out - (p_in - p_out)^2) / sqrt(n); "
+                                       "NaN for a grid)"}),
         "max_shift": (lv, np.abs(shift[:, resolved]).max(axis=1) if resolved.any() else
                       np.zeros(len(levels)), {"units": "1", "long_name":
                                               "largest |shift| of a resolved label"}),

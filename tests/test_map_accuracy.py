@@ -116,6 +116,29 @@ def test_differing_and_shifts_against_a_labelling_of_known_answer():
         assert ds.max_shift.values[k] == pytest.approx(abs(shift_of_1), abs=1e-15)
 
 
+def test_a_grids_fractions_have_no_standard_errors():
+    """A grid's cells are not a random sample: like ``differing_error`` and
+    `sweep.maps.fractions`, the fractions' and shifts' standard errors are NaN for a
+    `sweep.Grid` (they were binomial), and binomial for the same starts as `Points`."""
+    theta = np.linspace(0.05, 0.95, 16)
+
+    def above_dt(ds):  # one label per start: the grid's cells and the points alike
+        return (ds["theta0"] + 0 * ds["omega0"] > float(ds.attrs["dt"])).astype(np.int64)
+
+    kw = dict(t_end=1.0, observe=("final",))
+    grid = sweep.map_accuracy(FREE, sweep.Grid(theta0=theta, omega0=[0.0]), above_dt,
+                              {"dt": [0.5, 0.25]}, **kw).dataset
+    points = sweep.map_accuracy(FREE, sweep.Points(theta0=theta, omega0=np.zeros(16)),
+                                above_dt, {"dt": [0.5, 0.25]}, **kw).dataset
+    for name in ("differing_error", "fraction_error", "fraction_shift_error"):
+        assert np.isnan(grid[name].values).all(), name
+    np.testing.assert_array_equal(grid.fraction.values, points.fraction.values)
+    p = points.fraction.values
+    np.testing.assert_allclose(points.fraction_error.values, np.sqrt(p * (1 - p) / 16),
+                               rtol=1e-15)  # the same formula: rounding only
+    assert "NaN" in grid.fraction_error.attrs["long_name"]
+
+
 def test_rate_is_the_log_log_slope():
     """differing = 3 dt^2 exactly: the fitted rate is 2 (to rounding)."""
     dts = np.array([0.4, 0.2, 0.1, 0.05])
