@@ -399,8 +399,9 @@ def _usage_message(parser: argparse.ArgumentParser, argv: list[str],
 
 def _unknown_options(parser: argparse.ArgumentParser, tokens: list[str]) -> list[str]:
     """The tokens that look like options (``-x``, ``--name``, ``--name=value``) but are
-    none of ``parser``'s, nor an abbreviation of one (argparse accepts unique prefixes);
-    negative numbers and what follows ``--`` are values."""
+    none of ``parser``'s, nor an abbreviation of one (argparse accepts a unique prefix
+    and names the options an ambiguous one could be); negative numbers and what follows
+    ``--`` are values."""
     known = parser._option_string_actions
     unknown = []
     for token in tokens:
@@ -411,7 +412,7 @@ def _unknown_options(parser: argparse.ArgumentParser, tokens: list[str]) -> list
         if token.startswith("--"):
             name = token.split("=", 1)[0]
             prefixed = [o for o in known if o.startswith("--") and o.startswith(name)]
-            if name in known or len(prefixed) == 1:
+            if name in known or prefixed:  # several: argparse names the ambiguity
                 continue
         elif token[:2] in known:  # -o, -oFILE
             continue
