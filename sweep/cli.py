@@ -209,7 +209,8 @@ def build_parser() -> argparse.ArgumentParser:
                            help="basins (default), motion, well, period, inverted, or a "
                            "variable of the file")
     fractions.add_argument("--convergence", action="store_true",
-                           help="also the estimates over the first 16, 32, ... trajectories")
+                           help="also the estimates over the first 16, 32, ... trajectories "
+                           "(sampled points; a grid's is refused)")
     fractions.add_argument("-o", "--output", metavar="OUT.csv",
                            help="also write the table as CSV (its folder must exist)")
     fractions.set_defaults(handler=_command_fractions)
@@ -1050,12 +1051,19 @@ def _command_fractions(args: argparse.Namespace) -> int:
     try:
         labels = getattr(maps, args.label)(ds) if args.label in REFINE_MAPS \
             else ds[args.label]
-        table = maps.fractions(labels, convergence=args.convergence)
+        table = maps.fractions(labels)
     except ValueError as error:  # name the labels that work on this file
         working = file_labels(ds, args.label)
         hint = (f"; labels that work on {args.file!r}: "
                 + ", ".join(f"--label {n}" for n in working)) if working else ""
         raise ValueError(f"--label {args.label}: {error}{hint}") from None
+    if args.convergence:  # a grid's is refused: its first cells are not a sample
+        try:
+            table = maps.fractions(labels, convergence=True)
+        except ValueError as error:
+            why = str(error).removeprefix("convergence=True: ").split("; accepted:")[0]
+            raise ValueError(f"--convergence: {why}; accepted: a file of a [sample] or "
+                             "[points] run (sweep.sample), or no --convergence") from None
     frame = table.to_dataframe()
     frame.index = frame.index.set_levels(
         [label_text(v) for v in frame.index.levels[-1]], level=-1) \

@@ -194,6 +194,18 @@ def test_convergence_table_over_prefixes():
                                       .reindex(label=table.label, fill_value=0.0))
 
 
+def test_convergence_of_a_grid_is_refused():
+    """The first n cells of a grid (C order) are rows of its first axis, not a sample of
+    the box: their fractions converge to nothing (here the first 16 are all label 0)."""
+    grid = xr.DataArray(np.repeat([0, 1], 16).reshape(4, 8), dims=("theta0", "omega0"))
+    with pytest.raises(ValueError, match=r"^convergence=True: the labels are a grid's "
+                       r"cells, .*; accepted: the labels of sampled points"):
+        maps.fractions(grid, convergence=True)
+    table = maps.fractions(grid, convergence=True, sampled=True)  # the caller says so
+    assert table.n.values.tolist() == [16, 32]
+    assert table.fraction.sel(n=16).values.tolist() == [1.0, 0.0]
+
+
 @pytest.mark.parametrize("labels, kwargs, error, message", [
     (np.array([]), {}, ValueError, "labels are empty"),
     (np.array(["a", "b"]), {}, ValueError, "labels must be numbers"),

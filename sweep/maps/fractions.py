@@ -128,6 +128,8 @@ def fractions(labels, *, convergence: bool = False, unresolved=None,
     convergence : bool, default False
         Also give the estimates over the first n samples for n = 16, 32, 64, ... (powers
         of two, where a Sobol sample is balanced) and the total: a dimension ``n``.
+        Refused for a grid's labels (``sampled`` False): its first cells are a strip of
+        the grid, not a sample.
     unresolved : scalar, optional
         The label that means 'no label' (a failed, chaotic or unmatched trajectory).
         Default: the labels' own ``unresolved`` attribute (`basins`: -1) or
@@ -158,8 +160,9 @@ def fractions(labels, *, convergence: bool = False, unresolved=None,
     Raises
     ------
     ValueError
-        For no labels, a single replicate, or labels that are not numbers or not whole
-        numbers (a float such as 0.37 is no label: ``amplitude``, ``energy_final``).
+        For no labels, a single replicate, labels that are not numbers or not whole
+        numbers (a float such as 0.37 is no label: ``amplitude``, ``energy_final``), or
+        ``convergence`` of a grid's labels.
 
     Notes
     -----
@@ -185,8 +188,14 @@ def fractions(labels, *, convergence: bool = False, unresolved=None,
     """
     convergence = check_flag("convergence", convergence)
     sampled = _sampled(labels, sampled)
+    replicated = isinstance(labels, xr.DataArray) and REPLICATE in labels.dims
+    if convergence and not sampled and not replicated:
+        raise ValueError("convergence=True: the labels are a grid's cells, and its first "
+                         "16, 32, ... cells (C order) are rows of its first axis, not a "
+                         "sample of the box; accepted: the labels of sampled points "
+                         "(sweep.sample), or sampled=True for labels that are a sample")
     code = _unresolved_code(labels, unresolved)
-    if isinstance(labels, xr.DataArray) and REPLICATE in labels.dims:
+    if replicated:
         other = [d for d in labels.dims if d != REPLICATE]
         values = labels.transpose(REPLICATE, *other).values
         values = values.reshape(values.shape[0], -1)
