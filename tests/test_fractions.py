@@ -237,3 +237,18 @@ def test_wada_fractions_from_20000_sobol_samples_match_the_full_map():
     assert resolved.sizes["label"] == 3
     assert np.all(np.abs(resolved.fraction.values - WADA)
                   <= 2 * resolved.standard_error.values)
+
+
+def test_file_labels_leave_out_quantities_with_units():
+    """A variable of whole numbers in seconds or radians (capture_time, all 10.0 s when
+    every start is captured as t_transient ends) is a time, not a label: the hints of
+    sweep fractions named it as one."""
+    from sweep.maps.requirements import file_labels
+
+    dims = ("theta0", "omega0")
+    ds = xr.Dataset({"well": (dims, np.zeros((2, 3)), {"units": "1"}),
+                     "capture_time": (dims, np.full((2, 3), 10.0), {"units": "s"}),
+                     "theta_final": (dims, np.zeros((2, 3)), {"units": "rad"}),
+                     "count": (dims, np.ones((2, 3), dtype=np.int64)),
+                     "status": (dims, np.zeros((2, 3), dtype=np.int8))})
+    assert file_labels(ds) == ["basins", "motion", "well", "count"]  # maps, then variables
