@@ -394,6 +394,12 @@ def _usage_message(parser: argparse.ArgumentParser, argv: list[str],
         message += f"; accepted: {', '.join(commands)}"
     elif "invalid int value" in message:
         message += "; accepted: an integer"
+    elif message.startswith("unrecognized arguments") and command in commands:
+        owner = commands[command]  # an extra positional: what the command takes
+        takes = [("at most one " if a.nargs == "?" else "one ") + str(a.metavar or a.dest)
+                 for a in owner._actions if not a.option_strings]
+        what = f"{' and '.join(takes)} and" if takes else "no argument but"
+        return f"{owner.prog}: {message}; accepted: {what} the options {owner.prog} --help lists"
     prog = exc.parser.prog
     return message if prog == parser.prog else f"{prog}: {message}"
 
