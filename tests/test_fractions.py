@@ -146,6 +146,17 @@ def test_unresolved_labels_keep_a_row_of_their_own():
     assert well.unresolved.values.tolist() == [False, False, True]
     assert well.fraction.values.tolist() == [0.25, 0.5, 0.25]
     assert float(well.fraction.sum()) == 1.0
+    # a catalogued run's variable attractor: -1 is no attractor (its long_name says so),
+    # which sweep fractions' hints name as a label (the row read unresolved False)
+    attractor = xr.DataArray(np.array([0.0, 1.0, -1.0, 1.0]), dims="point",
+                             name="attractor", attrs={
+                                 "units": "1",
+                                 "long_name": "index of the attractor settled on (-1: none)"})
+    assert maps.fractions(attractor).unresolved.values.tolist() == [True, False, False]
+    from sweep.maps.fractions import ATTRACTOR_NONE
+    from sweep.observables import OBSERVABLES
+
+    assert OBSERVABLES["attractor"].variables[0][2].endswith(ATTRACTOR_NONE)  # as written
 
 
 def test_a_grid_gets_no_binomial_error():

@@ -39,11 +39,16 @@ def label_text(value) -> str:
     return str(int(number)) if number == int(number) else repr(number)
 
 
+#: The end of the long_name of a catalogued run's variable ``attractor`` (`sweep.run`
+#: with ``attractors=``): -1, no attractor, is its 'no label'.
+ATTRACTOR_NONE = "(-1: none)"
+
+
 def _unresolved_code(labels, unresolved):
     """The label value that means 'no label', from the argument or the labels' own
     attributes (``unresolved`` of `sweep.maps.basins`, ``no_period`` of
-    `sweep.maps.period`, the ``unresolved`` flag of `sweep.maps.motion`); None when
-    there is none."""
+    `sweep.maps.period`, the ``unresolved`` flag of `sweep.maps.motion`, -1 of a run's
+    ``attractor`` variable, `ATTRACTOR_NONE`); None when there is none."""
     if unresolved is not None:
         return unresolved
     attrs = getattr(labels, "attrs", {})
@@ -53,6 +58,9 @@ def _unresolved_code(labels, unresolved):
     meanings = str(attrs.get("flag_meanings", "")).split()
     if "unresolved" in meanings and "flag_values" in attrs:
         return np.asarray(attrs["flag_values"])[meanings.index("unresolved")]
+    if getattr(labels, "name", None) == "attractor" \
+            and str(attrs.get("long_name", "")).endswith(ATTRACTOR_NONE):
+        return -1  # a catalogued run's variable, its 'none' in its long_name
     return None
 
 
@@ -133,7 +141,8 @@ def fractions(labels, *, convergence: bool = False, unresolved=None,
     unresolved : scalar, optional
         The label that means 'no label' (a failed, chaotic or unmatched trajectory).
         Default: the labels' own ``unresolved`` attribute (`basins`: -1) or
-        ``unresolved`` flag (`motion`: -127); NaN (`well`) is always no label. It is not
+        ``unresolved`` flag (`motion`: -127), -1 for a catalogued run's variable
+        ``attractor``; NaN (`well`) is always no label. It is not
         dropped: it keeps a row of its own, flagged by the coordinate ``unresolved``, so
         the fractions of all rows sum to 1 and the resolved ones can be renormalised
         (divide by ``1 - fraction`` of the unresolved row) if that is what is wanted.
