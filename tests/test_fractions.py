@@ -171,7 +171,7 @@ def test_a_grid_gets_no_binomial_error():
     assert table.fraction.values.tolist() == [0.5, 0.5]
     points = maps.fractions(grid.stack(point=("theta0", "omega0")).drop_vars(
         ["point", "theta0", "omega0"]))
-    binomial = np.sqrt(0.5 * 0.5 / 6)
+    binomial = np.sqrt(0.5 * 0.5 / 6)  # rtol 1e-15 below: the same formula, rounding only
     np.testing.assert_allclose(points.standard_error, binomial, rtol=1e-15)
     np.testing.assert_allclose(maps.fractions(values).standard_error, binomial, rtol=1e-15)
     np.testing.assert_allclose(maps.fractions(grid, sampled=True).standard_error, binomial,
