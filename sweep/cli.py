@@ -1011,11 +1011,17 @@ def _parse_selection(items: list[str]) -> dict[str, float]:
 SELECTION_TOLERANCE = 0.01
 
 
+#: How far (relative, absolute below 1) a ``--sel`` value may lie from the value of an
+#: axis of one value: 1e-6, above the rounding of the 6 significant digits that the
+#: refusal of another value prints (5e-7 relative at most), so that they select it.
+SINGLE_VALUE_TOLERANCE = 1e-6
+
+
 def _check_selection(ds, selection: dict[str, float], items: list[str]) -> None:
     """Refuse a ``--sel DIM=VALUE`` whose VALUE is not a value of the axis DIM of ``ds``
-    (within `SELECTION_TOLERANCE` of its spacing; an axis of one value: within 1e-9 of
-    it, relative, the rounding of a decimal number). Names that are not axes are left
-    to `sweep.plot.select`, which names the axes."""
+    (within `SELECTION_TOLERANCE` of its spacing; an axis of one value: within
+    `SINGLE_VALUE_TOLERANCE` of it). Names that are not axes are left to
+    `sweep.plot.select`, which names the axes."""
     texts = {item.partition("=")[0].strip(): item.strip() for item in items}
     for name, value in selection.items():
         if name not in ds.dims or name not in ds.coords or ds[name].ndim != 1 \
@@ -1024,8 +1030,8 @@ def _check_selection(ds, selection: dict[str, float], items: list[str]) -> None:
         values = np.unique(np.asarray(ds[name].values, dtype=float))
         if values.size > 1:
             tolerance = SELECTION_TOLERANCE * float(np.diff(values).min())
-        else:
-            tolerance = 1e-9 * max(1.0, abs(float(values[0])))
+        else:  # the 6 significant digits the refusal below prints select it
+            tolerance = SINGLE_VALUE_TOLERANCE * max(1.0, abs(float(values[0])))
         if float(np.abs(values - value).min()) <= tolerance:
             continue
         units = ds[name].attrs.get("units", "")
