@@ -1179,7 +1179,8 @@ def _command_map_accuracy(args: argparse.Namespace) -> int:
     print(f"{args.run_file}: {args.label} of {starts.size} starts ({_shape(starts)}), "
           f"{'binomial standard errors' if sampled else 'a grid: no standard errors'}, "
           f"{seconds:.2f} s end to end")
-    print(table.to_string(float_format=lambda v: f"{v:.4g}"))
+    shown = table if sampled else table.drop(columns="differing_error", errors="ignore")
+    print(shown.to_string(float_format=lambda v: f"{v:.4g}"))  # a grid's NaN: not printed
     for key in ladder:
         if key not in ("dtype", "method"):
             print(f"rate of differing against {key}: {accuracy.rate(key):.3g} (log-log "
