@@ -1183,8 +1183,11 @@ def _command_map_accuracy(args: argparse.Namespace) -> int:
     print(shown.to_string(float_format=lambda v: f"{v:.4g}"))  # a grid's NaN: not printed
     for key in ladder:
         if key not in ("dtype", "method"):
-            print(f"rate of differing against {key}: {accuracy.rate(key):.3g} (log-log "
-                  "least-squares slope)")
+            rate = accuracy.rate(key)
+            print(f"rate of differing against {key}: " + (
+                f"{rate:.3g} (log-log least-squares slope)" if math.isfinite(rate) else
+                f"not computed (it needs two levels of {key} whose labels differ from the "
+                "reference)"))
     if output is not None:
         accuracy.save(output)
         print(f"wrote {output}")

@@ -370,6 +370,10 @@ omega0 = {start = -2.5, stop = 2.5, num = 8}""")
     assert "a grid: no standard errors" in out and "differing" in out, out
     assert "differing_error" not in out and " NaN" not in out.split("rate of")[0], out
     assert "differing_error" in sweep.load(tmp_path / "acc.nc")
+    # one level below the reference: no slope to fit, said in words (it printed nan)
+    assert "rate of differing against dt: not computed (it needs two levels of dt whose " \
+        "labels differ from the reference)" in out, out
+    assert "nan" not in out.lower(), out
 
 
 @pytest.mark.parametrize("extra, words", [
