@@ -209,7 +209,8 @@ def build_parser() -> argparse.ArgumentParser:
                            help="basins (default), motion, well, period, inverted, or a "
                            "variable of the file")
     fractions.add_argument("--convergence", action="store_true",
-                           help="also the estimates over the first 16, 32, ... trajectories")
+                           help="also the estimates over the first 16, 32, ... trajectories "
+                           "(sampled points; a grid's is refused)")
     fractions.add_argument("-o", "--output", metavar="OUT.csv",
                            help="also write the table as CSV (its folder must exist)")
     fractions.set_defaults(handler=_command_fractions)
@@ -393,14 +394,21 @@ def _usage_message(parser: argparse.ArgumentParser, argv: list[str],
         message += f"; accepted: {', '.join(commands)}"
     elif "invalid int value" in message:
         message += "; accepted: an integer"
+    elif message.startswith("unrecognized arguments") and command in commands:
+        owner = commands[command]  # an extra positional: what the command takes
+        takes = [("at most one " if a.nargs == "?" else "one ") + str(a.metavar or a.dest)
+                 for a in owner._actions if not a.option_strings]
+        what = f"{' and '.join(takes)} and" if takes else "no argument but"
+        return f"{owner.prog}: {message}; accepted: {what} the options {owner.prog} --help lists"
     prog = exc.parser.prog
     return message if prog == parser.prog else f"{prog}: {message}"
 
 
 def _unknown_options(parser: argparse.ArgumentParser, tokens: list[str]) -> list[str]:
     """The tokens that look like options (``-x``, ``--name``, ``--name=value``) but are
-    none of ``parser``'s, nor an abbreviation of one (argparse accepts unique prefixes);
-    negative numbers and what follows ``--`` are values."""
+    none of ``parser``'s, nor an abbreviation of one (argparse accepts a unique prefix
+    and names the options an ambiguous one could be); negative numbers and what follows
+    ``--`` are values."""
     known = parser._option_string_actions
     unknown = []
     for token in tokens:
@@ -411,7 +419,7 @@ def _unknown_options(parser: argparse.ArgumentParser, tokens: list[str]) -> list
         if token.startswith("--"):
             name = token.split("=", 1)[0]
             prefixed = [o for o in known if o.startswith("--") and o.startswith(name)]
-            if name in known or len(prefixed) == 1:
+            if name in known or prefixed:  # several: argparse names the ambiguity
                 continue
         elif token[:2] in known:  # -o, -oFILE
             continue
@@ -1003,11 +1011,17 @@ def _parse_selection(items: list[str]) -> dict[str, float]:
 SELECTION_TOLERANCE = 0.01
 
 
+#: How far (relative, absolute below 1) a ``--sel`` value may lie from the value of an
+#: axis of one value: 1e-6, above the rounding of the 6 significant digits that the
+#: refusal of another value prints (5e-7 relative at most), so that they select it.
+SINGLE_VALUE_TOLERANCE = 1e-6
+
+
 def _check_selection(ds, selection: dict[str, float], items: list[str]) -> None:
     """Refuse a ``--sel DIM=VALUE`` whose VALUE is not a value of the axis DIM of ``ds``
-    (within `SELECTION_TOLERANCE` of its spacing; an axis of one value: within 1e-9 of
-    it, relative, the rounding of a decimal number). Names that are not axes are left
-    to `sweep.plot.select`, which names the axes."""
+    (within `SELECTION_TOLERANCE` of its spacing; an axis of one value: within
+    `SINGLE_VALUE_TOLERANCE` of it). Names that are not axes are left to
+    `sweep.plot.select`, which names the axes."""
     texts = {item.partition("=")[0].strip(): item.strip() for item in items}
     for name, value in selection.items():
         if name not in ds.dims or name not in ds.coords or ds[name].ndim != 1 \
@@ -1016,8 +1030,8 @@ def _check_selection(ds, selection: dict[str, float], items: list[str]) -> None:
         values = np.unique(np.asarray(ds[name].values, dtype=float))
         if values.size > 1:
             tolerance = SELECTION_TOLERANCE * float(np.diff(values).min())
-        else:
-            tolerance = 1e-9 * max(1.0, abs(float(values[0])))
+        else:  # the 6 significant digits the refusal below prints select it
+            tolerance = SINGLE_VALUE_TOLERANCE * max(1.0, abs(float(values[0])))
         if float(np.abs(values - value).min()) <= tolerance:
             continue
         units = ds[name].attrs.get("units", "")
@@ -1049,12 +1063,19 @@ def _command_fractions(args: argparse.Namespace) -> int:
     try:
         labels = getattr(maps, args.label)(ds) if args.label in REFINE_MAPS \
             else ds[args.label]
-        table = maps.fractions(labels, convergence=args.convergence)
+        table = maps.fractions(labels)
     except ValueError as error:  # name the labels that work on this file
         working = file_labels(ds, args.label)
         hint = (f"; labels that work on {args.file!r}: "
                 + ", ".join(f"--label {n}" for n in working)) if working else ""
         raise ValueError(f"--label {args.label}: {error}{hint}") from None
+    if args.convergence:  # a grid's is refused: its first cells are not a sample
+        try:
+            table = maps.fractions(labels, convergence=True)
+        except ValueError as error:
+            why = str(error).removeprefix("convergence=True: ").split("; accepted:")[0]
+            raise ValueError(f"--convergence: {why}; accepted: a file of a [sample] or "
+                             "[points] run (sweep.sample), or no --convergence") from None
     frame = table.to_dataframe()
     frame.index = frame.index.set_levels(
         [label_text(v) for v in frame.index.levels[-1]], level=-1) \
@@ -1158,11 +1179,15 @@ def _command_map_accuracy(args: argparse.Namespace) -> int:
     print(f"{args.run_file}: {args.label} of {starts.size} starts ({_shape(starts)}), "
           f"{'binomial standard errors' if sampled else 'a grid: no standard errors'}, "
           f"{seconds:.2f} s end to end")
-    print(table.to_string(float_format=lambda v: f"{v:.4g}"))
+    shown = table if sampled else table.drop(columns="differing_error", errors="ignore")
+    print(shown.to_string(float_format=lambda v: f"{v:.4g}"))  # a grid's NaN: not printed
     for key in ladder:
         if key not in ("dtype", "method"):
-            print(f"rate of differing against {key}: {accuracy.rate(key):.3g} (log-log "
-                  "least-squares slope)")
+            rate = accuracy.rate(key)
+            print(f"rate of differing against {key}: " + (
+                f"{rate:.3g} (log-log least-squares slope)" if math.isfinite(rate) else
+                f"not computed (it needs two levels of {key} whose labels differ from the "
+                "reference)"))
     if output is not None:
         accuracy.save(output)
         print(f"wrote {output}")

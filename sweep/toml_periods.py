@@ -208,7 +208,7 @@ def run_lines(table: dict[str, Any], scene, grid, text) -> list[str]:
     grid : sweep.Grid or sweep.Points
         The rows the file writes.
     text : callable
-        A value as TOML text (the writer's own, e.g. the explorer's ``_toml_value``);
+        A value as TOML text (the writer's own, e.g. `sweep.explore.texts.toml_value`);
         it must write a dict as an inline table.
 
     Returns

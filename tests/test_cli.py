@@ -283,6 +283,24 @@ def test_errors_are_one_line_with_status_2_and_write_nothing(case, demo, tmp_pat
     assert not [p for p in output.parent.glob("*.part")] if output.parent.exists() else True
 
 
+def test_a_one_value_axis_is_selected_by_the_digits_its_refusal_prints(tmp_path):
+    """A grid's axis of one value (damping = 0.123456789 1/s): the refusal of another
+    value prints it with 6 digits (0.123457), and those 6 digits select it (they were
+    refused in turn: within 1e-9 of the value only)."""
+    path = tmp_path / "one.nc"
+    text = RUN_FILE.replace("[grid]\n", "[grid]\ndamping = [0.123456789]\n")
+    code, _, err = call("run", write(tmp_path, text), "-o", path, "--no-progress")
+    assert code == 0, err
+    code, _, err = call("plot", path, "--var", "winding", "--sel", "damping=0.2", "-o",
+                        tmp_path / "off.png")
+    assert code == 2 and "accepted: one of 0.123457 " in err, err
+    output = tmp_path / "map.png"
+    code, _, err = call("plot", path, "--var", "winding", "--sel", "damping=0.123457",
+                        "-o", output)
+    assert (code, err) == (0, ""), err
+    assert_png(output)
+
+
 def test_a_selection_within_a_small_fraction_of_the_spacing_is_that_value(trajectory_file,
                                                                          tmp_path):
     # time of the file: samples 0.2 s apart; 1.001 s is 0.5 % of that from the sample

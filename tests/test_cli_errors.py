@@ -240,6 +240,22 @@ _PARSER_ERRORS = {
     "size not an integer": (["demo", "--size", "1e3", "-o", "{out}"],
                             ["--size", "'1e3'", "accepted: an integer"], []),
     "misspelled command": (["rnu", "{run}"], ["'rnu'", "did you mean run?"], []),
+    # an extra positional: the command named, with what it takes
+    "second run file": (["run", "{run}", "{run}", "-o", "{out}"],
+                        ["sweep run: unrecognized arguments: ", "accepted: one RUN.toml "
+                         "and the options sweep run --help lists"], []),
+    "argument to demo": (["demo", "extra"],
+                         ["sweep demo: unrecognized arguments: extra; accepted: no "
+                          "argument but the options sweep demo --help lists"], []),
+    # an abbreviation of several options is ambiguous, not unknown: argparse's words
+    "ambiguous abbreviation": (["run", "{run}", "-o", "{out}", "--no"],
+                               ["sweep run: ambiguous option: --no could match",
+                                "--no-space-check", "--no-progress"],
+                               ["unrecognized", "did you mean"]),
+    "ambiguous abbreviation, required missing": (["run", "{run}", "--p"],
+                                                 ["ambiguous option: --p could match",
+                                                  "--pilot", "--progress"],
+                                                 ["unrecognized", "--help"]),
     "no command": ([], ["required: COMMAND; accepted: run, demo, plot"], []),
 }
 

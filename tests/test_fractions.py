@@ -146,6 +146,17 @@ def test_unresolved_labels_keep_a_row_of_their_own():
     assert well.unresolved.values.tolist() == [False, False, True]
     assert well.fraction.values.tolist() == [0.25, 0.5, 0.25]
     assert float(well.fraction.sum()) == 1.0
+    # a catalogued run's variable attractor: -1 is no attractor (its long_name says so),
+    # which sweep fractions' hints name as a label (the row read unresolved False)
+    attractor = xr.DataArray(np.array([0.0, 1.0, -1.0, 1.0]), dims="point",
+                             name="attractor", attrs={
+                                 "units": "1",
+                                 "long_name": "index of the attractor settled on (-1: none)"})
+    assert maps.fractions(attractor).unresolved.values.tolist() == [True, False, False]
+    from sweep.maps.fractions import ATTRACTOR_NONE
+    from sweep.observables import OBSERVABLES
+
+    assert OBSERVABLES["attractor"].variables[0][2].endswith(ATTRACTOR_NONE)  # as written
 
 
 def test_a_grid_gets_no_binomial_error():
@@ -160,7 +171,7 @@ def test_a_grid_gets_no_binomial_error():
     assert table.fraction.values.tolist() == [0.5, 0.5]
     points = maps.fractions(grid.stack(point=("theta0", "omega0")).drop_vars(
         ["point", "theta0", "omega0"]))
-    binomial = np.sqrt(0.5 * 0.5 / 6)
+    binomial = np.sqrt(0.5 * 0.5 / 6)  # rtol 1e-15 below: the same formula, rounding only
     np.testing.assert_allclose(points.standard_error, binomial, rtol=1e-15)
     np.testing.assert_allclose(maps.fractions(values).standard_error, binomial, rtol=1e-15)
     np.testing.assert_allclose(maps.fractions(grid, sampled=True).standard_error, binomial,
@@ -194,6 +205,18 @@ def test_convergence_table_over_prefixes():
                                       .reindex(label=table.label, fill_value=0.0))
 
 
+def test_convergence_of_a_grid_is_refused():
+    """The first n cells of a grid (C order) are rows of its first axis, not a sample of
+    the box: their fractions converge to nothing (here the first 16 are all label 0)."""
+    grid = xr.DataArray(np.repeat([0, 1], 16).reshape(4, 8), dims=("theta0", "omega0"))
+    with pytest.raises(ValueError, match=r"^convergence=True: the labels are a grid's "
+                       r"cells, .*; accepted: the labels of sampled points"):
+        maps.fractions(grid, convergence=True)
+    table = maps.fractions(grid, convergence=True, sampled=True)  # the caller says so
+    assert table.n.values.tolist() == [16, 32]
+    assert table.fraction.sel(n=16).values.tolist() == [1.0, 0.0]
+
+
 @pytest.mark.parametrize("labels, kwargs, error, message", [
     (np.array([]), {}, ValueError, "labels are empty"),
     (np.array(["a", "b"]), {}, ValueError, "labels must be numbers"),
@@ -225,3 +248,18 @@ def test_wada_fractions_from_20000_sobol_samples_match_the_full_map():
     assert resolved.sizes["label"] == 3
     assert np.all(np.abs(resolved.fraction.values - WADA)
                   <= 2 * resolved.standard_error.values)
+
+
+def test_file_labels_leave_out_quantities_with_units():
+    """A variable of whole numbers in seconds or radians (capture_time, all 10.0 s when
+    every start is captured as t_transient ends) is a time, not a label: the hints of
+    sweep fractions named it as one."""
+    from sweep.maps.requirements import file_labels
+
+    dims = ("theta0", "omega0")
+    ds = xr.Dataset({"well": (dims, np.zeros((2, 3)), {"units": "1"}),
+                     "capture_time": (dims, np.full((2, 3), 10.0), {"units": "s"}),
+                     "theta_final": (dims, np.zeros((2, 3)), {"units": "rad"}),
+                     "count": (dims, np.ones((2, 3), dtype=np.int64)),
+                     "status": (dims, np.zeros((2, 3), dtype=np.int8))})
+    assert file_labels(ds) == ["basins", "motion", "well", "count"]  # maps, then variables

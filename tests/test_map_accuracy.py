@@ -375,6 +375,30 @@ def test_cli_prints_the_table_and_writes_the_files(tmp_path):
     assert (tmp_path / "acc.png").stat().st_size > 0
 
 
+def test_cli_prints_no_column_of_nan_errors_for_a_grid(tmp_path):
+    """A grid's starts have no standard error (sweep fractions prints no column of its
+    NaN errors either); the netCDF file keeps the variable."""
+    grid = RUN_FILE.replace("""[sample]
+n = 64
+seed = 1
+theta0 = [-3.0, 3.0]
+omega0 = [-2.5, 2.5]""", """[grid]
+theta0 = {start = -3.0, stop = 3.0, num = 8}
+omega0 = {start = -2.5, stop = 2.5, num = 8}""")
+    assert grid != RUN_FILE
+    (tmp_path / "run.toml").write_text(grid)
+    code, out, err = call("map-accuracy", tmp_path / "run.toml", "--label", "motion",
+                          "--ladder", "dt=0.5,0.25", "-o", tmp_path / "acc.nc")
+    assert code == 0, err
+    assert "a grid: no standard errors" in out and "differing" in out, out
+    assert "differing_error" not in out and " NaN" not in out.split("rate of")[0], out
+    assert "differing_error" in sweep.load(tmp_path / "acc.nc")
+    # one level below the reference: no slope to fit, said in words (it printed nan)
+    assert "rate of differing against dt: not computed (it needs two levels of dt whose " \
+        "labels differ from the reference)" in out, out
+    assert "nan" not in out.lower(), out
+
+
 @pytest.mark.parametrize("extra, words", [
     (["--ladder", "dt"], "--ladder 'dt'"),
     (["--ladder", "step=0.2,0.1"], "KEY one of"),

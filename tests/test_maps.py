@@ -208,3 +208,14 @@ def test_identify_attractors_on_known_orbits():
     assert by_label["turns_per_period"][labels[0]] == 0.0
     assert list(by_label["size"]) == sorted(by_label["size"], reverse=True)
     assert by_label["size"].sum() == 7
+
+
+def test_a_systems_catalogued_run_is_told_its_attractor_none_is_minus_one():
+    """maps.basins of a system's run on a catalogue names ds['attractor'] as its labels;
+    its 'none' is -1 (the variable's long_name), not NaN, as the message said."""
+    from sweep.maps.labels import refuse_system_without_strobe
+
+    ds = xr.Dataset({"attractor": ("point", np.array([0.0, -1.0]))},
+                    attrs={"system_name": "DoublePendulum"})
+    with pytest.raises(ValueError, match=r"is each start's attractor \(-1: none\)"):
+        refuse_system_without_strobe(ds, "basins")

@@ -121,3 +121,10 @@ def test_sweep_fractions_of_a_grid(tmp_path):
                           "holds ") and "which is not a label" in err
     assert err.endswith("labels that work on " + repr(str(tmp_path / "g.nc"))
                         + ": --label basins, --label well\n")
+    # the first 16, 32, ... cells of a grid are rows of its first axis, not a sample
+    code, out, err = call("fractions", str(tmp_path / "g.nc"), "--label", "well",
+                          "--convergence")
+    assert (code, out) == (2, "") and err.count("\n") == 1, err
+    assert err.startswith("sweep: error: --convergence: the labels are a grid's cells"), err
+    assert "accepted: a file of a [sample] or [points] run" in err, err
+

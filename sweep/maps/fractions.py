@@ -39,11 +39,16 @@ def label_text(value) -> str:
     return str(int(number)) if number == int(number) else repr(number)
 
 
+#: The end of the long_name of a catalogued run's variable ``attractor`` (`sweep.run`
+#: with ``attractors=``): -1, no attractor, is its 'no label'.
+ATTRACTOR_NONE = "(-1: none)"
+
+
 def _unresolved_code(labels, unresolved):
     """The label value that means 'no label', from the argument or the labels' own
     attributes (``unresolved`` of `sweep.maps.basins`, ``no_period`` of
-    `sweep.maps.period`, the ``unresolved`` flag of `sweep.maps.motion`); None when
-    there is none."""
+    `sweep.maps.period`, the ``unresolved`` flag of `sweep.maps.motion`, -1 of a run's
+    ``attractor`` variable, `ATTRACTOR_NONE`); None when there is none."""
     if unresolved is not None:
         return unresolved
     attrs = getattr(labels, "attrs", {})
@@ -53,6 +58,9 @@ def _unresolved_code(labels, unresolved):
     meanings = str(attrs.get("flag_meanings", "")).split()
     if "unresolved" in meanings and "flag_values" in attrs:
         return np.asarray(attrs["flag_values"])[meanings.index("unresolved")]
+    if getattr(labels, "name", None) == "attractor" \
+            and str(attrs.get("long_name", "")).endswith(ATTRACTOR_NONE):
+        return -1  # a catalogued run's variable, its 'none' in its long_name
     return None
 
 
@@ -128,10 +136,13 @@ def fractions(labels, *, convergence: bool = False, unresolved=None,
     convergence : bool, default False
         Also give the estimates over the first n samples for n = 16, 32, 64, ... (powers
         of two, where a Sobol sample is balanced) and the total: a dimension ``n``.
+        Refused for a grid's labels (``sampled`` False): its first cells are a strip of
+        the grid, not a sample.
     unresolved : scalar, optional
         The label that means 'no label' (a failed, chaotic or unmatched trajectory).
         Default: the labels' own ``unresolved`` attribute (`basins`: -1) or
-        ``unresolved`` flag (`motion`: -127); NaN (`well`) is always no label. It is not
+        ``unresolved`` flag (`motion`: -127), -1 for a catalogued run's variable
+        ``attractor``; NaN (`well`) is always no label. It is not
         dropped: it keeps a row of its own, flagged by the coordinate ``unresolved``, so
         the fractions of all rows sum to 1 and the resolved ones can be renormalised
         (divide by ``1 - fraction`` of the unresolved row) if that is what is wanted.
@@ -158,8 +169,9 @@ def fractions(labels, *, convergence: bool = False, unresolved=None,
     Raises
     ------
     ValueError
-        For no labels, a single replicate, or labels that are not numbers or not whole
-        numbers (a float such as 0.37 is no label: ``amplitude``, ``energy_final``).
+        For no labels, a single replicate, labels that are not numbers or not whole
+        numbers (a float such as 0.37 is no label: ``amplitude``, ``energy_final``), or
+        ``convergence`` of a grid's labels.
 
     Notes
     -----
@@ -185,8 +197,14 @@ def fractions(labels, *, convergence: bool = False, unresolved=None,
     """
     convergence = check_flag("convergence", convergence)
     sampled = _sampled(labels, sampled)
+    replicated = isinstance(labels, xr.DataArray) and REPLICATE in labels.dims
+    if convergence and not sampled and not replicated:
+        raise ValueError("convergence=True: the labels are a grid's cells, and its first "
+                         "16, 32, ... cells (C order) are rows of its first axis, not a "
+                         "sample of the box; accepted: the labels of sampled points "
+                         "(sweep.sample), or sampled=True for labels that are a sample")
     code = _unresolved_code(labels, unresolved)
-    if isinstance(labels, xr.DataArray) and REPLICATE in labels.dims:
+    if replicated:
         other = [d for d in labels.dims if d != REPLICATE]
         values = labels.transpose(REPLICATE, *other).values
         values = values.reshape(values.shape[0], -1)

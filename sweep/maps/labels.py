@@ -304,7 +304,7 @@ def refuse_system_without_strobe(ds: xr.Dataset, what: str) -> None:
             raise ValueError(f"sweep.maps.{what} needs a system's stroboscopic samples, "
                              f"and this run of {ds.attrs['system_name']} has none: it was "
                              "run on an attractor catalogue, and its variable 'attractor' "
-                             "is each start's attractor (NaN: none); accepted: those "
+                             "is each start's attractor (-1: none); accepted: those "
                              "labels, ds['attractor'], or a run observing 'strobe'")
         raise ValueError(f"sweep.maps.{what} needs a system's stroboscopic samples, and "
                          f"this run of {ds.attrs['system_name']} has none; accepted: a "

@@ -94,9 +94,10 @@ def label_refusal(name: str, observe, forced: bool, where: str,
 
 def file_labels(ds, tried: str | None = None) -> list[str]:
     """What labels a run's dataset (a file): the maps of `sweep.maps` that accept it
-    (`sweep.toml_spec.REFINE_MAPS`, in that order), then its variables of whole numbers
-    (NaN: no label) on the trajectories' dimensions, ``status`` aside; ``tried`` left
-    out. What ``sweep fractions`` names when a label fails.
+    (`sweep.toml_spec.REFINE_MAPS`, in that order), then its dimensionless variables
+    (units ``1`` or none) of whole numbers (NaN: no label) on the trajectories'
+    dimensions, ``status`` aside; ``tried`` left out. What ``sweep fractions`` names
+    when a label fails.
 
     Parameters
     ----------
@@ -125,7 +126,8 @@ def file_labels(ds, tried: str | None = None) -> list[str]:
     for name, variable in ds.data_vars.items():
         values = np.asarray(variable.values)
         if name in (tried, "status") or (dims is not None and set(variable.dims) != dims) \
-                or values.dtype.kind not in "biuf" or values.size == 0:
+                or values.dtype.kind not in "biuf" or values.size == 0 \
+                or variable.attrs.get("units", "1") != "1":  # a quantity (s, rad), no label
             continue
         finite = values[np.isfinite(values)] if values.dtype.kind == "f" else values
         if finite.size and np.array_equal(finite, np.round(finite)) \
