@@ -239,11 +239,11 @@ class MapAccuracy:
         `sweep.Grid`, whose cells are not a random sample), ``fraction`` and
         ``fraction_error`` (level x label; binomial, NaN for a grid), ``fraction_shift``
         (fraction minus the reference's) with ``fraction_shift_error`` (the standard
-        error of a paired difference; NaN for a grid), ``max_shift`` (largest ``|fraction_shift|`` of a resolved label),
-        ``unresolved_fraction``, ``wall_time`` [s] (best of ``repeats``, compilation
-        excluded) and ``trajectory_steps`` (steps of all trajectories; with
-        ``stop_early``, the most they could take), and ``labels``
-        (level x start).
+        error of a paired difference; NaN for a grid), ``max_shift`` (largest
+        ``|fraction_shift|`` of a resolved label), ``unresolved_fraction``,
+        ``wall_time`` [s] (best of ``repeats``, compilation excluded) and
+        ``trajectory_steps`` (steps of all trajectories; with ``stop_early``, the most
+        they could take), and ``labels`` (level x start).
     """
 
     dataset: xr.Dataset
