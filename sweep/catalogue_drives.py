@@ -18,7 +18,9 @@ __all__ = ["pendulum_drives", "system_drives"]
 
 
 def _value(grid, axis: str, values: dict) -> float:
-    """The grid's first value of ``axis``, else ``values[axis]`` (0 where absent)."""
+    """The grid's value of ``axis`` (its smallest where it has several: only a dataset's
+    attribute naming the drives reads such a grid, and it keeps the names alone), else
+    ``values[axis]`` (0 where absent)."""
     column = grid.axes.get(axis, np.array([values.get(axis, 0.0)]))
     return float(np.unique(np.asarray(column, dtype=np.float64))[0])
 
