@@ -72,7 +72,7 @@ of ``[scene]``: ``kind`` names it, the other keys are its constructor's argument
 
     [system]
     kind = "DoublePendulum"      # or "CoupledPendula", "SwingNetwork"
-    mass1 = 1.0                  # kg (CoupledPendula: n, mass, length, coupling, kind,
+    mass1 = 1.0                  # kg (CoupledPendula: n, mass, length, coupling, coupling_kind,
     length2 = 0.5                # m   topology; SwingNetwork: edges or adjacency, power,
                                  #     damping, coupling)
     [grid]
@@ -361,13 +361,18 @@ def _system(source: str, table: dict):
 
             return declared_system(table)
         cls = getattr(physics, kind)
-        fields = [f.name for f in dataclasses.fields(cls) if f.name != "effects"]
+        # a constructor argument named like the table's `kind` (CoupledPendula's spring
+        # or torsion coupling) is written `coupling_kind` (`SYSTEM_KEYS`)
+        renamed = {SYSTEM_KEYS.get(f.name, f.name): f.name for f in dataclasses.fields(cls)
+                   if f.name != "effects"}
+        fields = list(renamed)
         if kind == "SwingNetwork":
             fields = ["edges"] + fields
         effects = {cls.declaration.name: cls for cls in acting_effects()}
         accepted = ["kind"] + fields + (list(effects) if kind != "SwingNetwork" else [])
         check_keys(table, accepted, label=f"accepted for {kind}")
-        arguments = {key: value for key, value in table.items() if key != "kind"}
+        arguments = {renamed.get(key, key): value for key, value in table.items()
+                     if key != "kind"}
         if kind == "SwingNetwork":
             if ("edges" in arguments) == ("adjacency" in arguments):
                 raise ValueError("a SwingNetwork needs edges = [[i, j], ...] or adjacency "
@@ -376,6 +381,12 @@ def _system(source: str, table: dict):
         else:
             arguments["effects"] = system_effects(arguments, effects)
         return cls(**arguments)
+
+
+#: ``[system]`` keys of constructor arguments whose own name the table takes: the
+#: table's ``kind`` names the system, so `sweep.CoupledPendula`'s ``kind`` (``"spring"``
+#: or ``"torsion"``) is ``coupling_kind``.
+SYSTEM_KEYS = {"kind": "coupling_kind"}
 
 
 def _grid(source: str, table: dict, names=None) -> Grid:

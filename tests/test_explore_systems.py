@@ -623,3 +623,24 @@ def test_the_catalogue_is_reused_on_zoom_and_rebuilt_when_the_system_changes(
         e.update(route="known cells")
     with pytest.raises(InvalidInput, match="route: DoublePendulum has no basins map"):
         double().update(route="exact")
+
+
+def test_a_torsion_coupled_run_file_reads_back_the_same_system(tmp_path):
+    """`sweep.CoupledPendula`'s own ``kind`` (spring or torsion) shares its name with the
+    ``[system]`` table's ``kind`` (the system's class): the explorer wrote both as
+    ``kind``, a TOML file with a duplicate key that no reader accepts, and a hand-written
+    file could not give a torsion coupling at all. It is ``coupling_kind`` in run files;
+    a wrong one names the argument as the class takes it."""
+    from sweep.toml_spec import load_run
+
+    system = sweep.CoupledPendula(3, kind="torsion", coupling=0.5)
+    e = SystemExplorer(system, sweep.Grid(theta1_0=np.linspace(-1, 1, N),
+                                          theta3_0=np.linspace(-1, 1, N)),
+                       resolution=N, **RUN)
+    text = e.toml_text()
+    assert 'coupling_kind = "torsion"' in text and text.count("\nkind = ") == 1
+    path = tmp_path / "torsion.toml"
+    path.write_text(text)
+    assert load_run(path, {})[0] == system
+    with pytest.raises(ValueError, match=r"^CoupledPendula: kind='rubber' is not accepted"):
+        sweep.CoupledPendula(3, kind="rubber")

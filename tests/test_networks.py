@@ -244,3 +244,11 @@ def test_dead_ends_undermine_basin_stability_and_repairing_them_restores_it():
 def test_bad_networks_are_refused_before_any_compute(make, match):
     with pytest.raises((ValueError, TypeError), match=match):
         make()
+
+
+def test_refusals_print_plain_numbers():
+    """A refusal shows the number the user would type (``1.0``), not NumPy's repr
+    (``np.float64(1.0)``, NumPy 2's)."""
+    with pytest.raises(ValueError) as refused:
+        sweep.SwingNetwork([(0, 1)], power=[1.0, 0.0])
+    assert "got sum 1.0;" in str(refused.value) and "np." not in str(refused.value)

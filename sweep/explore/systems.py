@@ -44,6 +44,7 @@ from ..settings import validate_settings
 from ..system_attractors import initial_axes
 from ..system_observables import SYSTEM_OBSERVABLES, variables
 from ..toml_periods import run_lines
+from ..toml_spec import SYSTEM_KEYS
 from .model import (
     PASSTHROUGH,
     RESOLUTION_RANGE,
@@ -268,7 +269,8 @@ def _system_toml(system: System) -> list[str]:
 
         return system_lines(system, toml_value)
     out = ["[system]", f"kind = {toml_value(type(system).__name__)}"]
-    out += [f"{k} = {toml_value(v)}" for k, v in _constructor(system).items()]
+    out += [f"{SYSTEM_KEYS.get(k, k)} = {toml_value(v)}"
+            for k, v in _constructor(system).items()]
     from ..toml_effects import system_effects_lines
 
     return out + system_effects_lines(system.effects, toml_value)

@@ -77,7 +77,12 @@ class CoupledPendula(System):
     effects: tuple = field(default=())
 
     def __post_init__(self) -> None:
-        _declaration(self.n, self.kind, self.topology)  # checks n, kind and topology
+        from .systems import COUPLINGS
+
+        if self.kind not in COUPLINGS:  # named as this class takes it (`coupling` is k)
+            raise ValueError(f"CoupledPendula: kind={self.kind!r} is not accepted; accepted: "
+                             f"{', '.join(map(repr, COUPLINGS))}")
+        _declaration(self.n, self.kind, self.topology)  # checks n and topology
         self._check_parameters()
 
     def derived(self, jacobian: bool = False) -> DerivedSystem:

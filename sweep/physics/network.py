@@ -173,7 +173,7 @@ class SwingNetwork(System):
         if abs(power.sum()) > 1e-9 * max(np.abs(power).sum(), 1.0):
             raise ValueError(f"power must sum to 0 (generators balance consumers, so the "
                              f"frame rotates at the grid frequency), got sum "
-                             f"{power.sum()!r}; accepted: powers whose sum is 0")
+                             f"{float(power.sum())!r}; accepted: powers whose sum is 0")
         matrix.flags.writeable = False
         power.flags.writeable = False
         object.__setattr__(self, "adjacency", matrix)
@@ -270,8 +270,9 @@ class SwingNetwork(System):
         else:
             raise ValueError(
                 f"SwingNetwork has no synchronous state that Newton's method reaches: the "
-                f"coupling K = {coupling!r} cannot carry the powers (max |P| = "
-                f"{np.abs(power).max()!r}); accepted: a larger coupling or smaller powers")
+                f"coupling K = {float(coupling)!r} cannot carry the powers (max |P| = "
+                f"{float(np.abs(power).max())!r}); accepted: a larger coupling or smaller "
+                "powers")
         diff = theta[None, :] - theta[:, None]
         if np.any(np.abs(diff[a > 0]) >= math.pi / 2):
             raise ValueError(
