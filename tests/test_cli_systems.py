@@ -4,6 +4,7 @@ place of ``[scene]`` (`sweep.toml_spec`), the same `sweep run` and `sweep plot`.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -140,6 +141,18 @@ def test_the_driven_example_writes_its_basins_by_a_pilot_catalogue(tmp_path, bas
     code, _, err = call("plot", output, "--var", "attractor", "-o", image)
     assert (code, err) == (0, "")
     assert_png(image)
+
+
+def test_sweep_run_says_the_pilots_size_time_and_attractors(basins_file):
+    """With ``[run] pilot = 12`` the summary has the pilot's line before the map's: its
+    12 x 12 starts, its wall time and the five attractors it catalogued (the count the
+    test above checks in the file)."""
+    code, out, err, _ = basins_file
+    assert (code, err) == (0, ""), err
+    lines = out.splitlines()
+    assert re.fullmatch(r"pilot: 144 trajectories \(theta1_0 12 x theta2_0 12\) in "
+                        r"\d+\.\d\d s wall time, 5 attractors catalogued", lines[-2]), out
+    assert lines[-1].startswith("wrote ") and "1600 trajectories" in lines[-1]
 
 
 def test_the_attractor_maps_colour_bar_has_a_short_label_and_the_file_the_detail(

@@ -149,3 +149,23 @@ def test_the_readme_links_resolve_and_the_quick_start_is_two_commands():
     quick = readme.split("## Quick start", 1)[1].split("\n## ", 1)[0]
     commands = re.findall(r"```bash\n(.*?)\n```", quick, re.DOTALL)
     assert commands == ['pip install -e . && sweep demo', 'pip install -e ".[test]" && pytest']
+
+
+@pytest.mark.parametrize("page", ["guide/systems.md", "guide/extending.md"])
+def test_the_guide_names_what_the_expression_parser_accepts(page):
+    # The sentence "read from Python's syntax tree ..." lists the functions and constants;
+    # the parser's refusal ("accepted: ...") names the same.
+    from sweep.physics.derive import FUNCTIONS
+
+    text = (DOCS / page).read_text(encoding="utf-8")
+    sentence = text.split("read from Python's syntax tree")[1].split("declared names")[0]
+    for name in (*FUNCTIONS, "pi", "t"):
+        assert f"`{name}`" in sentence, (page, name)
+    with pytest.raises(ValueError) as refused:
+        sweep.DeclaredSystem(sweep.physics.SystemDeclaration(
+            name="test_accepted_names",
+            coordinates=(sweep.physics.Coordinate("theta", "omega", "q", "w"),),
+            parameters=(), lagrangian="w**2/2 + tan(q)"))
+    message = str(refused.value)
+    for name in (*FUNCTIONS, "pi"):
+        assert name in message.split("accepted:")[1], name

@@ -405,3 +405,19 @@ def test_a_joint_damping_axis_switches_joint_damping_on():
     lost = (ds.energy_initial - ds.energy_final).values[0]
     # without damping RK4 keeps the energy to ~1e-7 here; 0.4 N m s takes a good part
     assert abs(lost[0]) < 1e-5 and lost[1] > 0.1
+
+
+def test_the_docstring_lists_exactly_the_grid_axes_and_outputs_of_a_double_pendulum():
+    # The Notes' "Grid axes:" paragraph names every axis in double backticks; the
+    # placeholder ``<effect axis>_<angle>`` and the example ``torque_theta2`` (an axis
+    # only with a Torque in effects) come after "An effect on one angle given".
+    import re
+
+    notes = sweep.DoublePendulum.__doc__.split("Grid axes:")[1]
+    axes_text = notes.split("An effect on one angle given")[0]
+    documented = re.findall(r"``([a-z0-9_]+)``", axes_text)
+    assert sorted(documented) == sorted(sweep.DoublePendulum().accepted_axes())
+    outputs = notes.split("Outputs")[1].split("Examples")[0]
+    from sweep.system_observables import SYSTEM_OBSERVABLES
+
+    assert set(re.findall(r'``"([a-z]+)"``', outputs)) == set(SYSTEM_OBSERVABLES)

@@ -46,7 +46,12 @@ class DoublePendulum(System):
     Parameters
     ----------
     mass1, mass2 : float, default 1.0
-        The masses [kg], finite and > 0 (only their ratio enters the motion).
+        The masses [kg], finite and > 0. Only their ratio ``mass2 / mass1`` enters the
+        motion as long as every generalized force scales with the masses: no joint
+        damping ``damping1``/``damping2`` and no effect on one angle (``on=``), whose
+        torques [N m] are absolute; gravity, the pivot drive and the mass-proportional
+        `sweep.Damping(c)` scale with them. The energy [J] scales with the masses
+        always.
     length1, length2 : float, default 1.0
         The rods' lengths [m], finite and > 0.
     gravity : float, default 9.81
@@ -71,18 +76,42 @@ class DoublePendulum(System):
 
     Notes
     -----
-    Grid axes: ``theta1_0``, ``theta2_0`` [rad], ``omega1_0``, ``omega2_0`` [rad/s], and
-    ``mass1``, ``mass2``, ``length1``, ``length2``, ``gravity``, ``damping``, and
-    ``<effect axis>_<angle>`` of the effects on one angle. Outputs:
-    ``theta1_final`` ... with ``observe=("final",)``, ``theta1`` ... over ``time`` with
-    ``save_every``, ``flip_time`` with ``observe=("flip",)``
-    (`sweep.system_observables`).
+    Grid axes: ``theta1_0``, ``theta2_0`` [rad], ``omega1_0``, ``omega2_0`` [rad/s]
+    (the initial state); ``mass1``, ``mass2``, ``length1``, ``length2``, ``gravity``;
+    ``damping1``, ``damping2`` (an axis switches the joint damping on),
+    ``pivot_amplitude``, ``pivot_frequency`` (an axis switches the pivot drive on);
+    ``damping`` (the rate of `sweep.Damping(c)`); ``damping_theta1``, ``drag_theta1``,
+    ``damping_theta2``, ``drag_theta2`` (an axis switches that effect on that angle on,
+    its other parameters 0). An effect on one angle given in ``effects`` adds its own
+    axes, ``<effect axis>_<angle>`` (``sweep.Torque(tau, on="theta2")``: the axis
+    ``torque_theta2``). `accepted_axes` lists them all.
+
+    Outputs (`sweep.system_observables`), by ``observe``:
+
+    - ``"final"``: ``theta1_final``, ``theta2_final`` [rad, unwrapped],
+      ``omega1_final``, ``omega2_final`` [rad/s] at ``t_end``;
+    - ``"winding"``: ``winding_theta1``, ``winding_theta2``: the wells each angle
+      crossed from ``t0`` to ``t_end``;
+    - ``"energy"``: ``energy_initial``, ``energy_final`` [J] (zero hanging at rest);
+    - ``"flip"``: ``flip_time`` [s], the first time either angle passes upright (NaN if
+      none did before ``t_end``); with ``stop_early`` a trajectory stops there;
+    - ``"lyapunov"``: ``lyapunov_max`` [1/s], the largest Lyapunov exponent;
+    - ``"strobe"``: ``theta1_strobe``, ... ``omega2_strobe`` over a dimension
+      ``strobe``: samples once per drive period (needs a drive: the pivot's or a
+      forcing on an angle);
+    - ``"attractor"``: ``attractor``, the index in the catalogue passed as
+      ``attractors=`` that the trajectory settled on, -1 if none (needs a drive).
+
+    With ``save_every``: ``theta1``, ``theta2``, ``omega1``, ``omega2`` over ``time``.
 
     Examples
     --------
     >>> import numpy as np, sweep
     >>> system = sweep.DoublePendulum(mass1=1.0, mass2=1.0, length1=1.0, length2=1.0)
     >>> grid = sweep.Grid(theta1_0=np.linspace(-3, 3, 5), theta2_0=np.linspace(-3, 3, 5))
+    >>> ds = sweep.run(system, grid, t_end=10.0, dt=0.01, observe=("final", "flip"))
+    >>> ds["flip_time"].shape
+    (5, 5)
     """
 
     mass1: float = 1.0
