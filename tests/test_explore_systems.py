@@ -89,6 +89,19 @@ def test_a_zoomed_map_is_sweep_run_of_the_window_cell_by_cell(quantity, observe,
     assert np.isfinite(result.values).any()
 
 
+def test_a_log10_map_is_labelled_in_log10_units_not_seconds():
+    """The flip map is the log10 of a time: its title, colour bar and long name give
+    log10(s), never "[s]" (a log10 has no unit of seconds)."""
+    e = double()
+    result = e.compute()
+    label = e.quantities()["log10:flip_time"]
+    assert label == "flip: log10 of the time of the first flip [log10(s)]"
+    assert result.title == "log10_flip_time [log10(s)]"
+    assert result.da.attrs["units"] == "1"  # the DataArray's: dimensionless (CF)
+    assert result.description == "log10 of the time of the first flip [log10(s)]"
+    assert "[s]" not in label + result.title + result.description
+
+
 def test_the_map_over_a_parameter_axis():
     e = double()
     e.update(x="mass2", quantity="var:theta1_final")

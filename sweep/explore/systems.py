@@ -69,11 +69,23 @@ def _always(system) -> bool:
     return True
 
 
+def _log10_text(name: str, long_name: str, units: str) -> str:
+    """``"log10 of the time of the first flip [log10(s)]"``: a log10's label, its units
+    those of the log10 of a value in ``units`` (UDUNITS), not ``units``."""
+    from ..plot import units_text
+
+    shown = units_text(units)
+    return f"log10 of the {long_name or name}" + (f" [log10({shown})]" if shown else "")
+
+
 def _log10(ds, name: str):
+    """The log10 of variable ``name`` (NaN where it is not positive): dimensionless
+    (units ``"1"``), its long name saying of what and in what units
+    (`_log10_text`)."""
     da = np.log10(ds[name].where(ds[name] > 0))
     da.name = f"log10_{name}"
-    da.attrs = {"units": "1", "long_name": f"log10 of {name} [{ds[name].attrs.get('units', '')}]"
-                f": {ds[name].attrs.get('long_name', '')}"}
+    da.attrs = {"units": "1", "long_name": _log10_text(
+        name, ds[name].attrs.get("long_name", ""), ds[name].attrs.get("units", ""))}
     if "comment" in ds[name].attrs:  # the variable's full meaning (MapResult.caption)
         da.attrs["comment"] = ds[name].attrs["comment"]
     return da
@@ -107,10 +119,12 @@ def system_quantities(system: System) -> dict[str, Quantity]:
     for observable in SYSTEM_OBSERVABLES.values():
         if observable.name in meaningless or observable.sampled:  # strobe: a sequence
             continue
-        for name, units, _ in variables(observable.name, coordinates, system.energy_units):
+        for name, units, long_name in variables(observable.name, coordinates,
+                                                system.energy_units):
             if units == "s":
                 out[f"log10:{name}"] = Quantity(
-                    f"log10:{name}", f"{observable.name}: log10 {name} [s]",
+                    f"log10:{name}",
+                    f"{observable.name}: {_log10_text(name, long_name, units)}",
                     (observable.name,), observable.stops, _always,
                     lambda ds, name=name: _log10(ds, name), False,
                     expression=f'np.log10(ds["{name}"])')
@@ -423,6 +437,18 @@ class SystemExplorer(Explorer):
 
     def quantity_info(self, name: str) -> Quantity:
         return self._registry[name]
+
+    def _image(self, state: State, ds, preview: bool, catalogue) -> MapResult:
+        """`Explorer._image`; a log10 map's colour-bar title gives the log10's units
+        (``"log10_flip_time [log10(s)]"``: the DataArray's own units are ``"1"``)."""
+        result = super()._image(state, ds, preview, catalogue)
+        if state.quantity.startswith("log10:"):
+            from ..plot import units_text
+
+            units = units_text(str(ds[state.quantity[6:]].attrs.get("units", "")))
+            if units:
+                result.title = f"{result.title} [log10({units})]"
+        return result
 
     @staticmethod
     def _default_range(system: System, name: str) -> tuple[float, float]:
