@@ -102,6 +102,21 @@ def test_a_log10_map_is_labelled_in_log10_units_not_seconds():
     assert "[s]" not in label + result.title + result.description
 
 
+def test_a_click_on_a_continuous_map_gives_its_value_name_and_units():
+    """The clicked start's log10 flip time is a value with its name and units, not a
+    label; a map's NaN (no flip before t_end) reads NaN."""
+    e = double()
+    result = e.compute()
+    row, col = np.argwhere(np.isfinite(result.values))[0]
+    value = result.values[row, col]
+    assert e.label_at(result, row, col) == f"log10_flip_time = {value:.6g} log10(s)"
+    rows, cols = np.nonzero(np.isnan(result.values))
+    assert e.label_at(result, rows[0], cols[0]) == "log10_flip_time = NaN log10(s)"
+    e.update(quantity="var:theta2_final")
+    result = e.compute()
+    assert e.label_at(result, 0, 0) == f"theta2_final = {result.values[0, 0]:.6g} rad"
+
+
 def test_the_map_over_a_parameter_axis():
     e = double()
     e.update(x="mass2", quantity="var:theta1_final")

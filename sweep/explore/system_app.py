@@ -82,8 +82,10 @@ class _SystemSession(_Session):
         where = ", ".join(f"{k} = {val:.6g}" for k, val in traj.point.items())
         self.trajectory.title.text = f"trajectory from {where}"
         start = ", ".join(self._start_text(k, val) for k, val in traj.start.items())
+        # a continuous map's clicked value is a value, not a label (`SystemExplorer.label_at`)
+        heading = "value" if self.result is not None and not self.result.legend else "label"
         self.info.object = (f"**start** {start}  \n**status** {traj.status}  \n"
-                            f"**label** {traj.label}")
+                            f"**{heading}** {traj.label}")
         self.traj_python.object = f"```python\n{traj.python}```"
         self.traj_toml.object = f"```toml\n{traj.toml}```"
 

@@ -58,7 +58,7 @@ from .model import (
     check_arguments,
 )
 from .quantities import Quantity
-from .texts import grid_lines, grid_text, toml_value
+from .texts import grid_lines, grid_text, number_text, toml_value
 
 __all__ = ["CATALOGUE_OBSERVE", "SYSTEM_PILOT_POINTS", "SYSTEM_RESOLUTION", "SYSTEM_ROUTES",
            "SystemExplorer", "SystemTrajectory", "driven_quantities",
@@ -437,6 +437,16 @@ class SystemExplorer(Explorer):
 
     def quantity_info(self, name: str) -> Quantity:
         return self._registry[name]
+
+    def label_at(self, result: MapResult, row: int, col: int) -> str:
+        """`Explorer.label_at` for a discrete map; a continuous map's value as
+        ``"log10_flip_time = 0.768651 log10(s)"`` (name, value, units: no label)."""
+        if result.legend:
+            return super().label_at(result, row, col)
+        name, _, units = result.title.partition(" [")
+        units = units.removesuffix("]")
+        return f"{name} = {number_text(result.values[row, col])}" + \
+            (f" {units}" if units else "")
 
     def _image(self, state: State, ds, preview: bool, catalogue) -> MapResult:
         """`Explorer._image`; a log10 map's colour-bar title gives the log10's units
