@@ -194,6 +194,29 @@ def test_a_click_gives_every_coordinate_of_that_start_over_time():
 
 
 
+def test_the_trajectory_title_gives_the_start_in_rad_and_degrees():
+    """The page's trajectory title (a session without a browser): the clicked start in
+    rad and in degrees as the map's axes, not a bare number."""
+    pytest.importorskip("panel")
+    from sweep.explore.system_app import SystemExplorerApp, _SystemSession
+
+    grid = sweep.Grid(theta1_0=np.linspace(-3, 3, N), theta2_0=np.linspace(-3, 3, N))
+    page = _SystemSession(SystemExplorerApp(sweep.DoublePendulum(), grid, resolution=N,
+                                            **RUN))
+    try:
+        result = page.explorer.compute()
+        page.result = result
+        traj = page.explorer.trajectory(0.9, -1.2, result)
+        page.show_trajectory(traj)
+        x, y = traj.point["theta1_0"], traj.point["theta2_0"]
+        assert page.trajectory.title.text == (
+            f"trajectory from theta1_0 = {x:.6g} rad ({np.degrees(x):.4g} deg),\n"
+            f"theta2_0 = {y:.6g} rad ({np.degrees(y):.4g} deg)")
+        assert page.info.object.startswith(f"**start** theta1_0 = {x:.6g} rad (")
+    finally:
+        page.requests.close()
+
+
 def test_effects_on_one_coordinate_are_controls_and_change_the_map(tmp_path):
     """A system's effects on one coordinate (``damping_theta1``, ``torque_theta2``) are
     controls with their generalized force's units; a change recomputes the map of the

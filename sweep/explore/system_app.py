@@ -79,7 +79,9 @@ class _SystemSession(_Session):
         _fit(self.trajectory, [traj.t], list(traj.series.values()))
         _fit(self.phase, [traj.series[n] for n in positions],
              [traj.series[n] for n in velocities])
-        where = ", ".join(f"{k} = {val:.6g}" for k, val in traj.point.items())
+        # the clicked axes' values with their units (an angle's in degrees too, as the
+        # map's axes show it), one a line: two do not fit the panel's width on one
+        where = ",\n".join(self._start_text(k, val) for k, val in traj.point.items())
         self.trajectory.title.text = f"trajectory from {where}"
         start = ", ".join(self._start_text(k, val) for k, val in traj.start.items())
         # a continuous map's clicked value is a value, not a label (`SystemExplorer.label_at`)
