@@ -111,10 +111,23 @@ def test_a_click_on_a_continuous_map_gives_its_value_name_and_units():
     value = result.values[row, col]
     assert e.label_at(result, row, col) == f"log10_flip_time = {value:.6g} log10(s)"
     rows, cols = np.nonzero(np.isnan(result.values))
-    assert e.label_at(result, rows[0], cols[0]) == "log10_flip_time = NaN log10(s)"
+    assert e.label_at(result, rows[0], cols[0]) == "log10_flip_time = NaN"  # no units
     e.update(quantity="var:theta2_final")
     result = e.compute()
     assert e.label_at(result, 0, 0) == f"theta2_final = {result.values[0, 0]:.6g} rad"
+
+
+def test_the_caption_says_what_the_grey_cells_are():
+    """Cells that never flipped are NaN, drawn dark grey with no colour-bar entry: the
+    caption says so after the meaning of NaN; a map without NaN says nothing of it."""
+    e = double()
+    result = e.compute()
+    assert np.isnan(result.values).any()
+    assert result.caption.endswith("NaN where none flipped before t\\_end; "
+                                   "grey on the map: NaN")
+    e.update(quantity="var:theta2_final")
+    result = e.compute()
+    assert not np.isnan(result.values).any() and "grey" not in result.caption
 
 
 def test_the_map_over_a_parameter_axis():

@@ -65,6 +65,11 @@ __all__ = ["CATALOGUE_OBSERVE", "SYSTEM_PILOT_POINTS", "SYSTEM_RESOLUTION", "SYS
            "system_quantities"]
 
 
+#: What a continuous map's caption says of its NaN cells (drawn dark grey: the colour
+#: bar has no entry for them).
+NAN_NOTE = "grey on the map: NaN"
+
+
 def _always(system) -> bool:
     return True
 
@@ -440,18 +445,25 @@ class SystemExplorer(Explorer):
 
     def label_at(self, result: MapResult, row: int, col: int) -> str:
         """`Explorer.label_at` for a discrete map; a continuous map's value as
-        ``"log10_flip_time = 0.768651 log10(s)"`` (name, value, units: no label)."""
+        ``"log10_flip_time = 0.768651 log10(s)"`` (name, value, units: no label), a NaN
+        cell's as ``"log10_flip_time = NaN"`` (grey on the map: `NAN_NOTE`)."""
         if result.legend:
             return super().label_at(result, row, col)
         name, _, units = result.title.partition(" [")
         units = units.removesuffix("]")
-        return f"{name} = {number_text(result.values[row, col])}" + \
-            (f" {units}" if units else "")
+        value = result.values[row, col]
+        return f"{name} = {number_text(value)}" + \
+            (f" {units}" if units and np.isfinite(value) else "")
 
     def _image(self, state: State, ds, preview: bool, catalogue) -> MapResult:
         """`Explorer._image`; a log10 map's colour-bar title gives the log10's units
-        (``"log10_flip_time [log10(s)]"``: the DataArray's own units are ``"1"``)."""
+        (``"log10_flip_time [log10(s)]"``: the DataArray's own units are ``"1"``), and
+        a continuous map with NaN cells says in its caption what their grey is
+        (`MapResult.comment`: the flip map's "NaN where none flipped before t_end;
+        grey on the map: NaN")."""
         result = super()._image(state, ds, preview, catalogue)
+        if not result.legend and np.isnan(result.image).any():
+            result.comment = "; ".join(filter(None, (result.comment, NAN_NOTE)))
         if state.quantity.startswith("log10:"):
             from ..plot import units_text
 
