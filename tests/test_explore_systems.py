@@ -209,7 +209,7 @@ def test_a_click_gives_every_coordinate_of_that_start_over_time():
 
 def test_the_trajectory_title_gives_the_start_in_rad_and_degrees():
     """The page's trajectory title (a session without a browser): the clicked start in
-    rad and in degrees as the map's axes, not a bare number."""
+    rad and in degrees as the map's axes, not a bare number; the controls' heading."""
     pytest.importorskip("panel")
     from sweep.explore.system_app import SystemExplorerApp, _SystemSession
 
@@ -226,6 +226,12 @@ def test_the_trajectory_title_gives_the_start_in_rad_and_degrees():
             f"trajectory from theta1_0 = {x:.6g} rad ({np.degrees(x):.4g} deg),\n"
             f"theta2_0 = {y:.6g} rad ({np.degrees(y):.4g} deg)")
         assert page.info.object.startswith(f"**start** theta1_0 = {x:.6g} rad (")
+        # the system's controls are headed "System" (a double pendulum is no Scene)
+        import panel as pn
+
+        headings = [m.object for m in page.layout.select(pn.pane.Markdown)
+                    if str(m.object).startswith("### ")]
+        assert "### System" in headings and "### Scene" not in headings
     finally:
         page.requests.close()
 

@@ -19,6 +19,8 @@ __all__ = ["NetworkExplorerApp", "SystemExplorerApp"]
 class _SystemSession(_Session):
     """One browser session of a system's explorer."""
 
+    controls_heading = "System"
+
     def _build(self) -> None:
         super()._build()
         positions, velocities = self.explorer.series_names()
