@@ -89,6 +89,47 @@ def test_a_zoomed_map_is_sweep_run_of_the_window_cell_by_cell(quantity, observe,
     assert np.isfinite(result.values).any()
 
 
+def test_a_log10_map_is_labelled_in_log10_units_not_seconds():
+    """The flip map is the log10 of a time: its title, colour bar and long name give
+    log10(s), never "[s]" (a log10 has no unit of seconds)."""
+    e = double()
+    result = e.compute()
+    label = e.quantities()["log10:flip_time"]
+    assert label == "flip: log10 of the time of the first flip [log10(s)]"
+    assert result.title == "log10_flip_time [log10(s)]"
+    assert result.da.attrs["units"] == "1"  # the DataArray's: dimensionless (CF)
+    assert result.description == "log10 of the time of the first flip [log10(s)]"
+    assert "[s]" not in label + result.title + result.description
+
+
+def test_a_click_on_a_continuous_map_gives_its_value_name_and_units():
+    """The clicked start's log10 flip time is a value with its name and units, not a
+    label; a map's NaN (no flip before t_end) reads NaN."""
+    e = double()
+    result = e.compute()
+    row, col = np.argwhere(np.isfinite(result.values))[0]
+    value = result.values[row, col]
+    assert e.label_at(result, row, col) == f"log10_flip_time = {value:.6g} log10(s)"
+    rows, cols = np.nonzero(np.isnan(result.values))
+    assert e.label_at(result, rows[0], cols[0]) == "log10_flip_time = NaN"  # no units
+    e.update(quantity="var:theta2_final")
+    result = e.compute()
+    assert e.label_at(result, 0, 0) == f"theta2_final = {result.values[0, 0]:.6g} rad"
+
+
+def test_the_caption_says_what_the_grey_cells_are():
+    """Cells that never flipped are NaN, drawn dark grey with no colour-bar entry: the
+    caption says so after the meaning of NaN; a map without NaN says nothing of it."""
+    e = double()
+    result = e.compute()
+    assert np.isnan(result.values).any()
+    assert result.caption.endswith("NaN where none flipped before t\\_end; "
+                                   "grey on the map: NaN")
+    e.update(quantity="var:theta2_final")
+    result = e.compute()
+    assert not np.isnan(result.values).any() and "grey" not in result.caption
+
+
 def test_the_map_over_a_parameter_axis():
     e = double()
     e.update(x="mass2", quantity="var:theta1_final")
@@ -164,6 +205,35 @@ def test_a_click_gives_every_coordinate_of_that_start_over_time():
     assert traj.status == "ok" and "theta2_final" in traj.label
     assert "sweep.DoublePendulum(" in traj.python and "[system]" in traj.toml
 
+
+
+def test_the_trajectory_title_gives_the_start_in_rad_and_degrees():
+    """The page's trajectory title (a session without a browser): the clicked start in
+    rad and in degrees as the map's axes, not a bare number; the controls' heading."""
+    pytest.importorskip("panel")
+    from sweep.explore.system_app import SystemExplorerApp, _SystemSession
+
+    grid = sweep.Grid(theta1_0=np.linspace(-3, 3, N), theta2_0=np.linspace(-3, 3, N))
+    page = _SystemSession(SystemExplorerApp(sweep.DoublePendulum(), grid, resolution=N,
+                                            **RUN))
+    try:
+        result = page.explorer.compute()
+        page.result = result
+        traj = page.explorer.trajectory(0.9, -1.2, result)
+        page.show_trajectory(traj)
+        x, y = traj.point["theta1_0"], traj.point["theta2_0"]
+        assert page.trajectory.title.text == (
+            f"trajectory from theta1_0 = {x:.6g} rad ({np.degrees(x):.4g} deg),\n"
+            f"theta2_0 = {y:.6g} rad ({np.degrees(y):.4g} deg)")
+        assert page.info.object.startswith(f"**start** theta1_0 = {x:.6g} rad (")
+        # the system's controls are headed "System" (a double pendulum is no Scene)
+        import panel as pn
+
+        headings = [m.object for m in page.layout.select(pn.pane.Markdown)
+                    if str(m.object).startswith("### ")]
+        assert "### System" in headings and "### Scene" not in headings
+    finally:
+        page.requests.close()
 
 
 def test_effects_on_one_coordinate_are_controls_and_change_the_map(tmp_path):

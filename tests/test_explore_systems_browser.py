@@ -69,6 +69,10 @@ def test_double_pendulum_in_a_real_browser(system_app, driver):  # noqa: F811 - 
     assert f"theta1_0 = {traj['theta1']:.6g} rad ({np.degrees(traj['theta1']):.4g} deg)" \
         in info[0]
     assert "omega2_0 = 0 rad/s (0 deg/s)" in info[0]
+    # the log10 flip time is a value with its name and units, not a label
+    # (the pane's text is its escaped HTML: "&lt;strong&gt;value&lt;/strong&gt; ...")
+    assert "value&lt;/strong&gt; log10_flip_time = " in info[0]
+    assert "label" not in info[0]
     check_layout(driver, "flip_time")  # fits 1400 px; the bar's title; no warning
     check_degree_axes(driver, ("theta1_0 [deg]", "theta2_0 [deg]"))  # as `sweep plot`
     legends = driver.execute_script(_LEGENDS)  # above the curves, never over them

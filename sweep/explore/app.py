@@ -298,6 +298,9 @@ def _legend_above(fig, items) -> Legend:
 class _Session:
     """One browser session: widgets, figures and the explorer behind them."""
 
+    #: The heading of the model's own controls (a system's page: "System").
+    controls_heading = "Scene"
+
     def __init__(self, app: ExplorerApp) -> None:
         self.app = app
         self.explorer = app.explorer_class(app.scene, app.grid, cache=app.cache, **app.kwargs)
@@ -505,7 +508,7 @@ class _Session:
                                     label="run file", width=100))
         controls = pn.Column(
             pn.pane.Markdown("### Map"), self.quantity, pn.Row(self.x_axis, self.y_axis),
-            pn.pane.Markdown("### Scene"), *scene_controls,
+            pn.pane.Markdown(f"### {self.controls_heading}"), *scene_controls,
             pn.pane.Markdown("### Run"), *run_controls, width=290, scroll=True, height=900)
         main = pn.Column(
             pn.Row(self.back, self.forward, self.reset, downloads), self.view_error,

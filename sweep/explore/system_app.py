@@ -19,6 +19,8 @@ __all__ = ["NetworkExplorerApp", "SystemExplorerApp"]
 class _SystemSession(_Session):
     """One browser session of a system's explorer."""
 
+    controls_heading = "System"
+
     def _build(self) -> None:
         super()._build()
         positions, velocities = self.explorer.series_names()
@@ -79,11 +81,15 @@ class _SystemSession(_Session):
         _fit(self.trajectory, [traj.t], list(traj.series.values()))
         _fit(self.phase, [traj.series[n] for n in positions],
              [traj.series[n] for n in velocities])
-        where = ", ".join(f"{k} = {val:.6g}" for k, val in traj.point.items())
+        # the clicked axes' values with their units (an angle's in degrees too, as the
+        # map's axes show it), one a line: two do not fit the panel's width on one
+        where = ",\n".join(self._start_text(k, val) for k, val in traj.point.items())
         self.trajectory.title.text = f"trajectory from {where}"
         start = ", ".join(self._start_text(k, val) for k, val in traj.start.items())
+        # a continuous map's clicked value is a value, not a label (`SystemExplorer.label_at`)
+        heading = "value" if self.result is not None and not self.result.legend else "label"
         self.info.object = (f"**start** {start}  \n**status** {traj.status}  \n"
-                            f"**label** {traj.label}")
+                            f"**{heading}** {traj.label}")
         self.traj_python.object = f"```python\n{traj.python}```"
         self.traj_toml.object = f"```toml\n{traj.toml}```"
 

@@ -58,22 +58,39 @@ from .model import (
     check_arguments,
 )
 from .quantities import Quantity
-from .texts import grid_lines, grid_text, toml_value
+from .texts import grid_lines, grid_text, number_text, toml_value
 
 __all__ = ["CATALOGUE_OBSERVE", "SYSTEM_PILOT_POINTS", "SYSTEM_RESOLUTION", "SYSTEM_ROUTES",
            "SystemExplorer", "SystemTrajectory", "driven_quantities",
            "system_quantities"]
 
 
+#: What a continuous map's caption says of its NaN cells (drawn dark grey: the colour
+#: bar has no entry for them).
+NAN_NOTE = "grey on the map: NaN"
+
+
 def _always(system) -> bool:
     return True
 
 
+def _log10_text(name: str, long_name: str, units: str) -> str:
+    """``"log10 of the time of the first flip [log10(s)]"``: a log10's label, its units
+    those of the log10 of a value in ``units`` (UDUNITS), not ``units``."""
+    from ..plot import units_text
+
+    shown = units_text(units)
+    return f"log10 of the {long_name or name}" + (f" [log10({shown})]" if shown else "")
+
+
 def _log10(ds, name: str):
+    """The log10 of variable ``name`` (NaN where it is not positive): dimensionless
+    (units ``"1"``), its long name saying of what and in what units
+    (`_log10_text`)."""
     da = np.log10(ds[name].where(ds[name] > 0))
     da.name = f"log10_{name}"
-    da.attrs = {"units": "1", "long_name": f"log10 of {name} [{ds[name].attrs.get('units', '')}]"
-                f": {ds[name].attrs.get('long_name', '')}"}
+    da.attrs = {"units": "1", "long_name": _log10_text(
+        name, ds[name].attrs.get("long_name", ""), ds[name].attrs.get("units", ""))}
     if "comment" in ds[name].attrs:  # the variable's full meaning (MapResult.caption)
         da.attrs["comment"] = ds[name].attrs["comment"]
     return da
@@ -107,10 +124,12 @@ def system_quantities(system: System) -> dict[str, Quantity]:
     for observable in SYSTEM_OBSERVABLES.values():
         if observable.name in meaningless or observable.sampled:  # strobe: a sequence
             continue
-        for name, units, _ in variables(observable.name, coordinates, system.energy_units):
+        for name, units, long_name in variables(observable.name, coordinates,
+                                                system.energy_units):
             if units == "s":
                 out[f"log10:{name}"] = Quantity(
-                    f"log10:{name}", f"{observable.name}: log10 {name} [s]",
+                    f"log10:{name}",
+                    f"{observable.name}: {_log10_text(name, long_name, units)}",
                     (observable.name,), observable.stops, _always,
                     lambda ds, name=name: _log10(ds, name), False,
                     expression=f'np.log10(ds["{name}"])')
@@ -423,6 +442,35 @@ class SystemExplorer(Explorer):
 
     def quantity_info(self, name: str) -> Quantity:
         return self._registry[name]
+
+    def label_at(self, result: MapResult, row: int, col: int) -> str:
+        """`Explorer.label_at` for a discrete map; a continuous map's value as
+        ``"log10_flip_time = 0.768651 log10(s)"`` (name, value, units: no label), a NaN
+        cell's as ``"log10_flip_time = NaN"`` (grey on the map: `NAN_NOTE`)."""
+        if result.legend:
+            return super().label_at(result, row, col)
+        name, _, units = result.title.partition(" [")
+        units = units.removesuffix("]")
+        value = result.values[row, col]
+        return f"{name} = {number_text(value)}" + \
+            (f" {units}" if units and np.isfinite(value) else "")
+
+    def _image(self, state: State, ds, preview: bool, catalogue) -> MapResult:
+        """`Explorer._image`; a log10 map's colour-bar title gives the log10's units
+        (``"log10_flip_time [log10(s)]"``: the DataArray's own units are ``"1"``), and
+        a continuous map with NaN cells says in its caption what their grey is
+        (`MapResult.comment`: the flip map's "NaN where none flipped before t_end;
+        grey on the map: NaN")."""
+        result = super()._image(state, ds, preview, catalogue)
+        if not result.legend and np.isnan(result.image).any():
+            result.comment = "; ".join(filter(None, (result.comment, NAN_NOTE)))
+        if state.quantity.startswith("log10:"):
+            from ..plot import units_text
+
+            units = units_text(str(ds[state.quantity[6:]].attrs.get("units", "")))
+            if units:
+                result.title = f"{result.title} [log10({units})]"
+        return result
 
     @staticmethod
     def _default_range(system: System, name: str) -> tuple[float, float]:
