@@ -29,8 +29,8 @@ import numpy as np
 
 from ._validate import check_quantity
 
-__all__ = ["angle_axis", "basin_fractions", "basins", "map", "orbit_diagram", "period_map",
-           "save_figure", "select", "trajectory"]
+__all__ = ["angle_axis", "basin_fractions", "basins", "degree_units", "map", "orbit_diagram",
+           "period_map", "save_figure", "select", "trajectory"]
 
 #: The single pendulum's coordinates converted to degrees (and deg/s) when
 #: ``degrees=True``; `angle_axis` adds every other axis declared as an angle.
@@ -119,15 +119,25 @@ def angle_axis(name: str) -> bool:
     return found is not None and bool(found.angle)
 
 
+def degree_units(name: str, units: str) -> str | None:
+    """The units of axis ``name`` in degrees (``"deg"``, ``"deg s-1"``, ``"deg/s"``) where
+    it is an `angle_axis` in radians (``units`` ``"rad"``, ``"rad s-1"`` or ``"rad/s"``),
+    else None: what `map`, ``sweep plot`` and the explorer's map convert by 180/pi."""
+    if re.match(r"rad(?![A-Za-z])", units) and angle_axis(name):
+        return "deg" + units[len("rad"):]
+    return None
+
+
 def _coordinate(da, name: str, degrees: bool) -> tuple[np.ndarray, str]:
     """Values and axis label of coordinate ``name`` (converted to degrees if asked and
     it is an `angle_axis` stored in rad or rad/s)."""
     coord = da[name]
     values = np.asarray(coord.values, dtype=np.float64)
     units = str(coord.attrs.get("units", ""))
-    if degrees and units.split()[:1] == ["rad"] and angle_axis(name):
+    shown = degree_units(name, units) if degrees else None
+    if shown is not None:
         values = np.rad2deg(values)
-        units = "deg" + units[len("rad"):]
+        units = shown
     long_name = str(coord.attrs.get("long_name", name))
     return values, _label(long_name, _SYMBOLS.get(name), units)
 

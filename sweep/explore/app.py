@@ -169,11 +169,12 @@ def degrees_label(label: str, name: str) -> tuple[str, float]:
     name : str
         The axis.
     """
-    from ..plot import angle_axis
+    from ..plot import degree_units
 
     head, _, units = label.partition(" [")
-    if units.startswith("rad") and angle_axis(name):
-        return f"{head} [deg{units[len('rad'):]}", 180.0 / math.pi
+    shown = degree_units(name, units)
+    if shown is not None:
+        return f"{head} [{shown}", 180.0 / math.pi
     return label, 1.0
 
 
