@@ -1258,7 +1258,7 @@ def _command_boundary(args: argparse.Namespace) -> int:
                          f"{', '.join(fixed)} in [scene], not in [grid]")
     label = getattr(maps, args.label)
     observe = tuple(kwargs.get("observe") or ())
-    has_forcing = any(type(e).declaration.name == "forcing" for e in scene.effects)
+    has_forcing = scene.forcing is not None  # a Scene: _pendulum_only refused a system
     refusal = label_refusal(args.label, observe, has_forcing, repr(args.run_file),
                             stop_early=bool(kwargs.get("stop_early")))
     if refusal is not None:  # before anything runs, naming what would work
