@@ -241,6 +241,22 @@ def checked_folder(folder: Path, root: Path) -> str | None:
     return None
 
 
+def probe_writable(folder: Path) -> None:
+    """Create a file in ``folder`` and remove it at once: what tells whether a file can be
+    made there (`os.access` answers yes to root whatever the mode, and on a read-only
+    file system). The file is this call's own (`tempfile.mkstemp`), so that concurrent
+    probes of one folder never touch each other's.
+
+    Raises
+    ------
+    OSError
+        Where no file can be created in ``folder``.
+    """
+    fd, probe = tempfile.mkstemp(dir=folder, prefix=".write-probe-")
+    os.close(fd)
+    os.unlink(probe)
+
+
 def kernel_folder() -> tuple[Path, str | None]:
     """The folder of generated kernel modules and derived systems' source, and what makes
     it unsafe, if anything.
@@ -262,9 +278,7 @@ def kernel_folder() -> tuple[Path, str | None]:
         if not problem:  # writable? A probe of this process's own (mkstemp): with one
             # shared name, two processes' touch and unlink raced (FileNotFoundError), and
             # the loser took the fallback folder below, so it compiled its kernels anew
-            fd, probe = tempfile.mkstemp(dir=folder, prefix=".write-probe-")
-            os.close(fd)
-            os.unlink(probe)
+            probe_writable(folder)
     except OSError:
         root = folder = Path(tempfile.gettempdir()) / f"sweep-kernels-{os.getuid()}"
         try:

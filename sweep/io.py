@@ -299,12 +299,9 @@ def check_output_path(path) -> Path:
     reason = None if os.access(folder, os.W_OK) else "permission denied"
     if reason is None:
         try:
-            handle, probe = tempfile.mkstemp(prefix=".sweep-probe-", dir=folder)
+            _config.probe_writable(folder)
         except OSError as exc:
             reason = exc.strerror or type(exc).__name__
-        else:
-            os.close(handle)
-            os.unlink(probe)
     if reason is not None:
         raise ValueError(f"output path {str(path)!r}: folder {str(folder)!r} is not "
                          f"writable (creating a file there fails: {reason}); accepted: a "
