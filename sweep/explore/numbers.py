@@ -148,14 +148,14 @@ def _fractality(result: Any, explorer: Any) -> str:
     `RADII_PER_AXIS`-th of the map's side, 3 to 20 pixels; not run on a view of fewer
     than `MIN_RADII` radii a side; a fixed seed): unlike Sbb > log 2 it decides with
     two basins too."""
-    from ..maps.boundary import MIN_RADII, RADII_PER_AXIS
+    from ..maps.boundary import MIN_RADII, fractality_radius
 
     labels = np.asarray(result.image).astype(np.int64)
     side = min(labels.shape)
-    radius = max(3, min(20, side // RADII_PER_AXIS))
+    radius, too_small = fractality_radius(labels.shape)
     if np.unique(labels).size < 2:
         return "**fractality test**: one label in the view, no boundary"
-    if side < MIN_RADII * radius:
+    if too_small:
         return (f"**fractality test**: the view is too small ({side} pixels a side, "
                 f"fewer than {MIN_RADII} radii of the smallest ball, {radius} pixels)")
     out = fractality_test(labels, radius=radius, n_balls=1000, rng=0)

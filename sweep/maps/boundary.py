@@ -25,7 +25,7 @@ from .uncertainty import SampledUncertainty, uncertainty_sampled
 from .wada import Wada, wada
 
 __all__ = ["BoundaryReport", "RADII_PER_AXIS", "SAMPLED_EPS", "describe_boundary",
-           "label_grid"]
+           "fractality_radius", "label_grid"]
 
 #: The fractality test's ball: this many radii per axis of the map at least (Puy et
 #: al.'s advice; Attractors.jl warns below 50), 3 cells at least, 20 at most.
@@ -185,6 +185,16 @@ def label_grid(labels_of, x, y) -> np.ndarray:
     return np.asarray(labels_of(starts)).reshape(x.size, y.size)
 
 
+def fractality_radius(shape) -> tuple[int, bool]:
+    """The fractality test's ball for a map of ``shape`` cells: its radius [cells], a
+    `RADII_PER_AXIS`-th of the shorter side (3 to 20), and whether the map is too small
+    for the test (fewer than `MIN_RADII` radii a side), as `describe_boundary` and the
+    explorer's numbers take them."""
+    side = min(shape)
+    radius = max(3, min(20, side // RADII_PER_AXIS))
+    return radius, side < MIN_RADII * radius
+
+
 def describe_boundary(labels, x, y, labels_of=None, *, sampled: int = 0,
                       wada_steps: int = 0, seed: int = 0,
                       unresolved: int | None = None) -> BoundaryReport:
@@ -254,10 +264,10 @@ def describe_boundary(labels, x, y, labels_of=None, *, sampled: int = 0,
     basins = sum(1 for k in fractions if k != unresolved)
     entropy = basin_entropy(labels, box_size=min(5, *labels.shape))
     fractality, note = None, ""
-    radius = max(3, min(20, min(labels.shape) // RADII_PER_AXIS))
+    radius, too_small = fractality_radius(labels.shape)
     if basins < 2:
         note = "one basin"
-    elif min(labels.shape) < MIN_RADII * radius:
+    elif too_small:
         note = (f"the map is too small for it: {min(labels.shape)} cells on its shorter "
                 f"axis, fewer than {MIN_RADII} radii of the smallest ball ({radius} cells); "
                 f"a finer grid ({MIN_RADII * radius} cells per axis or more) would allow it")
