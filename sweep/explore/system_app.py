@@ -6,10 +6,12 @@ time (``name="trajectory"``) and each coordinate's phase portrait (``name="phase
 
 from __future__ import annotations
 
+import math
+
 from bokeh.models import ColumnDataSource
 from bokeh.palettes import Category10_10
 
-from .app import ExplorerApp, _fit, _legend_above, _Session, degrees_label
+from .app import ExplorerApp, _fit, _legend_above, _Session
 from .networks import NetworkExplorer
 from .systems import SystemExplorer, SystemTrajectory
 
@@ -64,13 +66,15 @@ class _SystemSession(_Session):
         return f"{name} [{units_text(self.explorer.axis_units().get(name, '1'))}]"
 
     def _start_text(self, name: str, value: float) -> str:
-        """``name = value units``, and in degrees too for an angle axis (the map's)."""
-        text = self._axis_text(name)
-        units = text.partition(" [")[2].rstrip("]")
+        """``name = value units``, and in degrees too for an angle axis (the map's:
+        `sweep.plot.degree_units`)."""
+        from ..plot import degree_units, units_text
+
+        units = units_text(self.explorer.axis_units().get(name, "1"))
         shown = f"{name} = {value:.6g}" + (f" {units}" if units else "")
-        label, scale = degrees_label(text, name)
-        if scale != 1.0:
-            shown += f" ({value * scale:.4g} {label.partition(' [')[2].rstrip(']')})"
+        degrees = degree_units(name, units)
+        if degrees is not None:
+            shown += f" ({math.degrees(value):.4g} {degrees})"
         return shown
 
     def show_trajectory(self, traj: SystemTrajectory) -> None:

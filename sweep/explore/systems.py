@@ -74,13 +74,19 @@ def _always(system) -> bool:
     return True
 
 
-def _log10_text(name: str, long_name: str, units: str) -> str:
-    """``"log10 of the time of the first flip [log10(s)]"``: a log10's label, its units
-    those of the log10 of a value in ``units`` (UDUNITS), not ``units``."""
+def _log10_units(units: str) -> str:
+    """``" [log10(s)]"``: the bracketed units of the log10 of a value in ``units``
+    (UDUNITS), not ``units``; "" for a dimensionless value."""
     from ..plot import units_text
 
     shown = units_text(units)
-    return f"log10 of the {long_name or name}" + (f" [log10({shown})]" if shown else "")
+    return f" [log10({shown})]" if shown else ""
+
+
+def _log10_text(name: str, long_name: str, units: str) -> str:
+    """``"log10 of the time of the first flip [log10(s)]"``: a log10's label
+    (`_log10_units`)."""
+    return f"log10 of the {long_name or name}" + _log10_units(units)
 
 
 def _log10(ds, name: str):
@@ -465,11 +471,7 @@ class SystemExplorer(Explorer):
         if not result.legend and np.isnan(result.image).any():
             result.comment = "; ".join(filter(None, (result.comment, NAN_NOTE)))
         if state.quantity.startswith("log10:"):
-            from ..plot import units_text
-
-            units = units_text(str(ds[state.quantity[6:]].attrs.get("units", "")))
-            if units:
-                result.title = f"{result.title} [log10({units})]"
+            result.title += _log10_units(str(ds[state.quantity[6:]].attrs.get("units", "")))
         return result
 
     @staticmethod
