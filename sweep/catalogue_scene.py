@@ -37,7 +37,8 @@ import numpy as np
 
 __all__ = ["ATTRIBUTE", "FIELD", "PENDULUM_DRIVE", "PENDULUM_INITIAL", "SCENE_RTOL",
            "as_record", "attributes", "check_scene", "dataset_scene", "from_attributes",
-           "grid_value", "one_value", "pendulum_values", "record_columns", "scene_values"]
+           "grid_value", "one_value", "pendulum_values", "record_columns", "record_from_json",
+           "record_json", "scene_values"]
 
 #: The catalogue's key of its scene: a dict of parameter name to value.
 FIELD = "scene"
@@ -189,25 +190,35 @@ def attributes(attractors) -> dict:
     scene = _recorded(attractors)
     if scene is None:
         return {}
-    return {f"attractors_{FIELD}": json.dumps({name: values.tolist()
-                                               for name, values in scene.items()})}
+    return {f"attractors_{FIELD}": record_json(scene)}
 
 
 def from_attributes(attrs) -> dict:
     """The catalogue's scene from dataset attributes (`attributes`), ``{"scene": ...}``
     (a structured array, as `as_record` makes), or ``{}`` without it."""
     key = f"attractors_{FIELD}"
-    if key not in attrs:
-        return {}
-    values = {name: np.atleast_1d(np.asarray(column, dtype=np.float64))
-              for name, column in json.loads(attrs[key]).items()}
-    if not values:
-        return {}
-    record = np.zeros(max(v.size for v in values.values()),  # as `as_record` makes it
-                      dtype=[(name, np.float64) for name in values])
-    for name, column in values.items():
-        record[name] = column
-    return {FIELD: record}
+    record = record_from_json(attrs[key]) if key in attrs else None
+    return {} if record is None else {FIELD: record}
+
+
+def record_json(columns: dict) -> str:
+    """A catalogue's record of named values (`record_columns`: name -> float64 values)
+    as a dataset attribute: JSON of each name's values."""
+    return json.dumps({name: np.asarray(values).tolist() for name, values in columns.items()})
+
+
+def record_from_json(text: str) -> np.ndarray | None:
+    """The record `record_json` wrote, as the structured array `as_record` makes (a row
+    per attractor, a float64 field per name), or None where it names nothing."""
+    columns = {name: np.atleast_1d(np.asarray(values, dtype=np.float64))
+               for name, values in json.loads(text).items()}
+    if not columns:
+        return None
+    record = np.zeros(max(v.size for v in columns.values()),
+                      dtype=[(name, np.float64) for name in columns])
+    for name, values in columns.items():
+        record[name] = values
+    return record
 
 
 def dataset_scene(ds, count: int, initial: tuple = (), drive: tuple = ()) -> dict:

@@ -63,7 +63,13 @@ import math
 import numpy as np
 
 from ._timesteps import WHOLE_STEPS_RTOL, transient_steps
-from .catalogue_scene import as_record, one_value, record_columns
+from .catalogue_scene import (
+    as_record,
+    one_value,
+    record_columns,
+    record_from_json,
+    record_json,
+)
 
 __all__ = ["FIELDS", "LEGACY_FIELD", "OTHER_ATTRIBUTE", "OTHER_FIELD", "PHASE_RTOL",
            "attributes", "check_phase",
@@ -367,8 +373,7 @@ def attributes(attractors, count: int) -> dict:
                f"attractors_{FIELDS[1]}": np.array(frequency, dtype=np.float64)}
     others = _parse_others(attractors, count)
     if others:
-        out[f"attractors_{OTHER_FIELD}"] = json.dumps(
-            {name: values.tolist() for name, values in others.items()})
+        out[f"attractors_{OTHER_FIELD}"] = record_json(others)
     return out
 
 
@@ -383,12 +388,7 @@ def from_attributes(attrs) -> dict:
         out = {name: np.atleast_1d(np.asarray(attrs[f"attractors_{name}"], dtype=np.float64))
                for name in names}
     if f"attractors_{OTHER_FIELD}" in attrs:
-        columns = {name: np.atleast_1d(np.asarray(values, dtype=np.float64))
-                   for name, values in json.loads(attrs[f"attractors_{OTHER_FIELD}"]).items()}
-        if columns:
-            record = np.zeros(max(v.size for v in columns.values()),
-                              dtype=[(name, np.float64) for name in columns])
-            for name, values in columns.items():
-                record[name] = values
+        record = record_from_json(attrs[f"attractors_{OTHER_FIELD}"])
+        if record is not None:
             out[OTHER_FIELD] = record
     return out
