@@ -29,7 +29,7 @@ from .observables import STROBE_SAMPLES, variable_attributes
 from .physics.network import NETWORK_PARAMETERS, SwingNetwork
 from .physics.system import System, system_parameters
 from .settings import CUDA_CHUNK, _block, _check_device, default_chunk_size, validate_settings
-from .strobe_phase import OTHER_ATTRIBUTE, check_phase, phase_axis
+from .strobe_phase import check_phase, other_drives_attribute, phase_axis
 from .system_attractors import catalogue_arguments, catalogue_attributes, check_catalogue
 from .system_observables import (
     SYSTEM_OBSERVABLES,
@@ -350,10 +350,9 @@ def to_system_dataset(*, system, grid, settings, spec: SystemSpec, out, status,
     if "strobe" in spec.observe:  # what `sweep.maps.basins` reads of the samples
         attrs[SCENE_ATTRIBUTE] = json.dumps(system_values(
             system, grid, system.drive_frequency_parameter.axis), sort_keys=True)
-        others = system_drives(system, grid, system.drive_frequency_parameter.axis)
-        if others:  # the other drives whose phases a catalogue of it records
-            attrs[OTHER_ATTRIBUTE] = json.dumps(
-                {name: phase for name, (_, phase, _) in others.items()})
+        # the other drives whose phases a catalogue of it records
+        attrs.update(other_drives_attribute(
+            system_drives(system, grid, system.drive_frequency_parameter.axis)))
         attrs.update(strobe_samples=spec.strobe_samples,
                      strobe_frequency=system.drive_frequency_parameter.axis,
                      strobe_positions=" ".join(c.name for c in coordinates),

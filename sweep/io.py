@@ -25,7 +25,7 @@ from .grid import Grid, Points
 from .kernels import Status, vectors
 from .observables import OBSERVABLES, variable_attributes
 from .physics import EFFECTS, Scene, parameter_info
-from .strobe_phase import OTHER_ATTRIBUTE, from_attributes
+from .strobe_phase import from_attributes, other_drives_attribute
 
 __all__ = ["device_attributes", "origin_attributes", "run_attributes", "to_dataset",
            "status_variable", "save", "load", "scene_from", "grid_from",
@@ -140,10 +140,8 @@ def to_dataset(*, scene, grid, settings, spec, out, status, saved=None) -> xr.Da
     if "strobe" in spec.observe:  # and the scene an attractor catalogue of it is of
         attrs["strobe_samples"] = spec.strobe_samples
         attrs[SCENE_ATTRIBUTE] = json.dumps(pendulum_values(scene, grid), sort_keys=True)
-        others = pendulum_drives(scene, grid)
-        if others:  # the other drives whose phases a catalogue of it records
-            attrs[OTHER_ATTRIBUTE] = json.dumps(
-                {name: phase for name, (_, phase, _) in others.items()})
+        # the other drives whose phases a catalogue of it records
+        attrs.update(other_drives_attribute(pendulum_drives(scene, grid)))
     attrs.update(device_attributes(spec))
     if spec.dtype != "float64":  # its working precision, when not the default
         attrs["dtype"] = spec.dtype

@@ -72,9 +72,8 @@ from .catalogue_scene import (
 )
 
 __all__ = ["FIELDS", "LEGACY_FIELD", "OTHER_ATTRIBUTE", "OTHER_FIELD", "PHASE_RTOL",
-           "attributes", "check_phase",
-           "dataset_drive", "drive_fields", "from_attributes", "phase_axis",
-           "phase_mismatch", "strobe_start"]
+           "attributes", "check_phase", "dataset_drive", "drive_fields", "from_attributes",
+           "other_drives_attribute", "phase_axis", "phase_mismatch", "strobe_start"]
 
 #: The catalogue's keys of its drive: per attractor, the drive phase ``W t_s + phi`` of
 #: its samples [rad] and the drive's angular frequency [rad/s].
@@ -145,6 +144,16 @@ def drive_fields(frequency: float, t0: float, t_transient: float, dt: float,
             {name: _phase(float(nu), start, float(psi))
              for name, (nu, psi) in sorted(others.items())}, count)
     return fields
+
+
+def other_drives_attribute(others: dict) -> dict:
+    """The attribute in which a strobe run names its other drives (`OTHER_ATTRIBUTE`:
+    JSON of each one's frequency axis -> its phase constant's axis), of ``others`` as
+    `sweep.catalogue_drives` gives them; ``{}`` without one."""
+    if not others:
+        return {}
+    return {OTHER_ATTRIBUTE: json.dumps({name: phase for name, (_, phase, _) in
+                                         others.items()})}
 
 
 def _recorded(ds, name: str):
