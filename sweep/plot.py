@@ -112,11 +112,9 @@ def angle_axis(name: str) -> bool:
     """
     if name in ANGLE_COORDS:
         return True
-    from .physics import parameters
-    from .physics.system import system_axis
+    from .physics.system import angle_parameter
 
-    found = {p.axis: p for p in parameters()}.get(name) or system_axis(name)
-    return found is not None and bool(found.angle)
+    return angle_parameter(name) is not None
 
 
 def degree_units(name: str, units: str) -> str | None:

@@ -155,11 +155,10 @@ def angle_axes() -> tuple[str, ...]:
 
 def _angle_parameter(name: str):
     """The parameter of axis ``name`` if it is an angle (or an angular velocity): the
-    single pendulum's or a system's; None otherwise."""
-    from .physics.system import system_axis
+    single pendulum's or a system's; None otherwise (`sweep.physics.system.angle_parameter`)."""
+    from .physics.system import angle_parameter
 
-    found = {p.axis: p for p in parameters()}.get(name) or system_axis(name)
-    return found if found is not None and found.angle else None
+    return angle_parameter(name)
 
 
 def _units(name: str) -> dict[str, bool]:

@@ -44,8 +44,8 @@ from .._validate import check_real
 from .effect import Parameter
 
 __all__ = ["Coordinate", "DerivedSystem", "SYSTEMS", "SYSTEM_DAMPING", "System",
-           "SystemDeclaration", "initial_parameters", "register_system", "system_axis",
-           "system_columns", "system_parameters"]
+           "SystemDeclaration", "angle_parameter", "initial_parameters", "register_system",
+           "system_axis", "system_columns", "system_parameters"]
 
 
 @dataclass(frozen=True)
@@ -181,6 +181,17 @@ def system_axis(name: str) -> Parameter | None:
     from .coordinate_effects import coordinate_axis
 
     return coordinate_axis(name)
+
+
+def angle_parameter(name: str) -> Parameter | None:
+    """The parameter of grid axis ``name`` where it is an angle or an angular velocity
+    (declared ``angle``): the single pendulum's (`sweep.physics.parameters`, its effects'
+    included) or a registered system's (`system_axis`); None otherwise. The axes a run
+    file accepts in degrees and ``sweep plot`` draws in degrees."""
+    from .scene import parameters
+
+    found = {p.axis: p for p in parameters()}.get(name) or system_axis(name)
+    return found if found is not None and found.angle else None
 
 
 class System:
